@@ -1,0 +1,3 @@
+from subenv.cli import main
+import sys
+sys.exit(main())

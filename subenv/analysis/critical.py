@@ -1,0 +1,60 @@
+"""Critical speed and Froude number of dive-plane reversal (Riedel 1993 Ch. III)."""
+
+from __future__ import annotations
+
+import math
+
+from subenv.analysis.linear import plane_derivatives
+from subenv.vehicles.vehicle import Vehicle
+
+__all__ = ["critical_froude", "critical_speed", "froude_number"]
+
+
+def critical_speed(vehicle: Vehicle, alpha: float = 0.0) -> float:
+    """Speed below which level flight under dual control loses stability [m/s].
+
+    Riedel (1993) eq. 3.9 (exponent 1/2): u_cr^2 = z_GB Z_delta B / (M_w Z_delta - Z_w M_delta),
+    written with the restoring moment z_G W - z_B B (= B z_GB when W = B). At u_cr the constant
+    coefficient of the closed-loop characteristic polynomial vanishes for any gain (eq. 3.7).
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Needs z_GB > 0 (a statically stable loading).
+    alpha : float
+        Bow/stern allocation of dual control, in [-1, 1] (eq. 2.58).
+
+    Raises
+    ------
+    ValueError
+        z_GB <= 0 (no critical speed: level flight has no restoring moment), alpha outside
+        [-1, 1], or an allocation whose planes produce no net pitch-heave coupling.
+    """
+    restoring = vehicle.z_G_m * vehicle.weight_N - vehicle.z_B_m * vehicle.buoyancy_N
+    if not restoring > 0:
+        raise ValueError(
+            f"z_GB={vehicle.z_GB_m!r} m gives restoring moment z_G W - z_B B = {restoring!r} N m; "
+            "a critical speed exists only for a positive restoring moment (z_GB > 0)"
+        )
+    c = vehicle.coefficients
+    Z_delta, M_delta = plane_derivatives(vehicle, alpha)
+    coupling = c.M_w * Z_delta - c.Z_w * M_delta
+    u2 = restoring * Z_delta / coupling if coupling != 0 else math.inf
+    if not (math.isfinite(u2) and u2 > 0):
+        raise ValueError(
+            f"alpha={alpha!r}: this plane allocation has no critical speed "
+            f"(z_GB Z_delta B / (M_w Z_delta - Z_w M_delta) = {u2!r} m^2/s^2 is not positive)"
+        )
+    return math.sqrt(u2)  # Riedel (1993) eq. 3.9
+
+
+def froude_number(vehicle: Vehicle, speed_mps: float) -> float:
+    """Fn = u / sqrt(g z_GB) (Riedel 1993 eq. 4.25 uses lambda = Fn^2)."""
+    if not vehicle.z_GB_m > 0:
+        raise ValueError(f"z_GB={vehicle.z_GB_m!r} m: the Froude number needs z_GB > 0")
+    return speed_mps / math.sqrt(vehicle.gravity_m_s2 * vehicle.z_GB_m)
+
+
+def critical_froude(vehicle: Vehicle, alpha: float = 0.0) -> float:
+    """Froude number at the critical speed, u_cr / sqrt(g z_GB)."""
+    return froude_number(vehicle, critical_speed(vehicle, alpha))

@@ -1,0 +1,166 @@
+"""The ``subenv`` command line.
+
+``subenv demo`` (the README's main job for now) flies the thesis's pole-placement design
+(Riedel 1993 Ch. II.B, computed here from the linear model) once above and once below the
+critical speed, prints a summary and writes a plot.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import tempfile
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+
+import subenv  # noqa: F401  (registers the environments)
+from subenv.analysis import critical_speed, linear_model
+from subenv.scenarios import DESIGN_SPEED_MPS
+from subenv.units import mps_to_fps
+
+THESIS_POLES = (-0.3, -0.31, -0.32, -0.33)
+"""Closed-loop poles of the thesis design at 5 fps, alpha = 0 (Riedel 1993 Ch. II.B)."""
+
+
+@dataclass
+class Run:
+    label: str
+    speed_mps: float
+    times: np.ndarray
+    depth_error: np.ndarray
+    pitch: np.ndarray
+    plane: np.ndarray
+    reason: str
+
+
+def thesis_gain(env: gym.Env) -> np.ndarray:  # type: ignore[type-arg]
+    """Full-state gain K (delta = -K x) placed at 5 fps on the env's vehicle (SI units)."""
+    from scipy.signal import place_poles
+
+    lm = linear_model(env.unwrapped.base_vehicle, DESIGN_SPEED_MPS, alpha=0.0)  # type: ignore[attr-defined]
+    return place_poles(lm.A, lm.B[:, None], THESIS_POLES).gain_matrix[0]
+
+
+def fly(env_id: str, speed_mps: float, seed: int, label: str) -> Run:
+    """One episode of the thesis controller at a constant speed, starting 2 m above the ordered depth."""
+    env = gym.make(env_id)
+    gain = thesis_gain(env)
+    limit = env.unwrapped.plane_limit_rad  # type: ignore[attr-defined]
+    obs, info = env.reset(seed=seed, options={"speed": speed_mps, "depth_command": 10.0,
+                                              "initial_state": (0.0, 0.0, 0.0, 8.0)})
+    times, errors, pitches, planes = [0.0], [info["depth_error_m"]], [info["pitch_rad"]], [0.0]
+    reason = "time limit"
+    while True:
+        x = np.array([obs[1], obs[2], obs[3], obs[0]])  # (theta, w, q, depth error)
+        action = np.clip(-(gain @ x) / limit, -1.0, 1.0).astype(np.float32)
+        obs, _, terminated, truncated, info = env.step(action)
+        times.append(info["time_s"])
+        errors.append(info["depth_error_m"])
+        pitches.append(info["pitch_rad"])
+        planes.append(info["stern_plane_rad"])
+        if terminated or truncated:
+            reason = info["termination_reason"] or "time limit"
+            break
+    env.close()
+    return Run(label, speed_mps, np.array(times), np.array(errors), np.array(pitches), np.array(planes), reason)
+
+
+def _write_plot(runs: Sequence[Run], ucr: float, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
+    for run in runs:
+        axes[0].plot(run.times, run.depth_error, label=run.label)
+        axes[1].plot(run.times, np.degrees(run.pitch), label=run.label)
+        axes[2].plot(run.times, np.degrees(run.plane), label=run.label)
+    axes[0].set_ylabel("depth error [m]\n(+ too deep)")
+    axes[0].invert_yaxis()
+    axes[1].set_ylabel("pitch [deg]")
+    axes[2].set_ylabel("stern planes [deg]")
+    axes[2].set_xlabel("time [s]")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    axes[0].legend(loc="best")
+    fig.suptitle(f"Thesis pole-placement controller (5 fps design); critical speed {ucr:.3f} m/s")
+    fig.tight_layout()
+    _atomic_savefig(fig, path)
+    plt.close(fig)
+
+
+def _atomic_savefig(fig: object, path: Path) -> None:
+    """Write the figure completely or not at all (temporary file, then rename)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
+    os.close(fd)
+    try:
+        fig.savefig(tmp, dpi=110)  # type: ignore[attr-defined]
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def demo(args: argparse.Namespace) -> int:
+    env = gym.make(args.env)
+    ucr = critical_speed(env.unwrapped.base_vehicle)  # type: ignore[attr-defined]
+    env.close()
+    if not (args.low_speed > 0 and math.isfinite(args.low_speed)):
+        raise SystemExit(f"--low-speed={args.low_speed!r} is invalid: must be a number > 0 (m/s)")
+    runs = [
+        fly(args.env, DESIGN_SPEED_MPS, args.seed, f"{DESIGN_SPEED_MPS:.3f} m/s (design speed)"),
+        fly(args.low_env, args.low_speed, args.seed, f"{args.low_speed:.3f} m/s"),
+    ]
+    print(f"subenv demo on {args.env} and {args.low_env}: thesis pole placement at 5 fps "
+          f"(poles {THESIS_POLES})")
+    print(f"critical speed u_cr = {ucr:.4f} m/s = {mps_to_fps(ucr):.4f} fps (Riedel 1993 eq. 3.9)")
+    print(f"{'speed [m/s]':>12} {'u/u_cr':>7} {'final depth err [m]':>20} {'final pitch [deg]':>18} "
+          f"{'final plane [deg]':>18}  end")
+    for run in runs:
+        print(f"{run.speed_mps:12.3f} {run.speed_mps / ucr:7.2f} {run.depth_error[-1]:20.3f} "
+              f"{math.degrees(run.pitch[-1]):18.2f} {math.degrees(run.plane[-1]):18.2f}  {run.reason}")
+    if not args.no_plot:
+        _write_plot(runs, ucr, Path(args.out))
+        print(f"plot written to {args.out}")
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="subenv", description=__doc__.split("\n\n")[0])
+    sub = parser.add_subparsers(dest="command")
+    p_demo = sub.add_parser("demo", help="fly the thesis controller above and below the critical speed")
+    p_demo.add_argument("--env", default="subenv/Nominal-v0", help="environment id (default: %(default)s)")
+    p_demo.add_argument("--low-env", default="subenv/LowSpeed-v0",
+                        help="environment id for the low-speed run (default: %(default)s)")
+    p_demo.add_argument("--low-speed", type=float, default=0.45,
+                        help="the speed below critical to fly, m/s (default: %(default)s)")
+    p_demo.add_argument("--seed", type=int, default=0, help="reset seed (default: %(default)s)")
+    p_demo.add_argument("--out", default="results/demo.png", help="plot file (default: %(default)s)")
+    p_demo.add_argument("--no-plot", action="store_true", help="print the summary only")
+    sub.add_parser("list", help="list the environment ids and scenarios")
+    args = parser.parse_args(argv)
+    if args.command in (None, "demo"):
+        if args.command is None:
+            args = parser.parse_args(["demo", *(argv or [])])
+        return demo(args)
+    if args.command == "list":
+        from subenv.scenarios import get_scenario, scenario_names
+
+        for name in scenario_names():
+            print(f"subenv/{name}-v0: {get_scenario(name).description}")
+        print("subenv/DivePlane-v0: the Randomized scenario")
+        return 0
+    parser.error(f"unknown command {args.command!r}")
+    return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,211 @@
+"""The nonlinear vertical-plane equations of motion (Riedel 1993 eqs 2.38-2.43), written once.
+
+State ``x = (theta, w, q, Z)``: pitch [rad, nose-up positive], heave velocity [m/s, down positive],
+pitch rate [rad/s] and depth [m, down positive]. Forward speed ``u`` [m/s] is an input.
+
+Everything that needs the physics (the single and vector environments, linearisation, controller
+design, analysis) calls :func:`derivatives`. It is a pure function, batched over any leading axes:
+states ``(..., 4)``, inputs and :class:`ModelParams` fields broadcast against ``(...)``.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from subenv._typing import ArrayLike, FloatArray
+from subenv.dynamics.hull import HullTable, crossflow_integrals
+from subenv.vehicles.vehicle import Vehicle
+
+__all__ = [
+    "STATE_NAMES",
+    "ModelParams",
+    "derivatives",
+    "dual_plane_angles",
+    "model_params",
+    "stack_params",
+]
+
+STATE_NAMES = ("pitch_rad", "heave_mps", "pitch_rate_radps", "depth_m")
+"""Names (with units) of the state components, in order."""
+
+
+class ModelParams(NamedTuple):
+    """The vehicle reduced to the numbers :func:`derivatives` uses, in SI.
+
+    Each field but ``hull`` is a float or an array broadcastable against the batch, so one
+    vector environment can hold a different loading in every sub-environment.
+    Build with :func:`model_params`; never by hand.
+    """
+
+    inv_m11: ArrayLike        # inverse of the 2x2 added-mass matrix of (w, q)
+    inv_m12: ArrayLike
+    inv_m21: ArrayLike
+    inv_m22: ArrayLike
+    Z_uq: ArrayLike           # m + Z_q [kg]
+    m_zG: ArrayLike           # m z_G [kg m]
+    Z_w: ArrayLike            # [kg/m]
+    M_uq: ArrayLike           # M_q - m x_G [kg m]
+    M_w: ArrayLike            # [kg]
+    Z_delta_s: ArrayLike      # [kg/m per rad]
+    Z_delta_b: ArrayLike
+    M_delta_s: ArrayLike      # [kg per rad]
+    M_delta_b: ArrayLike
+    W_minus_B: ArrayLike      # W - B [N]
+    xGW_minus_xBB: ArrayLike  # x_G W - x_B B [N m]
+    zGW_minus_zBB: ArrayLike  # z_G W - z_B B [N m]
+    half_rho_CD: ArrayLike    # (rho/2) C_D [kg/m^3]
+    hull: HullTable
+
+
+def model_params(vehicle: Vehicle) -> ModelParams:
+    """Reduce a :class:`~subenv.vehicles.Vehicle` to the parameters of :func:`derivatives`."""
+    c = vehicle.coefficients
+    m = vehicle.mass_kg
+    # Added-mass matrix of eqs 2.38-2.39 (Riedel 1993), left-hand side for (wdot, qdot).
+    m11 = m - c.Z_wdot
+    m12 = -(c.Z_qdot + m * vehicle.x_G_m)
+    m21 = -(c.M_wdot + m * vehicle.x_G_m)
+    m22 = vehicle.inertia_y_kg_m2 - c.M_qdot
+    det = m11 * m22 - m12 * m21
+    W, B = vehicle.weight_N, vehicle.buoyancy_N
+    return ModelParams(
+        inv_m11=m22 / det,
+        inv_m12=-m12 / det,
+        inv_m21=-m21 / det,
+        inv_m22=m11 / det,
+        Z_uq=m + c.Z_q,
+        m_zG=m * vehicle.z_G_m,
+        Z_w=c.Z_w,
+        M_uq=c.M_q - m * vehicle.x_G_m,
+        M_w=c.M_w,
+        Z_delta_s=c.Z_delta_s,
+        Z_delta_b=c.Z_delta_b,
+        M_delta_s=c.M_delta_s,
+        M_delta_b=c.M_delta_b,
+        W_minus_B=W - B,
+        xGW_minus_xBB=vehicle.x_G_m * W - vehicle.x_B_m * B,
+        zGW_minus_zBB=vehicle.z_G_m * W - vehicle.z_B_m * B,
+        half_rho_CD=0.5 * vehicle.water_density_kg_m3 * vehicle.crossflow_drag,
+        hull=_hull_table(vehicle),
+    )
+
+
+_HULL_TABLES: dict[tuple[tuple[float, ...], tuple[float, ...]], HullTable] = {}
+
+
+def _hull_table(vehicle: Vehicle) -> HullTable:
+    key = (vehicle.hull.x_m, vehicle.hull.breadth_m)
+    table = _HULL_TABLES.get(key)
+    if table is None:
+        table = _HULL_TABLES[key] = HullTable.from_offsets(*key)
+    return table
+
+
+def stack_params(params: list[ModelParams]) -> ModelParams:
+    """Stack per-environment parameters into one batch (all must share one hull)."""
+    hulls = {id(p.hull) for p in params}
+    if len(hulls) != 1:
+        raise ValueError(f"stack_params: {len(hulls)} different hulls; a batch must share one hull")
+    fields = {
+        name: np.array([getattr(p, name) for p in params], dtype=float)
+        for name in ModelParams._fields
+        if name != "hull"
+    }
+    return ModelParams(**fields, hull=params[0].hull)
+
+
+def dual_plane_angles(delta: ArrayLike, alpha: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Stern and bow plane angles for the dual-control command ``delta`` (Riedel 1993 eq. 2.58).
+
+    One command drives both pairs with the bow planes slaved to the stern planes,
+    ``delta_s = delta``, ``delta_b = alpha delta``, so that Z_delta = Z_ds + alpha Z_db and
+    M_delta = M_ds + alpha M_db.
+    """
+    delta = np.asarray(delta, dtype=float)
+    return delta, np.asarray(alpha, dtype=float) * delta
+
+
+def derivatives(
+    state: FloatArray,
+    speed: ArrayLike,
+    stern: ArrayLike,
+    bow: ArrayLike,
+    params: ModelParams,
+    force: ArrayLike = 0.0,
+    moment: ArrayLike = 0.0,
+) -> FloatArray:
+    """Time derivative of the state, d/dt (theta, w, q, Z) (Riedel 1993 eqs 2.38-2.43).
+
+    Parameters
+    ----------
+    state : ndarray, shape (..., 4)
+        Pitch [rad], heave velocity [m/s], pitch rate [rad/s], depth [m].
+    speed : array_like
+        Forward speed u [m/s].
+    stern, bow : array_like
+        Applied stern and bow plane angles [rad] (already saturated: see
+        :func:`subenv.dynamics.saturate`).
+    params : ModelParams
+        From :func:`model_params` (or :func:`stack_params` for a batch).
+    force, moment : array_like, optional
+        External heave force [N, down positive] and pitch moment [N m, nose-up positive], e.g. a
+        disturbance.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        (theta_dot, w_dot, q_dot, Z_dot).
+
+    Notes
+    -----
+    ::
+
+        (m - Z_wdot) wdot - (Z_qdot + m x_G) qdot = (m + Z_q) u q + m z_G q^2 + Z_w u w
+            + (W - B) cos(theta) + u^2 (Z_ds delta_s + Z_db delta_b) + Z_drag
+        -(M_wdot + m x_G) wdot + (I_y - M_qdot) qdot = -m z_G w q + (M_q - m x_G) u q + M_w u w
+            - (x_G W - x_B B) cos(theta) - (z_G W - z_B B) sin(theta)
+            + u^2 (M_ds delta_s + M_db delta_b) + M_drag
+        theta_dot = q
+        Z_dot = -u sin(theta) + w cos(theta)
+
+    with the hull cross-flow drag Z_drag = -(rho/2) C_D int b w_loc|w_loc| dx and
+    M_drag = +(rho/2) C_D int x b w_loc|w_loc| dx, w_loc = w - x q (see
+    :func:`subenv.dynamics.hull.crossflow_integrals` for the sign of the moment).
+    """
+    p = params
+    theta = state[..., 0]
+    w = state[..., 1]
+    q = state[..., 2]
+    u = speed
+    cos_t = np.cos(theta)
+    sin_t = np.sin(theta)
+    uu = u * u
+    I0, I1 = crossflow_integrals(p.hull, w, q)
+    # Riedel (1993) eqs 2.38 and 2.39, right-hand sides, with the forces of eqs 2.42 and 2.43.
+    heave = (
+        p.Z_uq * u * q
+        + p.m_zG * q * q
+        + p.Z_w * u * w
+        + p.W_minus_B * cos_t
+        + uu * (p.Z_delta_s * stern + p.Z_delta_b * bow)
+        - p.half_rho_CD * I0
+        + force
+    )
+    pitch = (
+        -p.m_zG * w * q
+        + p.M_uq * u * q
+        + p.M_w * u * w
+        - p.xGW_minus_xBB * cos_t
+        - p.zGW_minus_zBB * sin_t
+        + uu * (p.M_delta_s * stern + p.M_delta_b * bow)
+        + p.half_rho_CD * I1
+        + moment
+    )
+    out = np.empty(np.broadcast_shapes(state.shape, np.shape(heave) + (4,)))
+    out[..., 0] = q  # Riedel (1993) eq. 2.40
+    out[..., 1] = p.inv_m11 * heave + p.inv_m12 * pitch
+    out[..., 2] = p.inv_m21 * heave + p.inv_m22 * pitch
+    out[..., 3] = -u * sin_t + w * cos_t  # Riedel (1993) eq. 2.41 (depth kinematics)
+    return out

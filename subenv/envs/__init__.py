@@ -1,0 +1,6 @@
+"""The Gymnasium environments."""
+
+from subenv.envs.dive_plane import OBSERVATION_NAMES, DivePlaneEnv
+from subenv.envs.registration import HEADLINE_ID, env_ids, register_envs
+
+__all__ = ["HEADLINE_ID", "OBSERVATION_NAMES", "DivePlaneEnv", "env_ids", "register_envs"]

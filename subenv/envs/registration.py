@@ -1,0 +1,47 @@
+"""Gymnasium registration of one id per scenario, ``subenv/<Name>-v0``, on ``import subenv``."""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+
+from subenv.dynamics.integrate import CONTROL_PERIOD_S
+from subenv.scenarios.registry import registry_snapshot
+
+__all__ = ["ENTRY_POINT", "HEADLINE_ID", "env_ids", "register_envs"]
+
+ENTRY_POINT = "subenv.envs.dive_plane:DivePlaneEnv"
+HEADLINE_ID = "subenv/DivePlane-v0"
+"""The randomized scenario under the package's headline name."""
+_HEADLINE_SCENARIO = "Randomized"
+
+
+def _max_steps(name: str) -> int:
+    scenarios = registry_snapshot()
+    scenario = scenarios[name]
+    durations = [scenarios[c].duration_s for c in scenario.components] or [scenario.duration_s]
+    return math.ceil(max(durations) / CONTROL_PERIOD_S - 1e-9)
+
+
+def env_ids() -> list[str]:
+    """The Gymnasium ids this package registers (after :func:`register_envs`)."""
+    return [HEADLINE_ID] + [f"subenv/{name}-v0" for name in registry_snapshot()]
+
+
+def register_envs() -> None:
+    """Register (or re-register) an id for every scenario in the registry.
+
+    ``max_episode_steps`` is the scenario's longest duration at the default ``dt``; the
+    environment truncates at the drawn episode's own duration.
+    """
+    for env_id in env_ids():
+        name = _HEADLINE_SCENARIO if env_id == HEADLINE_ID else env_id.removeprefix("subenv/").removesuffix("-v0")
+        if env_id in gym.registry:
+            del gym.registry[env_id]
+        gym.register(
+            id=env_id,
+            entry_point=ENTRY_POINT,
+            kwargs={"scenario": name},
+            max_episode_steps=_max_steps(name),
+        )

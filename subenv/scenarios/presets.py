@@ -1,0 +1,104 @@
+"""The scenarios shipped with subenv, registered on import.
+
+Speeds below, near and through critical are given relative to the episode's own critical speed
+(Riedel 1993 eq. 3.9), so they keep their meaning for any vehicle, loading and plane allocation.
+For DARPA SUBOFF at alpha = 0, u_cr = 1.8979 fps = 0.5785 m/s.
+"""
+
+from __future__ import annotations
+
+from subenv.scenarios.registry import register_scenario
+from subenv.scenarios.scenario import Scenario, SpeedRamp
+from subenv.units import fps_to_mps
+
+__all__ = ["BASE_SCENARIOS", "DESIGN_SPEED_MPS"]
+
+DESIGN_SPEED_MPS = fps_to_mps(5.0)
+"""The thesis's design speed, 5 fps (Riedel 1993 Ch. II.B)."""
+
+_SMALL_PITCH = (-0.05, 0.05)  # rad, about +-3 deg
+
+NOMINAL = Scenario(
+    name="Nominal",
+    description="Design speed 5 fps (1.524 m/s), well above critical: the thesis controller works here.",
+    speed_mps=(DESIGN_SPEED_MPS, DESIGN_SPEED_MPS),
+    depth_command_m=(8.0, 15.0),
+    initial_depth_offset_m=(-2.0, 2.0),
+    initial_pitch_rad=_SMALL_PITCH,
+    duration_s=200.0,
+)
+LOW_SPEED = Scenario(
+    name="LowSpeed",
+    description="Below the critical speed (0.3-0.8 u_cr): level flight is unstable and the planes reverse.",
+    speed_mps=(0.3, 0.8),
+    speed_relative=True,
+    depth_command_m=(8.0, 15.0),
+    initial_depth_offset_m=(-2.0, 2.0),
+    initial_pitch_rad=_SMALL_PITCH,
+    duration_s=600.0,
+)
+NEAR_CRITICAL = Scenario(
+    name="NearCritical",
+    description="Within 15% of the critical speed, where the planes have almost no net effect on depth.",
+    speed_mps=(0.85, 1.15),
+    speed_relative=True,
+    depth_command_m=(8.0, 15.0),
+    initial_depth_offset_m=(-2.0, 2.0),
+    initial_pitch_rad=_SMALL_PITCH,
+    duration_s=600.0,
+)
+SPEED_TRANSIENT = Scenario(
+    name="SpeedTransient",
+    description="Decelerates from 2-2.6 u_cr to 0.4-0.7 u_cr within the episode, through the critical speed.",
+    speed_mps=(2.0, 2.6),
+    speed_relative=True,
+    speed_ramp=SpeedRamp(final_speed_mps=(0.4, 0.7), start_s=(30.0, 90.0), duration_s=(120.0, 240.0)),
+    depth_command_m=(8.0, 15.0),
+    initial_depth_offset_m=(-1.0, 1.0),
+    initial_pitch_rad=_SMALL_PITCH,
+    duration_s=600.0,
+)
+PERISCOPE_DEPTH = Scenario(
+    name="PeriscopeDepth",
+    description=(
+        "Ordered depth 1.0-1.2 m, near the surface; surface suction modelled as excess buoyancy "
+        "(Riedel 1993 Ch. V.C); broaching ends the episode."
+    ),
+    speed_mps=(0.7, 2.0),
+    speed_relative=True,
+    depth_command_m=(1.0, 1.2),
+    initial_depth_offset_m=(-0.2, 0.6),
+    initial_pitch_rad=(-0.02, 0.02),
+    excess_buoyancy_fraction=(2e-4, 1e-3),
+    duration_s=400.0,
+)
+BALLAST_OFFSET = Scenario(
+    name="BallastOffset",
+    description="Centre of gravity 0.5-3 mm fore or aft of buoyancy (x_GB != 0, Riedel 1993 Ch. IV).",
+    speed_mps=(0.6, 2.0),
+    speed_relative=True,
+    depth_command_m=(8.0, 15.0),
+    initial_depth_offset_m=(-2.0, 2.0),
+    initial_pitch_rad=_SMALL_PITCH,
+    x_GB_m=(0.5e-3, 3e-3),
+    x_GB_sign_random=True,
+    duration_s=600.0,
+)
+
+BASE_SCENARIOS = (NOMINAL, LOW_SPEED, NEAR_CRITICAL, SPEED_TRANSIENT, PERISCOPE_DEPTH, BALLAST_OFFSET)
+
+RANDOMIZED = Scenario(
+    name="Randomized",
+    description=(
+        "Randomized: one of the scenarios above, with z_GB scaled by 0.8-1.25, C_D in 0-0.6, sensor "
+        "noise and a heave-force disturbance."
+    ),
+    components=tuple(s.name for s in BASE_SCENARIOS),
+    z_GB_scale=(0.8, 1.25),
+    crossflow_drag=(0.0, 0.6),
+    sensor_noise=True,
+    disturbance_std_N=2.0,
+)
+
+for _scenario in (*BASE_SCENARIOS, RANDOMIZED):
+    register_scenario(_scenario)

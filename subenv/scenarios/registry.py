@@ -1,0 +1,46 @@
+"""The scenario registry: every registered scenario is also a Gymnasium id ``subenv/<name>-v0``."""
+
+from __future__ import annotations
+
+from subenv.scenarios.scenario import Scenario
+
+__all__ = ["get_scenario", "register_scenario", "scenario_names"]
+
+_REGISTRY: dict[str, Scenario] = {}
+
+
+def register_scenario(scenario: Scenario, *, overwrite: bool = False) -> Scenario:
+    """Add a scenario to the registry (and so make it selectable by name).
+
+    A scenario registered after ``import subenv`` is selectable with
+    ``DivePlaneEnv(scenario=name)``; to get a Gymnasium id for it too, call
+    :func:`subenv.envs.register_envs` afterwards.
+    """
+    if scenario.name in _REGISTRY and not overwrite:
+        raise ValueError(f"scenario {scenario.name!r} is already registered; pass overwrite=True to replace it")
+    for component in scenario.components:
+        if component not in _REGISTRY:
+            raise ValueError(
+                f"scenario {scenario.name!r}: component {component!r} is unknown; "
+                f"known scenarios: {scenario_names()}"
+            )
+    _REGISTRY[scenario.name] = scenario
+    return scenario
+
+
+def get_scenario(name: str) -> Scenario:
+    """The registered scenario called ``name``; a ValueError lists the known names."""
+    try:
+        return _REGISTRY[name]
+    except KeyError:
+        raise ValueError(f"scenario={name!r} is unknown: must be one of {scenario_names()}") from None
+
+
+def scenario_names() -> list[str]:
+    """Names of the registered scenarios, in registration order."""
+    return list(_REGISTRY)
+
+
+def registry_snapshot() -> dict[str, Scenario]:
+    """A copy of the registry (name -> scenario)."""
+    return dict(_REGISTRY)

@@ -1,0 +1,254 @@
+"""Scenarios as data: named distributions over episodes, and the concrete draw of one episode.
+
+A :class:`Scenario` says how an episode is drawn (speed profile, loading, depth command, initial
+state, noise, disturbance); :meth:`Scenario.sample` turns it into an :class:`EpisodeConfig` with
+numbers only. Environments consume the config; they never branch on a scenario's name.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["EpisodeConfig", "Interval", "Scenario", "SpeedRamp"]
+
+Interval = tuple[float, float]
+"""A closed interval (low, high) drawn uniformly; low == high is a fixed value."""
+
+
+_TINY = 1e-9  # lower bound for quantities that must be strictly positive
+
+
+def _check_interval(name: str, value: Interval, low: float = -math.inf, high: float = math.inf) -> None:
+    ok = (
+        isinstance(value, tuple)
+        and len(value) == 2
+        and all(isinstance(v, (int, float)) and math.isfinite(v) for v in value)
+        and low <= value[0] <= value[1] <= high
+    )
+    if not ok:
+        raise ValueError(
+            f"{name}={value!r} is invalid: must be a (low, high) pair of finite numbers with "
+            f"{low} <= low <= high <= {high}"
+        )
+
+
+def _draw(rng: np.random.Generator, interval: Interval) -> float:
+    low, high = interval
+    return float(low) if low == high else float(rng.uniform(low, high))
+
+
+@dataclass(frozen=True)
+class SpeedRamp:
+    """A linear change of speed within an episode, from the initial speed to ``final_speed_mps``.
+
+    The ramp starts at ``start_s`` and lasts ``duration_s``; the speed is held before and after.
+    """
+
+    final_speed_mps: Interval
+    start_s: Interval
+    duration_s: Interval
+
+    def __post_init__(self) -> None:
+        _check_interval("final_speed_mps", self.final_speed_mps, 0.0)
+        _check_interval("start_s", self.start_s, 0.0)
+        _check_interval("duration_s", self.duration_s, 0.0)
+
+
+@dataclass(frozen=True)
+class EpisodeConfig:
+    """One concrete episode: every number an environment needs to run it (SI units).
+
+    ``speed_knots`` is a piecewise-linear speed profile ((t [s], u [m/s]), ...), held constant
+    after the last knot; a single knot is a constant speed. With ``speed_relative`` the speeds
+    are multiples of the episode's critical speed, which the environment resolves. The metacentric height is
+    ``z_GB_m`` (None: the vehicle's) times ``z_GB_scale``; ``crossflow_drag`` None keeps the
+    vehicle's C_D.
+    """
+
+    speed_knots: tuple[tuple[float, float], ...]
+    speed_relative: bool
+    depth_command_m: float
+    initial_state: tuple[float, float, float, float]
+    z_GB_m: float | None
+    z_GB_scale: float
+    x_GB_m: float
+    excess_buoyancy_N: float
+    crossflow_drag: float | None
+    sensor_noise: bool
+    disturbance_std_N: float
+    duration_s: float
+
+    def speed_at(self, t: float) -> float:
+        """Speed [m/s] at time ``t`` [s]."""
+        times = [k[0] for k in self.speed_knots]
+        speeds = [k[1] for k in self.speed_knots]
+        return float(np.interp(t, times, speeds))
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A named distribution over episodes; registered with :func:`subenv.scenarios.register_scenario`.
+
+    Intervals are drawn uniformly and independently. ``None`` for ``z_GB_m`` or ``crossflow_drag``
+    keeps the vehicle's own value. A scenario with ``components`` first picks one of the named
+    scenarios uniformly and then applies its own randomisation (``z_GB_scale``,
+    ``crossflow_drag``, noise, disturbance) on top: this is how ``Randomized`` draws from all.
+
+    Attributes
+    ----------
+    name : str
+        CamelCase; registered as the Gymnasium id ``subenv/<name>-v0``.
+    description : str
+        One line on what the scenario tests.
+    speed_mps : Interval
+        Initial forward speed [m/s], or [multiples of the critical speed] when
+        ``speed_relative`` is set.
+    speed_relative : bool
+        Speeds (initial and ramp) are u / u_cr of the episode's own loading and plane
+        allocation, so the scenario stays below, near or above critical for any vehicle.
+    speed_ramp : SpeedRamp or None
+        A deceleration (or acceleration) within the episode.
+    depth_command_m : Interval
+        Ordered depth [m, positive down].
+    initial_depth_offset_m : Interval
+        Initial depth minus the ordered depth [m].
+    initial_pitch_rad, initial_heave_mps, initial_pitch_rate_radps : Interval
+        Initial state.
+    z_GB_m : Interval or None
+        Metacentric height [m]; None keeps the vehicle's.
+    z_GB_scale : Interval
+        Factor applied to the metacentric height after the draw.
+    x_GB_m : Interval
+        Ballast offset [m] (Riedel 1993 Ch. IV).
+    x_GB_sign_random : bool
+        Flip the sign of the drawn x_GB with probability 1/2.
+    excess_buoyancy_fraction : Interval
+        (B - W) / W; near-surface suction modelled as excess buoyancy (Ch. V.C).
+    crossflow_drag : Interval or None
+        Hull cross-flow drag coefficient C_D; None keeps the vehicle's.
+    sensor_noise : bool
+        Add Gaussian noise to the observed depth, pitch, heave, pitch rate and speed.
+    disturbance_std_N : float
+        Standard deviation of a Gauss-Markov heave-force disturbance [N]; 0 disables it.
+    duration_s : float
+        Episode length [s]; the episode is truncated at this time.
+    components : tuple of str
+        Names of scenarios to draw from (a mixture); empty for a plain scenario.
+    """
+
+    name: str
+    description: str
+    speed_mps: Interval = (1.524, 1.524)
+    speed_relative: bool = False
+    speed_ramp: SpeedRamp | None = None
+    depth_command_m: Interval = (10.0, 10.0)
+    initial_depth_offset_m: Interval = (-2.0, 2.0)
+    initial_pitch_rad: Interval = (0.0, 0.0)
+    initial_heave_mps: Interval = (0.0, 0.0)
+    initial_pitch_rate_radps: Interval = (0.0, 0.0)
+    z_GB_m: Interval | None = None
+    z_GB_scale: Interval = (1.0, 1.0)
+    x_GB_m: Interval = (0.0, 0.0)
+    x_GB_sign_random: bool = False
+    excess_buoyancy_fraction: Interval = (0.0, 0.0)
+    crossflow_drag: Interval | None = None
+    sensor_noise: bool = False
+    disturbance_std_N: float = 0.0
+    duration_s: float = 300.0
+    components: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not (self.name and self.name.isidentifier() and self.name[0].isupper()):
+            raise ValueError(f"name={self.name!r} is invalid: must be a CamelCase identifier")
+        _check_interval("speed_mps", self.speed_mps, 0.0)
+        _check_interval("depth_command_m", self.depth_command_m, 0.0)
+        _check_interval("initial_depth_offset_m", self.initial_depth_offset_m)
+        _check_interval("initial_pitch_rad", self.initial_pitch_rad, -math.pi / 2, math.pi / 2)
+        _check_interval("initial_heave_mps", self.initial_heave_mps)
+        _check_interval("initial_pitch_rate_radps", self.initial_pitch_rate_radps)
+        if self.z_GB_m is not None:
+            _check_interval("z_GB_m", self.z_GB_m, _TINY)
+        _check_interval("z_GB_scale", self.z_GB_scale, _TINY)
+        _check_interval("x_GB_m", self.x_GB_m)
+        _check_interval("excess_buoyancy_fraction", self.excess_buoyancy_fraction, -1.0, 1.0)
+        if self.crossflow_drag is not None:
+            _check_interval("crossflow_drag", self.crossflow_drag, 0.0)
+        if not (math.isfinite(self.disturbance_std_N) and self.disturbance_std_N >= 0):
+            raise ValueError(
+                f"disturbance_std_N={self.disturbance_std_N!r} is invalid: must be a finite number >= 0"
+            )
+        if not (math.isfinite(self.duration_s) and self.duration_s > 0):
+            raise ValueError(f"duration_s={self.duration_s!r} is invalid: must be a finite number > 0")
+
+    def replace(self, **changes: object) -> Scenario:
+        """A copy with some fields changed (``dataclasses.replace``), validated again."""
+        return dataclasses.replace(self, **changes)  # type: ignore[arg-type]
+
+    def sample(
+        self, rng: np.random.Generator, weight_N: float, registry: dict[str, Scenario] | None = None
+    ) -> EpisodeConfig:
+        """Draw one episode.
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            The environment's generator; the draw consumes it deterministically.
+        weight_N : float
+            The vehicle's weight, to turn ``excess_buoyancy_fraction`` into newtons.
+        registry : dict, optional
+            Where ``components`` are looked up (the global registry by default).
+        """
+        if self.components:
+            from subenv.scenarios.registry import get_scenario
+
+            names: Sequence[str] = self.components
+            pick = names[int(rng.integers(len(names)))]
+            base = registry[pick] if registry is not None else get_scenario(pick)
+            config = base.sample(rng, weight_N, registry)
+            return dataclasses.replace(
+                config,
+                z_GB_scale=config.z_GB_scale * _draw(rng, self.z_GB_scale),
+                crossflow_drag=(
+                    _draw(rng, self.crossflow_drag) if self.crossflow_drag is not None else config.crossflow_drag
+                ),
+                sensor_noise=self.sensor_noise or config.sensor_noise,
+                disturbance_std_N=max(self.disturbance_std_N, config.disturbance_std_N),
+            )
+        speed0 = _draw(rng, self.speed_mps)
+        knots: tuple[tuple[float, float], ...] = ((0.0, speed0),)
+        if self.speed_ramp is not None:
+            start = _draw(rng, self.speed_ramp.start_s)
+            length = _draw(rng, self.speed_ramp.duration_s)
+            final = _draw(rng, self.speed_ramp.final_speed_mps)
+            knots = ((0.0, speed0), (start, speed0), (start + length, final))
+        command = _draw(rng, self.depth_command_m)
+        depth = command + _draw(rng, self.initial_depth_offset_m)
+        state = (
+            _draw(rng, self.initial_pitch_rad),
+            _draw(rng, self.initial_heave_mps),
+            _draw(rng, self.initial_pitch_rate_radps),
+            depth,
+        )
+        z_GB = _draw(rng, self.z_GB_m) if self.z_GB_m is not None else None
+        x_GB = _draw(rng, self.x_GB_m)
+        if self.x_GB_sign_random and rng.random() < 0.5:
+            x_GB = -x_GB
+        return EpisodeConfig(
+            speed_knots=knots,
+            speed_relative=self.speed_relative,
+            depth_command_m=command,
+            initial_state=state,
+            z_GB_m=z_GB,
+            z_GB_scale=_draw(rng, self.z_GB_scale),
+            x_GB_m=x_GB,
+            excess_buoyancy_N=_draw(rng, self.excess_buoyancy_fraction) * weight_N,
+            crossflow_drag=_draw(rng, self.crossflow_drag) if self.crossflow_drag is not None else None,
+            sensor_noise=self.sensor_noise,
+            disturbance_std_N=self.disturbance_std_N,
+            duration_s=self.duration_s,
+        )

@@ -1,0 +1,218 @@
+"""Loading vehicle files (TOML) into SI :class:`~subenv.vehicles.vehicle.Vehicle` objects.
+
+A vehicle file states its unit system once (``units = "us_customary"`` for ft, slug, lbf, s, or
+``units = "si"``); every dimensional quantity is converted to SI here and nowhere else.
+See ``subenv/vehicles/data/suboff.toml`` for the format.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from collections.abc import Mapping
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from subenv import units
+from subenv.vehicles.vehicle import HullOffsets, HydroCoefficients, PlaneCoefficients, Vehicle
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - exercised on Python 3.10 only
+    import tomli as tomllib
+
+__all__ = ["available_vehicles", "load_vehicle"]
+
+# Dimension of every key a vehicle file may hold, by section; "-" marks non-dimensional values.
+_SCHEMA: dict[str, dict[str, str]] = {
+    "environment": {"water_density": "density", "gravity": "acceleration"},
+    "rigid_body": {
+        "length": "length",
+        "weight": "force",
+        "buoyancy": "force",
+        "inertia_y": "inertia",
+        "x_G": "length",
+        "z_G": "length",
+        "x_B": "length",
+        "z_B": "length",
+    },
+    "hydrodynamics": {
+        name: "-"
+        for name in ("Z_wdot", "Z_qdot", "Z_w", "Z_q", "M_wdot", "M_qdot", "M_w", "M_q",
+                     "crossflow_drag")
+    },
+    "planes": {
+        "Z_delta_s": "-",
+        "M_delta_s": "-",
+        "Z_delta_b": "-",
+        "M_delta_b": "-",
+        "limit": "angle",
+    },
+    "hull": {"max_diameter": "length", "stations": "list", "radius_ratio": "list"},
+}
+# Keys whose value must be > 0 (checked on the file's own value, so the message quotes it).
+_POSITIVE = {
+    ("environment", "water_density"),
+    ("environment", "gravity"),
+    ("rigid_body", "length"),
+    ("rigid_body", "weight"),
+    ("rigid_body", "buoyancy"),
+    ("rigid_body", "inertia_y"),
+    ("hull", "max_diameter"),
+}
+_TOP_LEVEL = {"name": True, "description": False, "source": False, "units": True}
+
+# Factor from the file's unit to SI, per dimension.
+_TO_SI: dict[str, dict[str, float]] = {
+    "us_customary": {
+        "length": units.FOOT_M,
+        "force": units.POUND_FORCE_N,
+        "inertia": units.SLUG_FT2_KG_M2,
+        "density": units.SLUG_PER_FT3_KG_PER_M3,
+        "acceleration": units.FOOT_M,
+        "angle": 1.0,
+        "-": 1.0,
+    },
+    "si": dict.fromkeys(("length", "force", "inertia", "density", "acceleration", "angle", "-"), 1.0),
+}
+
+_DATA_PACKAGE = "subenv.vehicles.data"
+
+
+def available_vehicles() -> list[str]:
+    """Names of the vehicles shipped with the package (``load_vehicle(name)`` accepts them)."""
+    return sorted(
+        p.name.removesuffix(".toml")
+        for p in resources.files(_DATA_PACKAGE).iterdir()
+        if p.name.endswith(".toml")
+    )
+
+
+def load_vehicle(name_or_path: str | os.PathLike[str]) -> Vehicle:
+    """Load a vehicle by its shipped name (e.g. ``"suboff"``) or from a TOML file path.
+
+    Parameters
+    ----------
+    name_or_path : str or path-like
+        A name from :func:`available_vehicles`, or the path of a vehicle file in the same format
+        as ``subenv/vehicles/data/suboff.toml``.
+
+    Returns
+    -------
+    Vehicle
+        Frozen, in SI units.
+
+    Raises
+    ------
+    ValueError
+        Unknown name, missing or unknown key, or a value outside its allowed range; the message
+        names the field, the value and what is allowed.
+    FileNotFoundError
+        A path that does not exist.
+    """
+    text, origin = _read(name_or_path)
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"vehicle file {origin}: not valid TOML: {exc}") from exc
+    return vehicle_from_dict(data, origin=origin)
+
+
+def _read(name_or_path: str | os.PathLike[str]) -> tuple[str, str]:
+    name = os.fspath(name_or_path)
+    shipped = available_vehicles()
+    if name in shipped:
+        return resources.files(_DATA_PACKAGE).joinpath(f"{name}.toml").read_text("utf-8"), name
+    path = Path(name)
+    if path.suffix == ".toml" or path.exists() or os.sep in name:
+        if not path.is_file():
+            raise FileNotFoundError(f"vehicle file {str(path)!r} does not exist")
+        return path.read_text("utf-8"), str(path)
+    raise ValueError(
+        f"vehicle={name!r} is unknown: must be one of {shipped} or the path of a .toml vehicle file"
+    )
+
+
+def vehicle_from_dict(data: Mapping[str, Any], origin: str = "<dict>") -> Vehicle:
+    """Build a :class:`Vehicle` from the parsed contents of a vehicle file (see :func:`load_vehicle`)."""
+    where = f"vehicle file {origin}"
+    for key, required in _TOP_LEVEL.items():
+        if required and key not in data:
+            raise ValueError(f"{where}: missing key {key!r}")
+    unknown = set(data) - set(_TOP_LEVEL) - set(_SCHEMA)
+    if unknown:
+        raise ValueError(
+            f"{where}: unknown key(s) {sorted(unknown)}; allowed top-level keys are "
+            f"{sorted(set(_TOP_LEVEL) | set(_SCHEMA))}"
+        )
+    unit_system = data["units"]
+    if unit_system not in _TO_SI:
+        raise ValueError(f"{where}: units={unit_system!r} is invalid: must be one of {sorted(_TO_SI)}")
+    factors = _TO_SI[unit_system]
+
+    si: dict[str, dict[str, Any]] = {}
+    for section, keys in _SCHEMA.items():
+        table = data.get(section)
+        if not isinstance(table, Mapping):
+            raise ValueError(f"{where}: missing section [{section}]")
+        unknown = set(table) - set(keys)
+        if unknown:
+            raise ValueError(
+                f"{where}: unknown key(s) {sorted(unknown)} in [{section}]; allowed keys are {sorted(keys)}"
+            )
+        si[section] = {}
+        for key, dimension in keys.items():
+            if key not in table:
+                raise ValueError(f"{where}: missing key {section}.{key}")
+            value = table[key]
+            if dimension == "list":
+                if not isinstance(value, list) or not all(_is_number(v) for v in value):
+                    raise ValueError(f"{where}: {section}.{key}={value!r} is invalid: must be a list of numbers")
+                si[section][key] = [float(v) for v in value]
+            else:
+                if not _is_number(value):
+                    raise ValueError(f"{where}: {section}.{key}={value!r} is invalid: must be a number")
+                if (section, key) in _POSITIVE and not value > 0:
+                    raise ValueError(f"{where}: {section}.{key}={value!r} is invalid: must be > 0")
+                si[section][key] = float(value) * factors[dimension]
+
+    body, hull = si["rigid_body"], si["hull"]
+    hydro = dict(si["hydrodynamics"])
+    crossflow_drag = hydro.pop("crossflow_drag")
+    length = body["length"]
+    # Station convention of the thesis's offsets: x = (10 - station) L / 20, forward positive.
+    x_m = tuple((10.0 - s) * length / 20.0 for s in hull["stations"])
+    breadth_m = tuple(hull["max_diameter"] * r for r in hull["radius_ratio"])
+    try:
+        return Vehicle(
+            name=str(data["name"]),
+            description=str(data.get("description", "")),
+            source=str(data.get("source", "")),
+            length_m=length,
+            weight_N=body["weight"],
+            buoyancy_N=body["buoyancy"],
+            inertia_y_kg_m2=body["inertia_y"],
+            x_G_m=body["x_G"],
+            z_G_m=body["z_G"],
+            x_B_m=body["x_B"],
+            z_B_m=body["z_B"],
+            water_density_kg_m3=si["environment"]["water_density"],
+            gravity_m_s2=si["environment"]["gravity"],
+            hydro=HydroCoefficients(**hydro),
+            planes=PlaneCoefficients(
+                Z_delta_s=si["planes"]["Z_delta_s"],
+                M_delta_s=si["planes"]["M_delta_s"],
+                Z_delta_b=si["planes"]["Z_delta_b"],
+                M_delta_b=si["planes"]["M_delta_b"],
+                limit_rad=si["planes"]["limit"],
+            ),
+            hull=HullOffsets(x_m=x_m, breadth_m=breadth_m),
+            crossflow_drag=crossflow_drag,
+        )
+    except ValueError as exc:
+        raise ValueError(f"{where}: {exc}") from exc
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)

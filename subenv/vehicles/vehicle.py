@@ -1,0 +1,298 @@
+"""Vehicle data: a frozen, SI description of a submarine's vertical-plane properties.
+
+Everything derived (mass, dimensional coefficients, hull planform area and centroid) is a
+computed property, never a stored copy, so a variant made with :meth:`Vehicle.variant` can never
+disagree with itself.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "DimensionalCoefficients",
+    "HullOffsets",
+    "HydroCoefficients",
+    "PlaneCoefficients",
+    "Vehicle",
+]
+
+
+def _require(name: str, value: float, ok: bool, allowed: str) -> None:
+    if not (isinstance(value, (int, float)) and math.isfinite(value) and ok):
+        raise ValueError(f"{name}={value!r} is invalid: must be {allowed}")
+
+
+def _require_positive(name: str, value: float) -> None:
+    _require(name, value, isinstance(value, (int, float)) and value > 0, "a finite number > 0")
+
+
+def _require_finite(name: str, value: float) -> None:
+    _require(name, value, True, "a finite number")
+
+
+@dataclass(frozen=True)
+class HydroCoefficients:
+    """Non-dimensional vertical-plane hydrodynamic derivatives (SNAME primes).
+
+    Made dimensional with rho/2 L^n as in Riedel (1993) Appendix A: see
+    :class:`DimensionalCoefficients`.
+    """
+
+    Z_wdot: float
+    Z_qdot: float
+    Z_w: float
+    Z_q: float
+    M_wdot: float
+    M_qdot: float
+    M_w: float
+    M_q: float
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):
+            _require_finite(f"hydrodynamics.{f.name}", getattr(self, f.name))
+
+
+@dataclass(frozen=True)
+class PlaneCoefficients:
+    """Non-dimensional control derivatives of the stern (s) and bow (b) planes, and their limit."""
+
+    Z_delta_s: float
+    M_delta_s: float
+    Z_delta_b: float
+    M_delta_b: float
+    limit_rad: float = 0.4
+
+    def __post_init__(self) -> None:
+        for name in ("Z_delta_s", "M_delta_s", "Z_delta_b", "M_delta_b"):
+            _require_finite(f"planes.{name}", getattr(self, name))
+        _require(
+            "planes.limit_rad",
+            self.limit_rad,
+            isinstance(self.limit_rad, (int, float)) and 0 < self.limit_rad <= math.pi / 2,
+            "in (0, pi/2] rad",
+        )
+
+
+@dataclass(frozen=True)
+class HullOffsets:
+    """Hull planform breadth b(x) at stations x, for the cross-flow drag integral.
+
+    ``x_m`` is measured forward from the origin (the thesis's midship, L/2), so it decreases from
+    nose to tail; ``breadth_m`` is the local hull breadth. Between stations b(x) is linear.
+    """
+
+    x_m: tuple[float, ...]
+    breadth_m: tuple[float, ...]
+
+    def __post_init__(self) -> None:
+        if len(self.x_m) != len(self.breadth_m):
+            raise ValueError(
+                f"hull offsets: {len(self.x_m)} stations but {len(self.breadth_m)} breadths; "
+                "must be the same number"
+            )
+        if len(self.x_m) < 2:
+            raise ValueError(f"hull offsets: {len(self.x_m)} stations; must be at least 2")
+        x = np.asarray(self.x_m, dtype=float)
+        b = np.asarray(self.breadth_m, dtype=float)
+        if not np.all(np.isfinite(x)) or not np.all(np.isfinite(b)):
+            raise ValueError("hull offsets: stations and breadths must be finite numbers")
+        if np.any(np.diff(x) >= 0):
+            raise ValueError(
+                "hull offsets: x_m must decrease strictly from nose to tail "
+                "(stations must increase strictly)"
+            )
+        if np.any(b < 0):
+            raise ValueError(f"hull offsets: breadth_m has a negative value {b.min()!r}; must be >= 0")
+
+    @property
+    def area_m2(self) -> float:
+        """Planform area int b(x) dx, exact for the piecewise-linear hull [m^2]."""
+        x = np.asarray(self.x_m)
+        return float(-np.trapezoid(self.breadth_m, x))
+
+    @property
+    def centroid_x_m(self) -> float:
+        """Planform centroid int x b(x) dx / A, forward of the origin [m] (exact, piecewise linear)."""
+        x = np.asarray(self.x_m)
+        b = np.asarray(self.breadth_m)
+        x0, x1, b0, b1 = x[:-1], x[1:], b[:-1], b[1:]
+        # Exact first moment of a linear b over each segment (the trapezoid rule is not exact for x b).
+        moment = np.sum((x1 - x0) * (b0 * (2 * x0 + x1) + b1 * (x0 + 2 * x1)) / 6.0)
+        return float(-moment / self.area_m2)
+
+
+@dataclass(frozen=True)
+class DimensionalCoefficients:
+    """Dimensional hydrodynamic and control derivatives in SI.
+
+    Units: Z_w [kg/m], Z_q [kg], Z_wdot [kg], Z_qdot [kg m], M_w [kg], M_q [kg m],
+    M_wdot [kg m], M_qdot [kg m^2], Z_delta_* [kg/m /rad], M_delta_* [kg /rad]; forces are
+    ``Z_w u w`` [N], ``u^2 Z_delta delta`` [N] and so on (Riedel 1993 eqs 2.38-2.43).
+    """
+
+    Z_wdot: float
+    Z_qdot: float
+    Z_w: float
+    Z_q: float
+    M_wdot: float
+    M_qdot: float
+    M_w: float
+    M_q: float
+    Z_delta_s: float
+    M_delta_s: float
+    Z_delta_b: float
+    M_delta_b: float
+
+
+@dataclass(frozen=True)
+class Vehicle:
+    """A submarine's vertical-plane model data, in SI units (m, kg, N, s, rad).
+
+    Load one with :func:`subenv.load_vehicle`; make variants with :meth:`variant`.
+
+    Positions are body axes with the origin at midship: x forward, z down. Pitch is positive
+    nose-up, depth positive down.
+    """
+
+    name: str
+    length_m: float
+    weight_N: float
+    buoyancy_N: float
+    inertia_y_kg_m2: float
+    x_G_m: float
+    z_G_m: float
+    x_B_m: float
+    z_B_m: float
+    water_density_kg_m3: float
+    gravity_m_s2: float
+    hydro: HydroCoefficients
+    planes: PlaneCoefficients
+    hull: HullOffsets
+    crossflow_drag: float
+    description: str = ""
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        for name in ("length_m", "weight_N", "buoyancy_N", "inertia_y_kg_m2",
+                     "water_density_kg_m3", "gravity_m_s2"):
+            _require_positive(name, getattr(self, name))
+        for name in ("x_G_m", "z_G_m", "x_B_m", "z_B_m"):
+            _require_finite(name, getattr(self, name))
+        _require(
+            "crossflow_drag",
+            self.crossflow_drag,
+            isinstance(self.crossflow_drag, (int, float)) and self.crossflow_drag >= 0,
+            "a finite number >= 0",
+        )
+
+    # --- derived quantities -------------------------------------------------------------
+    @property
+    def mass_kg(self) -> float:
+        """Mass m = W / g [kg]."""
+        return self.weight_N / self.gravity_m_s2
+
+    @property
+    def z_GB_m(self) -> float:
+        """Metacentric height z_GB = z_G - z_B [m] (positive: G below B, statically stable)."""
+        return self.z_G_m - self.z_B_m
+
+    @property
+    def x_GB_m(self) -> float:
+        """Ballast offset x_GB = x_G - x_B [m] (Riedel 1993 Ch. IV)."""
+        return self.x_G_m - self.x_B_m
+
+    @property
+    def excess_buoyancy_N(self) -> float:
+        """Excess buoyancy B - W [N] (positive: light; models near-surface suction, Ch. V.C)."""
+        return self.buoyancy_N - self.weight_N
+
+    @cached_property
+    def coefficients(self) -> DimensionalCoefficients:
+        """Dimensional derivatives, nd_k = rho/2 L^(k+1) (Riedel 1993 Appendix A, THESIS1.M)."""
+        half_rho = 0.5 * self.water_density_kg_m3
+        L = self.length_m
+        nd1, nd2, nd3, nd4 = (half_rho * L**k for k in (2, 3, 4, 5))
+        h, p = self.hydro, self.planes
+        return DimensionalCoefficients(
+            Z_wdot=nd2 * h.Z_wdot,
+            Z_qdot=nd3 * h.Z_qdot,
+            Z_w=nd1 * h.Z_w,
+            Z_q=nd2 * h.Z_q,
+            M_wdot=nd3 * h.M_wdot,
+            M_qdot=nd4 * h.M_qdot,
+            M_w=nd2 * h.M_w,
+            M_q=nd3 * h.M_q,
+            Z_delta_s=nd1 * p.Z_delta_s,
+            M_delta_s=nd2 * p.M_delta_s,
+            Z_delta_b=nd1 * p.Z_delta_b,
+            M_delta_b=nd2 * p.M_delta_b,
+        )
+
+    @property
+    def hull_area_m2(self) -> float:
+        """Hull planform area A [m^2]."""
+        return self.hull.area_m2
+
+    @property
+    def hull_centroid_x_m(self) -> float:
+        """Hull planform centroid x_A, forward of midship [m]."""
+        return self.hull.centroid_x_m
+
+    # --- variants -----------------------------------------------------------------------
+    def variant(
+        self,
+        *,
+        z_GB_m: float | None = None,
+        x_GB_m: float | None = None,
+        excess_buoyancy_N: float | None = None,
+        crossflow_drag: float | None = None,
+        name: str | None = None,
+    ) -> Vehicle:
+        """Return a copy with another loading, leaving this vehicle unchanged.
+
+        Parameters
+        ----------
+        z_GB_m : float, optional
+            Metacentric height z_G - z_B [m]; moves G, keeps B.
+        x_GB_m : float, optional
+            Ballast offset x_G - x_B [m] (Riedel 1993 Ch. IV); moves G, keeps B.
+        excess_buoyancy_N : float, optional
+            B - W [N] (Riedel 1993 Ch. V.C); changes B, keeps W (and so the mass).
+        crossflow_drag : float, optional
+            Hull cross-flow drag coefficient C_D (>= 0).
+        name : str, optional
+            Name of the variant; by default the base name with the changes appended.
+        """
+        changes: dict[str, Any] = {}
+        labels = []
+        if z_GB_m is not None:
+            _require_finite("z_GB_m", z_GB_m)
+            changes["z_G_m"] = self.z_B_m + z_GB_m
+            labels.append(f"z_GB={z_GB_m:g}m")
+        if x_GB_m is not None:
+            _require_finite("x_GB_m", x_GB_m)
+            changes["x_G_m"] = self.x_B_m + x_GB_m
+            labels.append(f"x_GB={x_GB_m:g}m")
+        if excess_buoyancy_N is not None:
+            _require_finite("excess_buoyancy_N", excess_buoyancy_N)
+            changes["buoyancy_N"] = self.weight_N + excess_buoyancy_N
+            labels.append(f"B-W={excess_buoyancy_N:g}N")
+        if crossflow_drag is not None:
+            changes["crossflow_drag"] = crossflow_drag
+            labels.append(f"C_D={crossflow_drag:g}")
+        if not changes and name is None:
+            return self
+        changes["name"] = name if name is not None else f"{self.name}[{','.join(labels)}]"
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> Mapping[str, Any]:
+        """The vehicle's stored fields (SI), e.g. for logging."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}

@@ -1,0 +1,85 @@
+"""RK4 at the environments' step against scipy's solve_ivp (rtol 1e-10) over 600 s.
+
+Both integrate the same problem: planes held over each 0.5 s control period (zero-order hold),
+set either by an open-loop schedule or by the thesis's full-state feedback of the state each
+integrator has reached (closed loop). The worst errors are printed in the "measured" summary.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.signal import place_poles
+
+from subenv.analysis import linear_model
+from subenv.dynamics import CONTROL_PERIOD_S, SUBSTEPS, derivatives, model_params, rk4
+from subenv.units import fps_to_mps
+
+DURATION_S = 600.0
+DEPTH_TOL_M = 1e-3
+PITCH_TOL_RAD = 1e-5
+
+
+def _thesis_gain(vehicle) -> np.ndarray:
+    lm = linear_model(vehicle, fps_to_mps(5.0))
+    return place_poles(lm.A, lm.B[:, None], [-0.3, -0.31, -0.32, -0.33]).gain_matrix[0]
+
+
+def _planes(mode: str, gain: np.ndarray, x: np.ndarray, t: float) -> float:
+    if mode == "open":
+        return 0.1 * np.sin(0.05 * t)  # a slow open-loop sweep of the stern planes
+    return float(np.clip(-gain @ (x - np.array([0.0, 0.0, 0.0, 10.0])), -0.4, 0.4))
+
+
+@pytest.mark.parametrize("mode", ["open", "closed"])
+@pytest.mark.parametrize("speed", [0.15, 0.5, 1.0, 1.8])
+def test_rk4_matches_solve_ivp_over_600_s(suboff, report, mode, speed):
+    params = model_params(suboff)
+    gain = _thesis_gain(suboff)
+    x_rk = x_ref = np.array([0.05, 0.0, 0.0, 8.0])
+    worst_depth = worst_pitch = 0.0
+    for k in range(round(DURATION_S / CONTROL_PERIOD_S)):
+        t = k * CONTROL_PERIOD_S
+        d_rk = _planes(mode, gain, x_rk, t)
+        d_ref = _planes(mode, gain, x_ref, t)
+        x_rk = rk4(lambda s, x: derivatives(x, speed, d_rk, 0.0, params), t, x_rk, CONTROL_PERIOD_S, SUBSTEPS)
+        sol = solve_ivp(lambda s, x: derivatives(x, speed, d_ref, 0.0, params), (t, t + CONTROL_PERIOD_S),
+                        x_ref, method="DOP853", rtol=1e-10, atol=1e-12)
+        assert sol.success, sol.message
+        x_ref = sol.y[:, -1]
+        worst_depth = max(worst_depth, abs(x_rk[3] - x_ref[3]))
+        worst_pitch = max(worst_pitch, abs(x_rk[0] - x_ref[0]))
+    report(f"RK4 dt={CONTROL_PERIOD_S / SUBSTEPS} s vs solve_ivp, {mode} loop, u={speed} m/s, 600 s",
+           f"worst depth error {worst_depth:.2e} m, worst pitch error {worst_pitch:.2e} rad")
+    # The trajectory must actually move, or a small error would prove nothing.
+    assert abs(x_ref[3] - 8.0) > 0.05 or abs(x_ref[0]) > 0.01
+    assert worst_depth < DEPTH_TOL_M
+    assert worst_pitch < PITCH_TOL_RAD
+
+
+def test_rk4_matches_solve_ivp_through_a_deceleration(suboff, report):
+    """Closed loop while the speed ramps from 1.8 to 0.15 m/s over 600 s, through u_cr."""
+    params = model_params(suboff)
+    gain = _thesis_gain(suboff)
+
+    def speed(t: float) -> float:
+        return 1.8 + (0.15 - 1.8) * t / DURATION_S
+
+    x_rk = x_ref = np.array([0.05, 0.0, 0.0, 8.0])
+    worst_depth = worst_pitch = 0.0
+    for k in range(round(DURATION_S / CONTROL_PERIOD_S)):
+        t = k * CONTROL_PERIOD_S
+        d_rk = _planes("closed", gain, x_rk, t)
+        d_ref = _planes("closed", gain, x_ref, t)
+        x_rk = rk4(lambda s, x: derivatives(x, speed(s), d_rk, 0.0, params), t, x_rk, CONTROL_PERIOD_S, SUBSTEPS)
+        sol = solve_ivp(lambda s, x: derivatives(x, speed(s), d_ref, 0.0, params), (t, t + CONTROL_PERIOD_S),
+                        x_ref, method="DOP853", rtol=1e-10, atol=1e-12)
+        x_ref = sol.y[:, -1]
+        worst_depth = max(worst_depth, abs(x_rk[3] - x_ref[3]))
+        worst_pitch = max(worst_pitch, abs(x_rk[0] - x_ref[0]))
+    report("RK4 vs solve_ivp, closed loop, speed 1.8 -> 0.15 m/s over 600 s",
+           f"worst depth error {worst_depth:.2e} m, worst pitch error {worst_pitch:.2e} rad")
+    assert abs(x_ref[3] - 8.0) > 1.0  # the trajectory moved (to the ordered depth)
+    assert worst_depth < DEPTH_TOL_M
+    assert worst_pitch < PITCH_TOL_RAD

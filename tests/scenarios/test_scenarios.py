@@ -1,0 +1,120 @@
+"""Scenarios as data: the registry, what each shipped scenario draws, bad definitions."""
+
+from __future__ import annotations
+
+import collections
+
+import numpy as np
+import pytest
+
+import subenv
+from subenv.scenarios import Scenario, SpeedRamp, get_scenario, register_scenario, scenario_names
+from subenv.scenarios.presets import BASE_SCENARIOS
+
+
+def _episodes(name: str, n: int = 40, **env_kwargs):
+    env = subenv.DivePlaneEnv(scenario=name, **env_kwargs)
+    out = []
+    for seed in range(n):
+        _, info = env.reset(seed=seed)
+        out.append((env.episode, env.vehicle, info, env))
+    return out
+
+
+def test_registry_lists_and_rejects():
+    assert scenario_names()[:7] == ["Nominal", "LowSpeed", "NearCritical", "SpeedTransient",
+                                    "PeriscopeDepth", "BallastOffset", "Randomized"]
+    with pytest.raises(ValueError, match=r"scenario='Slow' is unknown: must be one of \['Nominal'"):
+        get_scenario("Slow")
+    with pytest.raises(ValueError, match="already registered"):
+        register_scenario(get_scenario("Nominal"))
+    with pytest.raises(ValueError, match=r"component 'Nope' is unknown"):
+        register_scenario(Scenario(name="Mix", description="", components=("Nope",)))
+
+
+def test_nominal_is_the_thesis_design_speed():
+    for _, _, info, _ in _episodes("Nominal", 5):
+        assert info["speed_mps"] == pytest.approx(5 * 0.3048)
+
+
+@pytest.mark.parametrize(("name", "low", "high"), [("LowSpeed", 0.3, 0.8), ("NearCritical", 0.85, 1.15)])
+def test_speeds_are_placed_relative_to_the_critical_speed(name, low, high):
+    ratios = [info["speed_mps"] / info["critical_speed_mps"] for *_, info, _ in _episodes(name)]
+    assert low <= min(ratios) and max(ratios) <= high
+    assert max(ratios) - min(ratios) > 0.5 * (high - low)  # actually spread over the interval
+
+
+def test_relative_speeds_follow_the_plane_allocation():
+    """With alpha = -1 the critical speed is lower (Fig. 3-9); LowSpeed stays below it."""
+    for _, vehicle, info, env in _episodes("LowSpeed", 5, alpha=-1.0):
+        assert info["critical_speed_mps"] == pytest.approx(subenv.analysis.critical_speed(vehicle, -1.0))
+        assert info["speed_mps"] < info["critical_speed_mps"] < 0.5
+
+
+def test_periscope_depth_is_near_the_surface_and_light():
+    for episode, vehicle, info, _ in _episodes("PeriscopeDepth", 10):
+        assert 1.0 <= info["depth_command_m"] <= 1.2
+        assert 2e-4 <= vehicle.excess_buoyancy_N / vehicle.weight_N <= 1e-3
+
+
+def test_ballast_offset_draws_both_signs():
+    offsets = [vehicle.x_GB_m for _, vehicle, _, _ in _episodes("BallastOffset")]
+    assert min(offsets) <= -0.5e-3 and max(offsets) >= 0.5e-3
+    assert all(0.5e-3 <= abs(x) <= 3e-3 for x in offsets)
+
+
+def test_randomized_draws_from_every_scenario_and_randomises_the_loading():
+    episodes = _episodes("Randomized", 120)
+    z_GB = np.array([v.z_GB_m for _, v, _, _ in episodes])
+    drag = np.array([v.crossflow_drag for _, v, _, _ in episodes])
+    assert z_GB.min() < 0.9 * 0.03048 and z_GB.max() > 1.15 * 0.03048
+    assert drag.min() < 0.1 and drag.max() > 0.5
+    assert all(e.sensor_noise and e.disturbance_std_N > 0 for e, *_ in episodes)
+    # Every component scenario shows up: recognise them by their signatures.
+    kinds = collections.Counter()
+    for episode, vehicle, info, _ in episodes:
+        if len(episode.speed_knots) > 1:
+            kinds["SpeedTransient"] += 1
+        elif vehicle.excess_buoyancy_N > 0:
+            kinds["PeriscopeDepth"] += 1
+        elif vehicle.x_GB_m != 0:
+            kinds["BallastOffset"] += 1
+        elif not episode.speed_relative:
+            kinds["Nominal"] += 1
+        else:
+            kinds["LowSpeed or NearCritical"] += 1
+    assert len(kinds) == 5 and min(kinds.values()) >= 5
+    assert {s.name for s in BASE_SCENARIOS} == set(get_scenario("Randomized").components)
+
+
+def test_disturbance_force_varies_within_an_episode():
+    env = subenv.DivePlaneEnv(scenario="Randomized")
+    env.reset(seed=0, options={"speed": 1.0})
+    forces = [env.step(np.zeros(1, dtype=np.float32))[-1]["disturbance_N"] for _ in range(50)]
+    assert np.std(forces) > 0.01 and max(map(abs, forces)) < 10.0
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"speed_mps": (1.0, 0.5)}, r"speed_mps=\(1\.0, 0\.5\) is invalid: must be a \(low, high\) pair"),
+        ({"speed_mps": (-1.0, 0.5)}, r"speed_mps=\(-1\.0, 0\.5\) is invalid"),
+        ({"duration_s": 0.0}, r"duration_s=0\.0 is invalid: must be a finite number > 0"),
+        ({"z_GB_scale": (0.0, 1.0)}, r"z_GB_scale=\(0\.0, 1\.0\) is invalid"),
+        ({"disturbance_std_N": -1.0}, r"disturbance_std_N=-1\.0 is invalid"),
+        ({"name": "lowercase"}, r"name='lowercase' is invalid: must be a CamelCase identifier"),
+    ],
+)
+def test_bad_scenario_definitions(kwargs, message):
+    fields = {"name": "Custom", "description": "test"} | kwargs
+    with pytest.raises(ValueError, match=message):
+        Scenario(**fields)
+    with pytest.raises(ValueError, match="duration_s"):
+        SpeedRamp(final_speed_mps=(0.1, 0.2), start_s=(0.0, 1.0), duration_s=(-1.0, 1.0))
+
+
+def test_a_custom_scenario_object_runs_without_registration():
+    custom = get_scenario("LowSpeed").replace(name="VeryLow", speed_mps=(0.2, 0.2), duration_s=10.0)
+    env = subenv.DivePlaneEnv(scenario=custom)
+    _, info = env.reset(seed=0)
+    assert info["speed_mps"] == pytest.approx(0.2 * info["critical_speed_mps"])

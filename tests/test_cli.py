@@ -1,0 +1,34 @@
+"""The ``subenv`` command: the demonstration the README's main command runs."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from subenv.cli import main
+
+
+def test_demo_prints_the_summary_and_writes_the_plot(tmp_path: Path, capsys):
+    out = tmp_path / "figs" / "demo.png"
+    assert main(["demo", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "u_cr = 0.5785 m/s = 1.8979 fps" in text
+    rows = [line.split() for line in text.splitlines() if line.strip().startswith(("1.524", "0.450"))]
+    assert len(rows) == 2
+    design, low = rows
+    assert abs(float(design[2])) < 0.01  # holds the ordered depth at 5 fps
+    assert abs(float(low[2])) > 1.0  # loses it below the critical speed
+    assert out.read_bytes().startswith(b"\x89PNG")
+    assert [p.name for p in out.parent.iterdir()] == ["demo.png"]  # no temporary file left
+
+
+def test_bad_option_is_a_clear_error(capsys):
+    with pytest.raises(SystemExit, match=r"--low-speed=-1\.0 is invalid"):
+        main(["demo", "--low-speed", "-1", "--no-plot"])
+
+
+def test_list_names_every_id(capsys):
+    assert main(["list"]) == 0
+    text = capsys.readouterr().out
+    assert "subenv/LowSpeed-v0" in text and "subenv/DivePlane-v0" in text

@@ -1,0 +1,167 @@
+"""Vehicle data: the shipped SUBOFF file, the unit conversion, derived quantities, variants, bad data."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import sys
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+from subenv import load_vehicle
+from subenv.units import FOOT_M, POUND_FORCE_N, SLUG_KG
+from subenv.vehicles import available_vehicles, vehicle_from_dict
+
+
+def _suboff_file() -> dict:
+    return tomllib.loads(resources.files("subenv.vehicles.data").joinpath("suboff.toml").read_text())
+
+
+def test_unit_constants_are_the_exact_definitions():
+    # 1 slug accelerates at 1 ft/s^2 under 1 lbf.
+    assert SLUG_KG * FOOT_M == pytest.approx(POUND_FORCE_N, rel=1e-15)
+    assert SLUG_KG == pytest.approx(14.5939029372, rel=1e-10)  # NIST SP 811
+
+
+def test_suboff_is_shipped_and_frozen(suboff):
+    assert "suboff" in available_vehicles()
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        suboff.length_m = 1.0  # type: ignore[misc]
+
+
+def test_suboff_conversion_to_si(suboff):
+    raw = _suboff_file()
+    body = raw["rigid_body"]
+    assert suboff.length_m == pytest.approx(body["length"] * 0.3048, rel=1e-15)
+    assert suboff.weight_N == pytest.approx(body["weight"] * 4.4482216152605, rel=1e-15)
+    assert suboff.inertia_y_kg_m2 == pytest.approx(body["inertia_y"] * 14.593902937206 * 0.3048**2, rel=1e-12)
+    assert suboff.z_GB_m == pytest.approx(0.1 * 0.3048, rel=1e-12)
+    assert suboff.water_density_kg_m3 == pytest.approx(1.94 * 14.593902937206 / 0.3048**3, rel=1e-12)
+    assert suboff.gravity_m_s2 == pytest.approx(32.2 * 0.3048, rel=1e-15)
+    # m = W / g in either unit system: 48.330 slug (reference sheet).
+    assert suboff.mass_kg / SLUG_KG == pytest.approx(1556.2363 / 32.2, rel=1e-12)
+    assert suboff.mass_kg / SLUG_KG == pytest.approx(48.330, abs=5e-4)
+    assert suboff.planes.limit_rad == 0.4
+
+
+def test_dimensional_coefficients_follow_rho_half_L_power(suboff):
+    """nd1..nd4 = rho/2 L^2..L^5 (Appendix A); compare in thesis units, then in SI."""
+    rho, L = 1.94, 13.9792
+    nd = {k: 0.5 * rho * L**k for k in (2, 3, 4, 5)}
+    c = suboff.coefficients
+    # Z_w is nd1 Z'_w, in lbf s/ft^2 -> kg/m: lbf s^2/ft^2 / s = slug/ft.
+    assert c.Z_w == pytest.approx(nd[2] * -1.391e-2 * SLUG_KG / FOOT_M, rel=1e-12)
+    assert c.M_qdot == pytest.approx(nd[5] * -8.8e-4 * SLUG_KG * FOOT_M**2, rel=1e-12)
+    assert c.M_delta_s == pytest.approx(nd[3] * -2.409e-3 * SLUG_KG, rel=1e-12)
+    assert c.Z_delta_b == pytest.approx(0.5 * c.Z_delta_s, rel=1e-12)
+    assert c.M_delta_b == pytest.approx(-0.5 * c.M_delta_s, rel=1e-12)
+
+
+def test_hull_area_and_centroid_are_computed_from_offsets(suboff):
+    # Reference sheet: full hull A = 20.215 ft^2; the centroid 0.320 ft is the trapezoid-rule
+    # value, the exact piecewise-linear centroid is 0.3163 ft.
+    assert suboff.hull_area_m2 / FOOT_M**2 == pytest.approx(20.215, abs=1e-3)
+    x = np.asarray(suboff.hull.x_m)
+    b = np.asarray(suboff.hull.breadth_m)
+    fine = np.linspace(x.min(), x.max(), 400001)
+    bf = np.interp(fine, x[::-1], b[::-1])
+    centroid = np.trapezoid(fine * bf, fine) / np.trapezoid(bf, fine)
+    assert suboff.hull_centroid_x_m == pytest.approx(centroid, abs=1e-7)
+    assert suboff.hull_centroid_x_m / FOOT_M == pytest.approx(0.3163, abs=1e-4)
+    assert max(suboff.hull.breadth_m) == pytest.approx(1.6667 * FOOT_M, rel=1e-12)
+
+
+def test_variants_change_only_what_they_name(suboff):
+    v = suboff.variant(z_GB_m=0.05, x_GB_m=-0.002, excess_buoyancy_N=3.0, crossflow_drag=0.0)
+    assert v.z_GB_m == pytest.approx(0.05)
+    assert v.x_GB_m == pytest.approx(-0.002)
+    assert v.excess_buoyancy_N == pytest.approx(3.0)
+    assert v.crossflow_drag == 0.0
+    assert v.mass_kg == suboff.mass_kg  # W unchanged: excess buoyancy changes B
+    assert v.coefficients == suboff.coefficients
+    assert suboff.z_GB_m == pytest.approx(0.03048)  # the original is untouched
+    assert suboff.variant() is suboff
+    assert "z_GB=0.05m" in v.name
+
+
+def test_user_vehicle_file_by_path(tmp_path: Path, suboff):
+    text = resources.files("subenv.vehicles.data").joinpath("suboff.toml").read_text()
+    path = tmp_path / "mysub.toml"
+    path.write_text(text.replace('name = "suboff"', 'name = "mysub"').replace("inertia_y = 561.32", "inertia_y = 600.0"))
+    v = load_vehicle(path)
+    assert v.name == "mysub"
+    assert v.inertia_y_kg_m2 == pytest.approx(600.0 * SLUG_KG * FOOT_M**2)
+    assert v.length_m == suboff.length_m
+
+
+def test_si_vehicle_file_round_trips(suboff):
+    raw = _suboff_file()
+    si = dict(raw, units="si")
+    si["rigid_body"] = {k: v * (FOOT_M if k in ("length", "x_G", "z_G", "x_B", "z_B") else 1.0)
+                        for k, v in raw["rigid_body"].items()}
+    si["rigid_body"]["weight"] = suboff.weight_N
+    si["rigid_body"]["buoyancy"] = suboff.buoyancy_N
+    si["rigid_body"]["inertia_y"] = suboff.inertia_y_kg_m2
+    si["environment"] = {"water_density": suboff.water_density_kg_m3, "gravity": suboff.gravity_m_s2}
+    si["hull"] = dict(raw["hull"], max_diameter=raw["hull"]["max_diameter"] * FOOT_M)
+    v = vehicle_from_dict(si)
+    assert v.coefficients.M_q == pytest.approx(suboff.coefficients.M_q, rel=1e-12)
+    assert v.hull_area_m2 == pytest.approx(suboff.hull_area_m2, rel=1e-12)
+
+
+def _broken(section: str | None, key: str, value: object) -> dict:
+    raw = _suboff_file()
+    target = raw if section is None else raw[section]
+    if value is _DELETE:
+        del target[key]
+    else:
+        target[key] = value
+    return raw
+
+
+_DELETE = object()
+
+
+@pytest.mark.parametrize(
+    ("section", "key", "value", "message"),
+    [
+        ("rigid_body", "length", 0.0, r"rigid_body\.length=0\.0 is invalid: must be > 0"),
+        ("rigid_body", "length", -13.9, r"rigid_body\.length=-13\.9 is invalid: must be > 0"),
+        ("rigid_body", "weight", -1.0, r"rigid_body\.weight=-1\.0 is invalid: must be > 0"),
+        ("rigid_body", "inertia_y", 0, r"rigid_body\.inertia_y=0 is invalid: must be > 0"),
+        ("rigid_body", "inertia_y", "big", r"rigid_body\.inertia_y='big' is invalid: must be a number"),
+        ("hydrodynamics", "M_w", _DELETE, r"missing key hydrodynamics\.M_w"),
+        ("hydrodynamics", "K_p", 0.1, r"unknown key\(s\) \['K_p'\] in \[hydrodynamics\]; allowed keys are"),
+        (None, "colour", "grey", r"unknown key\(s\) \['colour'\]; allowed top-level keys are"),
+        (None, "units", "imperial", r"units='imperial' is invalid: must be one of \['si', 'us_customary'\]"),
+        (None, "planes", _DELETE, r"missing section \[planes\]"),
+        ("planes", "limit", 2.0, r"planes\.limit_rad=2\.0 is invalid: must be in \(0, pi/2\] rad"),
+        ("hydrodynamics", "crossflow_drag", -0.1, r"crossflow_drag=-0\.1 is invalid: must be a finite number >= 0"),
+        ("hull", "radius_ratio", [0.0, 1.0], r"stations but 2 breadths"),
+    ],
+)
+def test_invalid_vehicle_data_names_field_value_and_allowed(section, key, value, message):
+    with pytest.raises(ValueError, match=message):
+        vehicle_from_dict(_broken(section, key, value))
+
+
+def test_unknown_vehicle_name_lists_the_shipped_ones():
+    with pytest.raises(ValueError, match=r"vehicle='seawolf' is unknown: must be one of \['suboff'\]"):
+        load_vehicle("seawolf")
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        load_vehicle("/nonexistent/sub.toml")
+
+
+def test_direct_construction_validates(suboff):
+    with pytest.raises(ValueError, match=r"inertia_y_kg_m2=-5\.0 is invalid: must be a finite number > 0"):
+        dataclasses.replace(suboff, inertia_y_kg_m2=-5.0)
+    with pytest.raises(ValueError, match=r"z_GB_m=nan is invalid"):
+        suboff.variant(z_GB_m=math.nan)
