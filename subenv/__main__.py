@@ -1,3 +1,5 @@
-from subenv.cli import main
 import sys
+
+from subenv.cli import main
+
 sys.exit(main())

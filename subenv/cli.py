@@ -103,6 +103,9 @@ def _atomic_savefig(fig: object, path: Path) -> None:
     os.close(fd)
     try:
         fig.savefig(tmp, dpi=110)  # type: ignore[attr-defined]
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; give the file the usual mode
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

@@ -13,8 +13,8 @@ from subenv.dynamics.model import (
 
 __all__ = [
     "CONTROL_PERIOD_S",
-    "SUBSTEPS",
     "STATE_NAMES",
+    "SUBSTEPS",
     "HullTable",
     "ModelParams",
     "crossflow_integrals",

@@ -31,6 +31,7 @@ deterministic: the same :class:`Frame` and size always give the same pixels.
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 from collections.abc import Iterable, Sequence
@@ -39,6 +40,7 @@ from typing import TYPE_CHECKING, Any, Final
 
 import numpy as np
 import numpy.typing as npt
+from typing_extensions import Self
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     import pygame
@@ -47,11 +49,11 @@ __all__ = [
     "BACKGROUND_RGB",
     "COMMAND_RGB",
     "DEPTH_RGB",
-    "Frame",
     "HULL_RGB",
-    "HumanWindow",
     "PLANE_RGB",
     "SURFACE_RGB",
+    "Frame",
+    "HumanWindow",
     "panel_rects",
     "render_rgb",
 ]
@@ -336,7 +338,7 @@ def _dashed_polyline(
     """Draw a dashed polyline, the dash pattern running on across vertices."""
     period = _DASH_ON_PX + _DASH_OFF_PX
     travelled = 0.0
-    for (x0, y0), (x1, y1) in zip(points[:-1], points[1:]):
+    for (x0, y0), (x1, y1) in itertools.pairwise(points):
         seg = math.hypot(x1 - x0, y1 - y0)
         if seg == 0.0:
             continue
@@ -471,9 +473,9 @@ def _draw_side_view(
 
     # Commanded depth.
     if math.isfinite(frame.depth_command_m):
-        y = depth_to_y(frame.depth_command_m)
-        if -2 <= y <= ph + 2:
-            _dashed_polyline(surface, pg, COMMAND_RGB, [(0, y), (pw - 1, y)], 2)
+        y_command = depth_to_y(frame.depth_command_m)
+        if -2 <= y_command <= ph + 2:
+            _dashed_polyline(surface, pg, COMMAND_RGB, [(0, y_command), (pw - 1, y_command)], 2)
 
     # Water surface.
     if 0 <= y_surface < ph:
@@ -595,7 +597,7 @@ def _draw_trace(surface: pygame.Surface, pg: Any, font: Any | None, frame: Frame
     pg.draw.rect(surface, AXES_RGB, clip, 1)
 
     # Legend, top right above the box.
-    if text:
+    if font is not None:
         x_end = left + ax_w
         y_mid = top / 2
         for label, colour, dashed in (("command", COMMAND_RGB, True),
@@ -726,7 +728,7 @@ class HumanWindow:
         self._pg.display.quit()
         self._pg.quit()
 
-    def __enter__(self) -> HumanWindow:
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(self, *exc_info: object) -> None:

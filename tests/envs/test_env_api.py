@@ -89,7 +89,7 @@ def test_info_reports_the_required_quantities(env_id):
     env = gym.make(env_id)
     _, info = env.reset(seed=0)
     assert set(INFO_KEYS) <= set(info)
-    obs, reward, *_, info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))
+    _obs, reward, *_, info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))
     assert set(INFO_KEYS) <= set(info)
     assert reward == pytest.approx(sum(info[k] for k in REWARD_TERMS))
     assert info["critical_speed_mps"] > 0
@@ -234,7 +234,7 @@ def test_termination_reasons():
     # Full planes at 5 fps pitch the boat past the limit.
     env = subenv.DivePlaneEnv(scenario="Nominal")
     env.reset(seed=0)
-    _, reward, terminated, _, info = _run_until_done(env, np.array([-1.0], dtype=np.float32))
+    _, _reward, terminated, _, info = _run_until_done(env, np.array([-1.0], dtype=np.float32))
     assert terminated and info["termination_reason"] == "pitch_limit" and info["reward_termination"] == -100.0
     # Near the surface with planes pitching the bow up, the hull breaks the surface.
     env = subenv.DivePlaneEnv(scenario="PeriscopeDepth", max_pitch_rad=1.5)
