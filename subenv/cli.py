@@ -136,6 +136,20 @@ def demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def analyze(args: argparse.Namespace) -> int:
+    from subenv.analysis.report import write_report
+    from subenv.vehicles import load_vehicle
+
+    vehicle = load_vehicle(args.vehicle)
+    try:
+        out = write_report(args.out, vehicle, overwrite=args.force)
+    except FileExistsError as exc:
+        raise SystemExit(f"subenv analyze: {exc}") from None
+    print((out / "report.md").read_text().split("## Figures")[0].rstrip())
+    print(f"\nreport written to {out}/report.md with {len(list(out.glob('*.png')))} figures")
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="subenv", description=__doc__.split("\n\n")[0])
     sub = parser.add_subparsers(dest="command")
@@ -149,11 +163,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     p_demo.add_argument("--out", default="results/demo.png", help="plot file (default: %(default)s)")
     p_demo.add_argument("--no-plot", action="store_true", help="print the summary only")
     sub.add_parser("list", help="list the environment ids and scenarios")
+    p_analyze = sub.add_parser("analyze", help="write the reproduction report of Riedel (1993)")
+    p_analyze.add_argument("--out", default="results/analysis", help="report folder (default: %(default)s)")
+    p_analyze.add_argument("--vehicle", default="suboff", help="vehicle name or file (default: %(default)s)")
+    p_analyze.add_argument("--force", action="store_true", help="replace the folder if it exists")
     args = parser.parse_args(argv)
     if args.command in (None, "demo"):
         if args.command is None:
             args = parser.parse_args(["demo", *(argv or [])])
         return demo(args)
+    if args.command == "analyze":
+        return analyze(args)
     if args.command == "list":
         from subenv.scenarios import get_scenario, scenario_names
 

@@ -6,7 +6,11 @@ vehicle files may be written in either system and are converted once, in the loa
 
 from __future__ import annotations
 
-from typing import Final
+from typing import Final, TypeVar
+
+from subenv._typing import FloatArray
+
+_Speed = TypeVar("_Speed", float, FloatArray)
 
 FOOT_M: Final = 0.3048
 """One international foot in metres (exact)."""
@@ -27,11 +31,11 @@ SLUG_PER_FT3_KG_PER_M3: Final = SLUG_KG / FOOT_M**3
 """One slug/ft^3 (density) in kg/m^3."""
 
 
-def fps_to_mps(speed_fps: float) -> float:
+def fps_to_mps(speed_fps: _Speed) -> _Speed:
     """Convert a speed from ft/s to m/s."""
     return speed_fps * FPS_MPS
 
 
-def mps_to_fps(speed_mps: float) -> float:
+def mps_to_fps(speed_mps: _Speed) -> _Speed:
     """Convert a speed from m/s to ft/s."""
     return speed_mps / FPS_MPS

@@ -32,3 +32,14 @@ def test_list_names_every_id(capsys):
     assert main(["list"]) == 0
     text = capsys.readouterr().out
     assert "subenv/LowSpeed-v0" in text and "subenv/DivePlane-v0" in text
+
+
+def test_analyze_writes_the_report_and_refuses_to_overwrite(tmp_path: Path, capsys):
+    out = tmp_path / "analysis"
+    assert main(["analyze", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "| quantity | thesis value | computed value | difference |" in text
+    assert (out / "report.md").is_file() and len(list(out.glob("*.png"))) == 13
+    with pytest.raises(SystemExit, match="exists; pass overwrite=True"):
+        main(["analyze", "--out", str(out)])
+    assert main(["analyze", "--out", str(out), "--force"]) == 0

@@ -1,13 +1,70 @@
-"""Analysis of the dive-plane model: linear models and critical speeds."""
+"""Analysis of the dive-plane model (Riedel 1993 Ch. II-V): where the physics turns hard.
 
+- :mod:`~subenv.analysis.linear`: closed-form linear model (eqs 2.59-2.68), numerical Jacobian.
+- :mod:`~subenv.analysis.critical`: critical speed and Froude number (eq. 3.9).
+- :mod:`~subenv.analysis.design`: pole placement (eq. 2.98), closed-loop eigenvalues,
+  controllability (Fig. 3-14), scheduled depth gain (Fig. 5-3).
+- :mod:`~subenv.analysis.equilibria`: steady states with stability (eqs 3.17-3.23, 4.3-4.4, 4.40-4.42).
+- :mod:`~subenv.analysis.continuation`: pseudo-arclength continuation over speed or x_GB.
+- :mod:`~subenv.analysis.bifurcation`: cusps and bifurcation sets (eqs 4.7, 4.37, 4.39, 4.43-4.45, 5.1-5.2).
+- :mod:`~subenv.analysis.reversal`: level-flight trim through the critical speed (Fig. 5-2).
+- :mod:`~subenv.analysis.curriculum`: speed stages relative to the critical speed.
+- :mod:`~subenv.analysis.report`: the reproduction report (``subenv analyze``).
+"""
+
+from subenv.analysis.bifurcation import (
+    approximate_cusp,
+    exact_bifurcation_set,
+    exact_cusp,
+    saturation_cusp,
+    saturation_cusp_closed_form,
+)
+from subenv.analysis.continuation import Branch, ContinuationError, continue_equilibria
 from subenv.analysis.critical import critical_froude, critical_speed, froude_number
+from subenv.analysis.curriculum import SpeedStage, speed_curriculum
+from subenv.analysis.design import (
+    THESIS_DESIGN_SPEED_MPS,
+    THESIS_POLES,
+    closed_loop_eigenvalues,
+    controllability_determinant,
+    controllability_losses,
+    place_gain,
+    scheduled_depth_gain,
+    thesis_gain,
+)
+from subenv.analysis.equilibria import Equilibrium, equilibria, steady_state_residual, symmetric_pitchfork
 from subenv.analysis.linear import LinearModel, linear_model, numerical_jacobian
+from subenv.analysis.reversal import LevelFlightTrim, level_flight_trim
 
 __all__ = [
+    "THESIS_DESIGN_SPEED_MPS",
+    "THESIS_POLES",
+    "Branch",
+    "ContinuationError",
+    "Equilibrium",
+    "LevelFlightTrim",
     "LinearModel",
+    "SpeedStage",
+    "approximate_cusp",
+    "closed_loop_eigenvalues",
+    "continue_equilibria",
+    "controllability_determinant",
+    "controllability_losses",
     "critical_froude",
     "critical_speed",
+    "equilibria",
+    "exact_bifurcation_set",
+    "exact_cusp",
     "froude_number",
+    "level_flight_trim",
     "linear_model",
     "numerical_jacobian",
+    "place_gain",
+    "saturation_cusp",
+    "saturation_cusp_closed_form",
+    "scheduled_depth_gain",
+    "speed_curriculum",
+    "steady_state_residual",
+    "symmetric_pitchfork",
+    "thesis_gain",
 ]

@@ -1,0 +1,464 @@
+"""The reproduction report: published numbers of Riedel (1993) recomputed, and its figures redrawn.
+
+``subenv analyze`` calls :func:`write_report`. Every computed number comes from the package's
+functions; the thesis's values appear only in the "thesis value" column.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy.optimize import brentq
+
+from subenv.analysis import bifurcation as bif
+from subenv.analysis.continuation import continue_equilibria
+from subenv.analysis.critical import critical_froude, critical_speed, froude_number
+from subenv.analysis.design import (
+    closed_loop_eigenvalues,
+    controllability_determinant,
+    controllability_losses,
+    depth_gain_denominator,
+    scheduled_depth_gain,
+    thesis_gain,
+)
+from subenv.analysis.equilibria import Equilibrium, equilibria, symmetric_pitchfork
+from subenv.analysis.linear import plane_derivatives
+from subenv.analysis.reversal import level_flight_trim
+from subenv.units import FOOT_M, mps_to_fps
+from subenv.vehicles.loader import load_vehicle
+from subenv.vehicles.vehicle import Vehicle
+
+__all__ = ["ReportRow", "critical_speed_three_ways", "reproduce_numbers", "write_report"]
+
+# Inputs the thesis used for its figures (not results): x_GB/L of Figs 4-1, 4-6, 4-11 and the
+# Froude numbers of the paths of Fig. 4-13.
+_XGB_OVER_L_CH4 = -1e-4
+_PATH_C_FN, _PATH_B_FN = 1.0, 1.1
+
+
+@dataclass(frozen=True)
+class ReportRow:
+    """One line of the reproduction table."""
+
+    quantity: str
+    thesis: float
+    computed: float
+    unit: str
+    note: str = ""
+
+    @property
+    def difference(self) -> float:
+        return self.computed - self.thesis
+
+
+def _deg(x: float) -> float:
+    return math.degrees(x)
+
+
+def critical_speed_three_ways(vehicle: Vehicle, alpha: float = 0.0) -> dict[str, float]:
+    """u_cr [m/s] from eq. 3.9, from a closed-loop eigenvalue crossing zero, and from det(ctrb) = 0.
+
+    The eigenvalue crossing is found for the thesis's gain (any stabilising gain gives the same
+    speed: the constant coefficient of the closed-loop polynomial is k4 D(u), eq. 3.7).
+    """
+    closed = critical_speed(vehicle, alpha)
+    gain = thesis_gain(vehicle, alpha)
+
+    def smallest_real_eigenvalue(u: float) -> float:
+        eig = closed_loop_eigenvalues(vehicle, [u], gain, alpha)[0]
+        real = eig[np.abs(eig.imag) < 1e-9].real
+        return float(real.max()) if real.size else -1.0
+
+    lo, hi = 0.5 * closed, 1.5 * closed
+    eigen = brentq(lambda u: depth_gain_denominator(vehicle, u, alpha), lo, hi, xtol=1e-14)
+    # Confirm with the eigenvalues themselves: the largest real eigenvalue changes sign there.
+    assert smallest_real_eigenvalue(eigen * 0.99) > 0 > smallest_real_eigenvalue(eigen * 1.01)
+    losses = controllability_losses(vehicle, np.linspace(lo, hi, 201), alpha)
+    # The loss that matters is that of the depth mode (eigenvalue 0 of A); see controllability_losses.
+    ctrb = min(losses, key=lambda loss: abs(loss[1]))[0]
+    return {"closed_form": closed, "eigenvalue": eigen, "controllability": ctrb}
+
+
+def _saturation_pitch_and_froude(vehicle: Vehicle, alpha: float | None) -> tuple[float, float]:
+    """Where the symmetric pitchfork reaches the plane limit: (pitch [rad], Froude number)."""
+    c = vehicle.coefficients
+    if alpha is None:  # bow planes only
+        Z_d, M_d = c.Z_delta_b, c.M_delta_b
+    else:
+        Z_d, M_d = plane_derivatives(vehicle, alpha)
+    theta = math.atan(vehicle.planes.limit_rad * abs(Z_d / c.Z_w))  # |delta_ss| = limit in eq. 3.21
+    u_cr2 = vehicle.z_GB_m * Z_d * vehicle.buoyancy_N / (c.M_w * Z_d - c.Z_w * M_d)  # eq. 3.9
+    return theta, froude_number(vehicle, math.sqrt(u_cr2 * math.cos(theta)))  # eq. 3.17
+
+
+def _bow_only_critical_froude(vehicle: Vehicle) -> float:
+    c = vehicle.coefficients
+    u2 = vehicle.z_GB_m * c.Z_delta_b * vehicle.buoyancy_N / (c.M_w * c.Z_delta_b - c.Z_w * c.M_delta_b)
+    return froude_number(vehicle, math.sqrt(u2))
+
+
+def _jump_at_path_c(vehicle: Vehicle) -> tuple[float, float, float]:
+    """Fig. 4-13: x_GB/L where the +limit branch ends at Fn 1.0, and the pitch before and after."""
+    u = _PATH_C_FN * math.sqrt(vehicle.gravity_m_s2 * vehicle.z_GB_m)
+    x_plus, _ = bif.saturation_cusp(vehicle, np.array([u]))
+    x_end = float(x_plus[0])
+
+    def saturated_pitch(x: float, sign: float) -> float:
+        states = [e for e in equilibria(vehicle.variant(x_GB_m=x), u) if e.saturated and np.sign(e.plane_rad) == sign]
+        return states[0].pitch_rad
+
+    before = saturated_pitch(x_end * (1 - 1e-6), 1.0)
+    after = saturated_pitch(x_end * (1 + 1e-6), -1.0)
+    return x_end / vehicle.length_m, before, after
+
+
+def _path_a_crossings(vehicle: Vehicle) -> tuple[float, float]:
+    """Fig. 4-11: sqrt(lambda) where the path x_GB/L = -1e-4 meets the two saturation curves."""
+    target = _XGB_OVER_L_CH4 * vehicle.length_m
+    scale = math.sqrt(vehicle.gravity_m_s2 * vehicle.z_GB_m)
+    crossings = []
+    for index in (0, 1):
+        def f(fn: float, index: int = index) -> float:
+            return float(bif.saturation_cusp(vehicle, np.array([fn * scale]))[index][0]) - target
+        grid = np.linspace(0.8, 1.3, 101)
+        values = np.array([f(g) for g in grid])
+        i = int(np.flatnonzero(np.sign(values[:-1]) != np.sign(values[1:]))[0])
+        crossings.append(brentq(f, grid[i], grid[i + 1], xtol=1e-12))
+    return max(crossings), min(crossings)
+
+
+def reproduce_numbers(vehicle: Vehicle) -> list[ReportRow]:
+    """The thesis's published numbers next to the values the package computes for ``vehicle``."""
+    rows = []
+    gain = thesis_gain(vehicle)
+    gain_ft = gain * np.array([1.0, FOOT_M, 1.0, FOOT_M])
+    for i, (name, published) in enumerate(zip(("k_theta", "k_w", "k_q", "k_Z"), (-0.9917, -0.8333, -0.6026, 0.0351))):
+        rows.append(ReportRow(f"eq. 2.98 gain {name}", published, float(gain_ft[i]),
+                              "ft units", "poles (-0.3,-0.31,-0.32,-0.33) at 5 fps"))
+    three = critical_speed_three_ways(vehicle)
+    rows.append(ReportRow("u_cr, eq. 3.9 closed form", 1.8979, mps_to_fps(three["closed_form"]), "fps", "alpha = 0"))
+    rows.append(ReportRow("u_cr, closed-loop eigenvalue crossing zero (Fig. 3-4)", 1.8979,
+                          mps_to_fps(three["eigenvalue"]), "fps", "thesis gain"))
+    rows.append(ReportRow("u_cr, controllability matrix singular (Fig. 3-14)", 1.8979,
+                          mps_to_fps(three["controllability"]), "fps"))
+    rows.append(ReportRow("critical Fn, alpha = -1 (Fig. 3-9)", 0.81, critical_froude(vehicle, -1.0), "-"))
+    rows.append(ReportRow("critical Fn, alpha = +1 (Fig. 3-9)", 1.22, critical_froude(vehicle, 1.0), "-"))
+    rows.append(ReportRow("critical Fn, bow planes only (Fig. 5-4)", 2.05, _bow_only_critical_froude(vehicle), "-"))
+    theta_sat, fn_sat = _saturation_pitch_and_froude(vehicle, 0.0)
+    rows.append(ReportRow("saturation Fn, symmetric pitchfork (Figs 3-5, 3-6)", 1.05, fn_sat, "-"))
+    rows.append(ReportRow("pitch at saturation (Figs 3-5, 4-6)", 9.0, _deg(theta_sat), "deg", "thesis: 'about nine'"))
+    theta_bow, _ = _saturation_pitch_and_froude(vehicle, None)
+    rows.append(ReportRow("pitch at saturation, bow planes only (Fig. 5-5)", 4.5, _deg(theta_bow), "deg"))
+    drag_free = vehicle.variant(crossflow_drag=0.0)  # the thesis's Ch. III-IV conditions
+    high, low = _path_a_crossings(drag_free)
+    rows.append(ReportRow("path A meets saturation cusp, upper (Fig. 4-11)", 1.08, high, "sqrt(lambda)",
+                          "x_GB/L = -1e-4"))
+    rows.append(ReportRow("path A enters saturation cusp (Fig. 4-11)", 0.99, low, "sqrt(lambda)"))
+    x_jump, before, after = _jump_at_path_c(drag_free)
+    rows.append(ReportRow("Fig. 4-13 jump location, path C (Fn 1.0)", 1e-4, x_jump, "x_GB/L"))
+    rows.append(ReportRow("Fig. 4-13 pitch before the jump", -9.0, _deg(before), "deg"))
+    rows.append(ReportRow("Fig. 4-13 pitch after the jump", 7.5, _deg(after), "deg"))
+    return rows
+
+
+# --- figures ----------------------------------------------------------------------------------
+
+def _fn_axis(vehicle: Vehicle, fn: np.ndarray) -> np.ndarray:
+    return fn * math.sqrt(vehicle.gravity_m_s2 * vehicle.z_GB_m)
+
+
+def _plot_branches(ax: Any, xs: list[float], states: list[list[Equilibrium]], value: Callable[[Equilibrium], float],
+                   label: str | None = None, color: str = "C0") -> None:
+    """Scatter steady states: filled = stable, hollow = unstable."""
+    stable = [(x, value(e)) for x, es in zip(xs, states) for e in es if e.stable]
+    unstable = [(x, value(e)) for x, es in zip(xs, states) for e in es if not e.stable]
+    if stable:
+        ax.plot(*zip(*stable), ".", ms=3, color=color, label=label and f"{label} (stable)")
+    if unstable:
+        ax.plot(*zip(*unstable), "o", ms=2.5, mfc="none", color=color, alpha=0.6,
+                label=label and f"{label} (unstable)")
+
+
+def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
+    """name -> function drawing into a fresh figure and returning its caption."""
+    drag_free = vehicle.variant(crossflow_drag=0.0)
+    L = vehicle.length_m
+    ucr = critical_speed(vehicle)
+    fn_scale = math.sqrt(vehicle.gravity_m_s2 * vehicle.z_GB_m)
+
+    def fig_3_4(fig: Any) -> str:
+        speeds = np.linspace(0.3, 2.0, 400)
+        eig = closed_loop_eigenvalues(vehicle, speeds, thesis_gain(vehicle))
+        ax = fig.subplots()
+        for k in range(4):
+            ax.plot(mps_to_fps(speeds), eig[:, k].real, lw=1)
+        ax.axhline(0, color="k", lw=0.5)
+        ax.axvline(mps_to_fps(ucr), color="r", ls="--", lw=1, label=f"u_cr = {mps_to_fps(ucr):.4f} fps")
+        ax.set(xlabel="speed [fps]", ylabel="Re(eigenvalue) [1/s]", ylim=(-1.5, 0.3))
+        ax.legend()
+        return "Fig. 3-4: real parts of the closed-loop eigenvalues with the thesis gain; one crosses zero at u_cr."
+
+    def fig_3_5_to_3_7(fig: Any) -> str:
+        fns = np.linspace(0.6, 1.3, 141)
+        states = [symmetric_pitchfork(drag_free, float(u)) for u in _fn_axis(vehicle, fns)]
+        axes = fig.subplots(3, 1, sharex=True)
+        _plot_branches(axes[0], list(fns), states, lambda e: _deg(e.pitch_rad), "pitch")
+        _plot_branches(axes[1], list(fns), states, lambda e: _deg(e.plane_rad), "plane")
+        depth = [[e for e in es if e.depth_offset_m is not None] for es in states]
+        _plot_branches(axes[2], list(fns), depth, lambda e: float(e.depth_offset_m or 0.0) / L, "Z_ss/L")
+        axes[0].set_ylabel("theta [deg]")
+        axes[1].set_ylabel("delta [deg]")
+        axes[2].set_ylabel("Z_ss / L")
+        axes[2].set_xlabel("Froude number")
+        axes[0].legend(fontsize=7)
+        return ("Figs 3-5 to 3-7: symmetric pitchfork (eqs 3.17-3.23) with saturation (eq. 4.42); filled stable, "
+                "hollow unstable. Saturated states sink or rise steadily, so have no Z_ss.")
+
+    def fig_3_9(fig: Any) -> str:
+        alphas = np.linspace(-1, 1, 201)
+        ax = fig.subplots()
+        ax.plot([critical_froude(vehicle, float(a)) for a in alphas], alphas)
+        ax.set(xlabel="critical Froude number", ylabel="alpha")
+        ax.grid(alpha=0.3)
+        return "Fig. 3-9: critical Froude number versus the bow/stern allocation alpha (0.80 to 1.22)."
+
+    def fig_3_13(fig: Any) -> str:
+        alphas = np.linspace(-1, 1, 201)
+        ax = fig.subplots()
+        ax.plot([critical_froude(vehicle, float(a)) for a in alphas], alphas, label="critical")
+        ax.plot([_saturation_pitch_and_froude(vehicle, float(a))[1] for a in alphas], alphas, "--", label="saturation")
+        ax.set(xlabel="Froude number", ylabel="alpha")
+        ax.legend()
+        return "Fig. 3-13: critical and plane-saturation Froude numbers versus alpha."
+
+    def fig_3_14(fig: Any) -> str:
+        fns = np.linspace(0.5, 1.6, 400)
+        ax = fig.subplots()
+        for a in (-1.0, 0.0, 1.0):
+            det = np.array([controllability_determinant(vehicle, float(u), a) for u in _fn_axis(vehicle, fns)])
+            ax.plot(fns, det / np.abs(det).max(), label=f"alpha = {a:g}")
+        ax.axhline(0, color="k", lw=0.5)
+        ax.set(xlabel="Froude number", ylabel="det(controllability matrix), normalised")
+        ax.legend()
+        return "Fig. 3-14: the controllability matrix becomes singular at the critical Froude number."
+
+    def fig_4_1(fig: Any) -> str:
+        fns = np.linspace(0.6, 1.4, 161)
+        biased = drag_free.variant(x_GB_m=_XGB_OVER_L_CH4 * L)
+        ax = fig.subplots()
+        for v, color, name in ((drag_free, "C0", "x_GB = 0"), (biased, "C1", "x_GB/L = -1e-4")):
+            xs, ths, stab = [], [], []
+            for fn in fns:
+                for theta, stable in _all_unsaturated_roots(v, fn * fn_scale):
+                    xs.append(fn)
+                    ths.append(_deg(theta))
+                    stab.append(stable)
+            xs_a, ths_a, stab_a = np.array(xs), np.array(ths), np.array(stab)
+            ax.plot(xs_a[stab_a], ths_a[stab_a], ".", ms=3, color=color, label=f"{name} stable")
+            ax.plot(xs_a[~stab_a], ths_a[~stab_a], "o", ms=2.5, mfc="none", color=color, alpha=0.6,
+                    label=f"{name} unstable")
+        ax.set(xlabel="Froude number", ylabel="theta [deg]", ylim=(-40, 40))
+        ax.legend(fontsize=7)
+        return ("Fig. 4-1: exact steady states (eq. 4.3, no saturation) for x_GB/L = -1e-4 next to the symmetric "
+                "pitchfork; the bias perturbs the pitchfork and moves the bifurcation to lower Fn.")
+
+    def fig_4_2(fig: Any) -> str:
+        lam = np.linspace(0.6, 1.2, 121)
+        speeds = bif.speed_from_lambda(drag_free, lam)
+        lo, hi = bif.exact_bifurcation_set(drag_free, speeds)
+        ax = fig.subplots()
+        ax.plot(lo / L, np.sqrt(lam), "k-", label="exact bifurcation set (eq. 4.3 folds)")
+        ax.plot(hi / L, np.sqrt(lam), "k-")
+        forms: tuple[tuple[bif.CuspForm, str], ...] = (("consistent", "C0--"), ("thesis", "C1:"))
+        for form, style in forms:
+            beta = bif.exact_cusp(drag_free, lam, form=form)
+            x = bif.offset_from_beta(drag_free, beta, speeds) / L
+            ax.plot(x, np.sqrt(lam), style, label=f"exact cusp eq. 4.37 ({form})")
+            ax.plot(-x, np.sqrt(lam), style)
+        beta = np.linspace(-0.02, 0.02, 201)
+        lam_approx = bif.approximate_cusp(drag_free, beta)
+        x = bif.offset_from_beta(drag_free, beta, bif.speed_from_lambda(drag_free, lam_approx)) / L
+        ax.plot(x, np.sqrt(lam_approx), "C2-.", label="approximate cusp eq. 4.39")
+        ax.set(xlabel="x_GB / L", ylabel="sqrt(lambda) = Fn", xlim=(-6e-4, 6e-4))
+        ax.legend(fontsize=7)
+        return ("Fig. 4-2: bifurcation sets in the (x_GB, Fn) plane. The printed eq. 4.37 carries a dimensional u^2 "
+                "(evaluated in fps, as the thesis did); the dimensionally consistent cusp matches the exact folds.")
+
+    def fig_4_6(fig: Any) -> str:
+        fns = np.linspace(0.6, 1.4, 161)
+        biased = drag_free.variant(x_GB_m=_XGB_OVER_L_CH4 * L)
+        states = [equilibria(biased, float(fn * fn_scale)) for fn in fns]
+        ax = fig.subplots()
+        _plot_branches(ax, list(fns), states, lambda e: _deg(e.pitch_rad), "x_GB/L = -1e-4")
+        ax.set(xlabel="Froude number", ylabel="theta [deg]")
+        ax.legend(fontsize=7)
+        return "Fig. 4-6: exact solution set for x_GB/L = -1e-4 with plane saturation (eqs 4.3, 4.42)."
+
+    def fig_4_11(fig: Any) -> str:
+        fn = np.linspace(0.7, 1.3, 241)
+        speeds = fn * fn_scale
+        lo, hi = bif.exact_bifurcation_set(drag_free, speeds)
+        xp, xm = bif.saturation_cusp(drag_free, speeds)
+        ax = fig.subplots()
+        ax.plot(lo / L, fn, "k-", label="exact bifurcation set")
+        ax.plot(hi / L, fn, "k-")
+        ax.plot(xp / L, fn, "C1:", label="saturation cusp (eqs 4.43-4.45)")
+        ax.plot(xm / L, fn, "C1:")
+        ax.axvline(_XGB_OVER_L_CH4, color="C2", label="path A, x_GB/L = -1e-4")
+        ax.set(xlabel="x_GB / L", ylabel="sqrt(lambda)", xlim=(-6e-4, 6e-4))
+        ax.legend(fontsize=7)
+        return "Fig. 4-11: path A at constant ballast through the bifurcation and saturation cusps."
+
+    def fig_4_13(fig: Any) -> str:
+        ax = fig.subplots()
+        xs = np.linspace(-5e-4, 5e-4, 201)
+        for fn, color, name in ((_PATH_C_FN, "C0", "path C, Fn 1.0"), (_PATH_B_FN, "C1", "path B, Fn 1.1")):
+            u = fn * fn_scale
+            states = [equilibria(drag_free.variant(x_GB_m=float(x * L)), u) for x in xs]
+            _plot_branches(ax, list(xs), states, lambda e: _deg(e.pitch_rad), name, color)
+            branch = continue_equilibria(drag_free, "x_GB", -5e-4 * L, 5e-4 * L, speed_mps=u, initial_pitch_rad=0.5)
+            ax.plot(branch.values / L, np.degrees(branch.states[:, 0]), "-", color=color, lw=0.6, alpha=0.5,
+                    label=f"{name}: continuation, planes unlimited")
+        ax.set(xlabel="x_GB / L", ylabel="theta [deg]", ylim=(-20, 20))
+        ax.legend(fontsize=7)
+        return ("Fig. 4-13: steady pitch versus ballast at constant speed. With saturation, path C (Fn 1.0) jumps "
+                "between the saturated branches (hysteresis); the thin lines are the pseudo-arclength continuation "
+                "of the unlimited-plane steady states, whose folds give the S-shape.")
+
+    def fig_5_2(fig: Any) -> str:
+        speeds = np.linspace(0.25, 1.6, 541)
+        light = drag_free.variant(excess_buoyancy_N=1e-4 * drag_free.weight_N)
+        trim = level_flight_trim(light, speeds)
+        axes = fig.subplots(2, 1, sharex=True)
+        axes[0].plot(speeds, np.degrees(trim.pitch_rad))
+        axes[1].plot(speeds, np.degrees(trim.plane_rad))
+        for ax in axes:
+            ax.axvline(ucr, color="r", ls="--", lw=1)
+            ax.axhline(0, color="k", lw=0.5)
+        axes[0].set(ylabel="pitch [deg]", ylim=(-20, 20))
+        axes[1].set(ylabel="stern planes [deg]", ylim=(-40, 40), xlabel="speed [m/s]")
+        axes[1].axhspan(-22.9, 22.9, color="g", alpha=0.08)
+        return ("Fig. 5-2: pitch and stern-plane angle for straight and level flight with 0.01% excess buoyancy "
+                "(BIFSU.M's B = 1.0001 W); both pass through infinity at u_cr and reverse sign below it.")
+
+    def fig_5_3(fig: Any) -> str:
+        speeds = np.linspace(0.25, 1.6, 541)
+        k4 = scheduled_depth_gain(vehicle, speeds)
+        ax = fig.subplots()
+        ax.plot(speeds, k4)
+        ax.axvline(ucr, color="r", ls="--", lw=1)
+        ax.set(xlabel="speed [m/s]", ylabel="scheduled depth gain k4 [rad/m]", ylim=(-5, 5))
+        return "Fig. 5-3: depth gain of the pole-placement design repeated at each speed; it diverges at u_cr."
+
+    def fig_5_4(fig: Any) -> str:
+        alphas = np.logspace(-2, 3, 300)
+        ax = fig.subplots()
+        fns = []
+        for a in alphas:
+            c = vehicle.coefficients
+            # Bow-heavy allocation: divide the command by alpha, so alpha -> infinity is bow planes only.
+            Z_d, M_d = c.Z_delta_s / a + c.Z_delta_b, c.M_delta_s / a + c.M_delta_b
+            u2 = vehicle.z_GB_m * Z_d * vehicle.buoyancy_N / (c.M_w * Z_d - c.Z_w * M_d)
+            fns.append(froude_number(vehicle, math.sqrt(u2)) if u2 > 0 else math.nan)
+        ax.semilogx(alphas, fns)
+        ax.axhline(_bow_only_critical_froude(vehicle), color="r", ls="--", lw=1, label="bow planes only")
+        ax.set(xlabel="alpha", ylabel="critical Froude number")
+        ax.legend()
+        return "Fig. 5-4: critical Froude number as alpha grows; bow planes alone give 2.05."
+
+    return {
+        "fig3-4": fig_3_4, "fig3-5_3-7": fig_3_5_to_3_7, "fig3-9": fig_3_9, "fig3-13": fig_3_13,
+        "fig3-14": fig_3_14, "fig4-1": fig_4_1, "fig4-2": fig_4_2, "fig4-6": fig_4_6, "fig4-11": fig_4_11,
+        "fig4-13": fig_4_13, "fig5-2": fig_5_2, "fig5-3": fig_5_3, "fig5-4": fig_5_4,
+    }
+
+
+def _all_unsaturated_roots(vehicle: Vehicle, u: float) -> list[tuple[float, bool]]:
+    """Every root of eq. 4.3 (planes unlimited) with its closed-loop stability."""
+    from subenv.analysis.equilibria import _PITCH_GRID, _roots, _unsaturated, steady_state_residual
+
+    gain = thesis_gain(vehicle)
+    out = []
+    for theta in _roots(lambda th: steady_state_residual(vehicle, u, th), _PITCH_GRID):
+        eq = _unsaturated(vehicle, u, theta, 0.0, gain, 0.0)
+        out.append((theta, eq.stable))
+    return out
+
+
+def _table(rows: list[ReportRow]) -> str:
+    lines = ["| quantity | thesis value | computed value | difference | unit | note |",
+             "|---|---:|---:|---:|---|---|"]
+    for r in rows:
+        lines.append(f"| {r.quantity} | {r.thesis:.5g} | {r.computed:.5g} | {r.difference:+.3g} | {r.unit} | {r.note} |")
+    return "\n".join(lines)
+
+
+def write_report(out_dir: str | Path, vehicle: Vehicle | None = None, overwrite: bool = False) -> Path:
+    """Write ``report.md`` and the PNG figures into ``out_dir``, completely or not at all.
+
+    The folder is assembled in a temporary directory beside it and renamed into place.
+
+    Raises
+    ------
+    FileExistsError
+        ``out_dir`` exists and ``overwrite`` is False.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out = Path(out_dir)
+    if out.exists() and not overwrite:
+        raise FileExistsError(f"output folder {str(out)!r} exists; pass overwrite=True (--force) to replace it")
+    vehicle = vehicle or load_vehicle("suboff")
+    started = time.perf_counter()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    try:
+        rows = reproduce_numbers(vehicle)
+        captions = []
+        for name, draw in _figures(vehicle).items():
+            fig = plt.figure(figsize=(7, 5) if name != "fig3-5_3-7" else (7, 8))
+            caption = draw(fig)
+            fig.suptitle(caption.split(":")[0])
+            fig.tight_layout()
+            fig.savefig(tmp / f"{name}.png", dpi=100)
+            plt.close(fig)
+            captions.append((name, caption))
+        elapsed = time.perf_counter() - started
+        text = [
+            "# Reproduction of Riedel (1993) with subenv",
+            "",
+            f"Vehicle: {vehicle.name} ({vehicle.description}). Figures use C_D = 0 as the thesis's did, the full",
+            "hull offsets, and the physically consistent drag-moment sign (none of these figures has drag).",
+            "",
+            "## Published numbers",
+            "",
+            _table(rows),
+            "",
+            "Equation 4.37 as printed is not dimensionless; Fig. 4-2 shows it evaluated as printed (u in fps) next",
+            "to the dimensionally consistent form, which agrees with the exact folds of eq. 4.3.",
+            "",
+            "## Figures",
+            "",
+        ]
+        for name, caption in captions:
+            text += [f"![{name}]({name}.png)", "", caption, ""]
+        text += [f"Generated in {elapsed:.1f} s."]
+        (tmp / "report.md").write_text("\n".join(text) + "\n")
+        if out.exists():
+            shutil.rmtree(out)
+        tmp.rename(out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return out
