@@ -39,7 +39,7 @@ def test_analyze_writes_the_report_and_refuses_to_overwrite(tmp_path: Path, caps
     assert main(["analyze", "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert "| quantity | thesis value | computed value | difference |" in text
-    assert (out / "report.md").is_file() and len(list(out.glob("*.png"))) == 13
+    assert (out / "report.md").is_file() and len(list(out.glob("*.png"))) == 14
     with pytest.raises(SystemExit, match="exists; pass overwrite=True"):
         main(["analyze", "--out", str(out)])
     assert main(["analyze", "--out", str(out), "--force"]) == 0

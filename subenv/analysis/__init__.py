@@ -33,10 +33,11 @@ from subenv.analysis.design import (
     thesis_gain,
 )
 from subenv.analysis.equilibria import Equilibrium, equilibria, steady_state_residual, symmetric_pitchfork
-from subenv.analysis.linear import LinearModel, linear_model, numerical_jacobian
+from subenv.analysis.linear import BOW_PLANES_ONLY, LinearModel, linear_model, numerical_jacobian
 from subenv.analysis.reversal import LevelFlightTrim, level_flight_trim
 
 __all__ = [
+    "BOW_PLANES_ONLY",
     "THESIS_DESIGN_SPEED_MPS",
     "THESIS_POLES",
     "Branch",

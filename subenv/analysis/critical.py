@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import math
 
-from subenv.analysis.linear import plane_derivatives
+from subenv.analysis.linear import Allocation, plane_derivatives
 from subenv.vehicles.vehicle import Vehicle
 
-__all__ = ["critical_froude", "critical_speed", "froude_number"]
+__all__ = ["critical_froude", "critical_speed", "critical_speed_for_planes", "froude_number"]
 
 
-def critical_speed(vehicle: Vehicle, alpha: float = 0.0) -> float:
+def critical_speed(vehicle: Vehicle, alpha: Allocation = 0.0) -> float:
     """Speed below which level flight under dual control loses stability [m/s].
 
     Riedel (1993) eq. 3.9 (exponent 1/2): u_cr^2 = z_GB Z_delta B / (M_w Z_delta - Z_w M_delta),
@@ -21,14 +21,25 @@ def critical_speed(vehicle: Vehicle, alpha: float = 0.0) -> float:
     ----------
     vehicle : Vehicle
         Needs z_GB > 0 (a statically stable loading).
-    alpha : float
-        Bow/stern allocation of dual control, in [-1, 1] (eq. 2.58).
+    alpha : float or "bow"
+        Bow/stern allocation of dual control, in [-1, 1] (eq. 2.58), or ``"bow"`` for bow planes
+        only (the limit alpha -> infinity, Fig. 5-4: Fn_cr = 2.05 for SUBOFF).
 
     Raises
     ------
     ValueError
         z_GB <= 0 (no critical speed: level flight has no restoring moment), alpha outside
         [-1, 1], or an allocation whose planes produce no net pitch-heave coupling.
+    """
+    Z_delta, M_delta = plane_derivatives(vehicle, alpha)
+    return critical_speed_for_planes(vehicle, Z_delta, M_delta, label=f"alpha={alpha!r}")
+
+
+def critical_speed_for_planes(vehicle: Vehicle, Z_delta: float, M_delta: float, label: str = "planes") -> float:
+    """Critical speed [m/s] for any dimensional plane derivatives Z_delta, M_delta (eq. 3.9).
+
+    :func:`critical_speed` calls this with the derivatives of an allocation alpha; Fig. 5-4's
+    sweep of alpha beyond [-1, 1] calls it directly.
     """
     restoring = vehicle.z_G_m * vehicle.weight_N - vehicle.z_B_m * vehicle.buoyancy_N
     if not restoring > 0:
@@ -37,12 +48,11 @@ def critical_speed(vehicle: Vehicle, alpha: float = 0.0) -> float:
             "a critical speed exists only for a positive restoring moment (z_GB > 0)"
         )
     c = vehicle.coefficients
-    Z_delta, M_delta = plane_derivatives(vehicle, alpha)
     coupling = c.M_w * Z_delta - c.Z_w * M_delta
     u2 = restoring * Z_delta / coupling if coupling != 0 else math.inf
     if not (math.isfinite(u2) and u2 > 0):
         raise ValueError(
-            f"alpha={alpha!r}: this plane allocation has no critical speed "
+            f"{label}: this plane allocation has no critical speed "
             f"(z_GB Z_delta B / (M_w Z_delta - Z_w M_delta) = {u2!r} m^2/s^2 is not positive)"
         )
     return math.sqrt(u2)  # Riedel (1993) eq. 3.9
@@ -55,6 +65,6 @@ def froude_number(vehicle: Vehicle, speed_mps: float) -> float:
     return speed_mps / math.sqrt(vehicle.gravity_m_s2 * vehicle.z_GB_m)
 
 
-def critical_froude(vehicle: Vehicle, alpha: float = 0.0) -> float:
+def critical_froude(vehicle: Vehicle, alpha: Allocation = 0.0) -> float:
     """Froude number at the critical speed, u_cr / sqrt(g z_GB)."""
     return froude_number(vehicle, critical_speed(vehicle, alpha))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Final, Literal, Union
 
 import numpy as np
 
@@ -10,7 +11,7 @@ from subenv._typing import FloatArray
 from subenv.dynamics.model import derivatives, model_params
 from subenv.vehicles.vehicle import Vehicle
 
-__all__ = ["LinearModel", "check_alpha", "linear_model", "numerical_jacobian", "plane_derivatives"]
+__all__ = ["BOW_PLANES_ONLY", "Allocation", "LinearModel", "check_alpha", "linear_model", "numerical_jacobian", "plane_derivatives"]
 
 
 def check_alpha(alpha: float) -> float:
@@ -20,10 +21,22 @@ def check_alpha(alpha: float) -> float:
     return float(alpha)
 
 
-def plane_derivatives(vehicle: Vehicle, alpha: float) -> tuple[float, float]:
-    """Dimensional Z_delta, M_delta of dual control, Z_ds + alpha Z_db (Riedel 1993 eq. 2.58)."""
+BOW_PLANES_ONLY: Final = "bow"
+"""Pass as ``alpha`` for bow-plane control only, the limit alpha -> infinity (Riedel 1993 Ch. V.B)."""
+
+Allocation = Union[float, Literal["bow"]]
+"""A dual-control allocation alpha in [-1, 1], or ``"bow"`` for the bow planes alone."""
+
+
+def plane_derivatives(vehicle: Vehicle, alpha: Allocation) -> tuple[float, float]:
+    """Dimensional Z_delta, M_delta of dual control, Z_ds + alpha Z_db (Riedel 1993 eq. 2.58).
+
+    ``alpha="bow"`` gives the bow planes alone (Z_db, M_db), with delta_b as the command.
+    """
     c = vehicle.coefficients
-    alpha = check_alpha(alpha)
+    if alpha == BOW_PLANES_ONLY:
+        return c.Z_delta_b, c.M_delta_b
+    alpha = check_alpha(alpha)  # type: ignore[arg-type]
     return c.Z_delta_s + alpha * c.Z_delta_b, c.M_delta_s + alpha * c.M_delta_b
 
 
@@ -34,10 +47,10 @@ class LinearModel:
     A: FloatArray
     B: FloatArray
     speed_mps: float
-    alpha: float
+    alpha: Allocation
 
 
-def linear_model(vehicle: Vehicle, speed_mps: float, alpha: float = 0.0) -> LinearModel:
+def linear_model(vehicle: Vehicle, speed_mps: float, alpha: Allocation = 0.0) -> LinearModel:
     """Closed-form linearisation about level flight (Riedel 1993 eqs 2.59-2.68).
 
     Parameters
@@ -47,8 +60,8 @@ def linear_model(vehicle: Vehicle, speed_mps: float, alpha: float = 0.0) -> Line
         enter: it is quadratic in (w, q).
     speed_mps : float
         Forward speed u [m/s], >= 0.
-    alpha : float
-        Bow/stern allocation of dual control, in [-1, 1] (eq. 2.58).
+    alpha : float or "bow"
+        Bow/stern allocation of dual control, in [-1, 1] (eq. 2.58), or "bow" for bow planes only.
     """
     if not (np.isfinite(speed_mps) and speed_mps >= 0):
         raise ValueError(f"speed_mps={speed_mps!r} is invalid: must be a finite number >= 0")
@@ -76,7 +89,7 @@ def linear_model(vehicle: Vehicle, speed_mps: float, alpha: float = 0.0) -> Line
         ]
     )
     B = np.array([0.0, b1 * u * u, b2 * u * u, 0.0])
-    return LinearModel(A=A, B=B, speed_mps=u, alpha=float(alpha))
+    return LinearModel(A=A, B=B, speed_mps=u, alpha=alpha)
 
 
 def numerical_jacobian(

@@ -20,7 +20,7 @@ from scipy.optimize import brentq
 
 from subenv.analysis import bifurcation as bif
 from subenv.analysis.continuation import continue_equilibria
-from subenv.analysis.critical import critical_froude, critical_speed, froude_number
+from subenv.analysis.critical import critical_froude, critical_speed, critical_speed_for_planes, froude_number
 from subenv.analysis.design import (
     closed_loop_eigenvalues,
     controllability_determinant,
@@ -30,7 +30,7 @@ from subenv.analysis.design import (
     thesis_gain,
 )
 from subenv.analysis.equilibria import Equilibrium, equilibria, symmetric_pitchfork
-from subenv.analysis.linear import plane_derivatives
+from subenv.analysis.linear import BOW_PLANES_ONLY, Allocation, plane_derivatives
 from subenv.analysis.reversal import level_flight_trim
 from subenv.units import FOOT_M, mps_to_fps
 from subenv.vehicles.loader import load_vehicle
@@ -87,22 +87,13 @@ def critical_speed_three_ways(vehicle: Vehicle, alpha: float = 0.0) -> dict[str,
     return {"closed_form": closed, "eigenvalue": eigen, "controllability": ctrb}
 
 
-def _saturation_pitch_and_froude(vehicle: Vehicle, alpha: float | None) -> tuple[float, float]:
+def _saturation_pitch_and_froude(vehicle: Vehicle, alpha: Allocation) -> tuple[float, float]:
     """Where the symmetric pitchfork reaches the plane limit: (pitch [rad], Froude number)."""
     c = vehicle.coefficients
-    if alpha is None:  # bow planes only
-        Z_d, M_d = c.Z_delta_b, c.M_delta_b
-    else:
-        Z_d, M_d = plane_derivatives(vehicle, alpha)
+    Z_d, M_d = plane_derivatives(vehicle, alpha)
     theta = math.atan(vehicle.planes.limit_rad * abs(Z_d / c.Z_w))  # |delta_ss| = limit in eq. 3.21
-    u_cr2 = vehicle.z_GB_m * Z_d * vehicle.buoyancy_N / (c.M_w * Z_d - c.Z_w * M_d)  # eq. 3.9
-    return theta, froude_number(vehicle, math.sqrt(u_cr2 * math.cos(theta)))  # eq. 3.17
-
-
-def _bow_only_critical_froude(vehicle: Vehicle) -> float:
-    c = vehicle.coefficients
-    u2 = vehicle.z_GB_m * c.Z_delta_b * vehicle.buoyancy_N / (c.M_w * c.Z_delta_b - c.Z_w * c.M_delta_b)
-    return froude_number(vehicle, math.sqrt(u2))
+    u_cr = critical_speed_for_planes(vehicle, Z_d, M_d)
+    return theta, froude_number(vehicle, u_cr * math.sqrt(math.cos(theta)))  # eq. 3.17
 
 
 def _jump_at_path_c(vehicle: Vehicle) -> tuple[float, float, float]:
@@ -151,11 +142,11 @@ def reproduce_numbers(vehicle: Vehicle) -> list[ReportRow]:
                           mps_to_fps(three["controllability"]), "fps"))
     rows.append(ReportRow("critical Fn, alpha = -1 (Fig. 3-9)", 0.81, critical_froude(vehicle, -1.0), "-"))
     rows.append(ReportRow("critical Fn, alpha = +1 (Fig. 3-9)", 1.22, critical_froude(vehicle, 1.0), "-"))
-    rows.append(ReportRow("critical Fn, bow planes only (Fig. 5-4)", 2.05, _bow_only_critical_froude(vehicle), "-"))
+    rows.append(ReportRow("critical Fn, bow planes only (Fig. 5-4)", 2.05, critical_froude(vehicle, BOW_PLANES_ONLY), "-"))
     theta_sat, fn_sat = _saturation_pitch_and_froude(vehicle, 0.0)
     rows.append(ReportRow("saturation Fn, symmetric pitchfork (Figs 3-5, 3-6)", 1.05, fn_sat, "-"))
     rows.append(ReportRow("pitch at saturation (Figs 3-5, 4-6)", 9.0, _deg(theta_sat), "deg", "thesis: 'about nine'"))
-    theta_bow, _ = _saturation_pitch_and_froude(vehicle, None)
+    theta_bow, _ = _saturation_pitch_and_froude(vehicle, BOW_PLANES_ONLY)
     rows.append(ReportRow("pitch at saturation, bow planes only (Fig. 5-5)", 4.5, _deg(theta_bow), "deg"))
     drag_free = vehicle.variant(crossflow_drag=0.0)  # the thesis's Ch. III-IV conditions
     high, low = _path_a_crossings(drag_free)
@@ -362,22 +353,39 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
         alphas = np.logspace(-2, 3, 300)
         ax = fig.subplots()
         fns = []
+        c = vehicle.coefficients
         for a in alphas:
-            c = vehicle.coefficients
-            # Bow-heavy allocation: divide the command by alpha, so alpha -> infinity is bow planes only.
-            Z_d, M_d = c.Z_delta_s / a + c.Z_delta_b, c.M_delta_s / a + c.M_delta_b
-            u2 = vehicle.z_GB_m * Z_d * vehicle.buoyancy_N / (c.M_w * Z_d - c.Z_w * M_d)
-            fns.append(froude_number(vehicle, math.sqrt(u2)) if u2 > 0 else math.nan)
+            # Z_ds + alpha Z_db scaled by 1/alpha (the same critical speed), so alpha -> infinity
+            # tends to bow planes only.
+            u_cr = critical_speed_for_planes(vehicle, c.Z_delta_s / a + c.Z_delta_b, c.M_delta_s / a + c.M_delta_b)
+            fns.append(froude_number(vehicle, u_cr))
         ax.semilogx(alphas, fns)
-        ax.axhline(_bow_only_critical_froude(vehicle), color="r", ls="--", lw=1, label="bow planes only")
+        ax.axhline(critical_froude(vehicle, BOW_PLANES_ONLY), color="r", ls="--", lw=1, label="bow planes only")
         ax.set(xlabel="alpha", ylabel="critical Froude number")
         ax.legend()
         return "Fig. 5-4: critical Froude number as alpha grows; bow planes alone give 2.05."
 
+    def fig_5_7(fig: Any) -> str:
+        fn = np.linspace(0.6, 1.3, 141)
+        speeds = fn * fn_scale
+        ax = fig.subplots()
+        for k, excess in enumerate((0.0, 1e-4, 5e-4)):
+            boat = vehicle.variant(crossflow_drag=0.3, excess_buoyancy_N=excess * vehicle.weight_N)
+            for moment, hull, style in (("consistent", "full", "-"), ("thesis", "thesis", ":")):
+                xp, xm = bif.saturation_cusp(boat, speeds, drag_moment=moment, hull=hull)
+                label = f"B-W = {excess:.2%} W, " + ("full hull, M = -x Z" if hull == "full" else "thesis A, x_A, sign")
+                ax.plot(xp / L, fn, style, color=f"C{k}", label=label)
+                ax.plot(xm / L, fn, style, color=f"C{k}")
+        ax.set(xlabel="x_GB / L", ylabel="sqrt(lambda)", xlim=(-1.5e-3, 1.5e-3))
+        ax.legend(fontsize=6)
+        return ("Fig. 5-7 (supplementary): saturation cusps with C_D = 0.3 and excess buoyancy (eqs 5.1-5.2). "
+                "Dotted: the thesis's inputs (truncated hull A = 19.85 ft^2, x_A = 0.201 ft, its drag-moment "
+                "sign); solid: the full hull and the physically consistent sign the simulation uses.")
+
     return {
         "fig3-4": fig_3_4, "fig3-5_3-7": fig_3_5_to_3_7, "fig3-9": fig_3_9, "fig3-13": fig_3_13,
         "fig3-14": fig_3_14, "fig4-1": fig_4_1, "fig4-2": fig_4_2, "fig4-6": fig_4_6, "fig4-11": fig_4_11,
-        "fig4-13": fig_4_13, "fig5-2": fig_5_2, "fig5-3": fig_5_3, "fig5-4": fig_5_4,
+        "fig4-13": fig_4_13, "fig5-2": fig_5_2, "fig5-3": fig_5_3, "fig5-4": fig_5_4, "fig5-7": fig_5_7,
     }
 
 
@@ -438,8 +446,10 @@ def write_report(out_dir: str | Path, vehicle: Vehicle | None = None, overwrite:
         text = [
             "# Reproduction of Riedel (1993) with subenv",
             "",
-            f"Vehicle: {vehicle.name} ({vehicle.description}). Figures use C_D = 0 as the thesis's did, the full",
-            "hull offsets, and the physically consistent drag-moment sign (none of these figures has drag).",
+            f"Vehicle: {vehicle.name} ({vehicle.description}). Figures 3-4 to 5-4 use C_D = 0 as the thesis's",
+            "did (so neither the hull integral nor the drag-moment sign enters them). The supplementary Fig. 5-7",
+            "has drag: it is drawn with the thesis's inputs (truncated hull integral, printed moment sign) next",
+            "to the full hull with the physically consistent sign.",
             "",
             "## Published numbers",
             "",

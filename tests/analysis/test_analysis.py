@@ -230,7 +230,7 @@ def test_report_is_written_completely_and_not_over_an_existing_folder(tmp_path, 
     out = write_report(tmp_path / "report", suboff)
     text = (out / "report.md").read_text()
     assert "| u_cr, eq. 3.9 closed form | 1.8979 | 1.8979 |" in text
-    assert len(list(out.glob("*.png"))) == 13
+    assert len(list(out.glob("*.png"))) == 14
     with pytest.raises(FileExistsError, match="exists; pass overwrite=True"):
         write_report(tmp_path / "report", suboff)
     assert [p.name for p in tmp_path.iterdir()] == ["report"]  # no temporary folder left behind
