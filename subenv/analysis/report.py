@@ -29,7 +29,7 @@ from subenv.analysis.design import (
     scheduled_depth_gain,
     thesis_gain,
 )
-from subenv.analysis.equilibria import Equilibrium, equilibria, symmetric_pitchfork
+from subenv.analysis.equilibria import DragMoment, Equilibrium, HullIntegral, equilibria, symmetric_pitchfork
 from subenv.analysis.linear import BOW_PLANES_ONLY, Allocation, plane_derivatives
 from subenv.analysis.reversal import level_flight_trim
 from subenv.units import FOOT_M, mps_to_fps
@@ -371,7 +371,9 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
         ax = fig.subplots()
         for k, excess in enumerate((0.0, 1e-4, 5e-4)):
             boat = vehicle.variant(crossflow_drag=0.3, excess_buoyancy_N=excess * vehicle.weight_N)
-            for moment, hull, style in (("consistent", "full", "-"), ("thesis", "thesis", ":")):
+            inputs: tuple[tuple[DragMoment, HullIntegral, str], ...] = (
+                ("consistent", "full", "-"), ("thesis", "thesis", ":"))
+            for moment, hull, style in inputs:
                 xp, xm = bif.saturation_cusp(boat, speeds, drag_moment=moment, hull=hull)
                 label = f"B-W = {excess:.2%} W, " + ("full hull, M = -x Z" if hull == "full" else "thesis A, x_A, sign")
                 ax.plot(xp / L, fn, style, color=f"C{k}", label=label)
