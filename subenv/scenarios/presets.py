@@ -49,13 +49,17 @@ NEAR_CRITICAL = Scenario(
 )
 SPEED_TRANSIENT = Scenario(
     name="SpeedTransient",
-    description="Decelerates from 2-2.6 u_cr to 0.4-0.7 u_cr within the episode, through the critical speed.",
+    description=(
+        "Decelerates from 2-2.6 u_cr to 0.4-0.7 u_cr within the episode, through the critical speed, "
+        "with a 0.3 N heave-force disturbance (below u_cr it reveals whether level flight is still stable)."
+    ),
     speed_mps=(2.0, 2.6),
     speed_relative=True,
     speed_ramp=SpeedRamp(final_speed_mps=(0.4, 0.7), start_s=(30.0, 90.0), duration_s=(120.0, 240.0)),
     depth_command_m=(8.0, 15.0),
-    initial_depth_offset_m=(-1.0, 1.0),
+    initial_depth_offset_m=(-2.0, 2.0),
     initial_pitch_rad=_SMALL_PITCH,
+    disturbance_std_N=0.3,
     duration_s=600.0,
 )
 PERISCOPE_DEPTH = Scenario(

@@ -1,0 +1,94 @@
+"""LQR with integral action, scheduled over speed: the modern reference."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, Final
+
+import numpy as np
+from scipy.linalg import solve_continuous_are
+
+from baselines._common import SPEED, GainSchedule, feedback_state
+from subenv.analysis import linear_model
+from subenv.analysis.linear import Allocation
+from subenv.dynamics import CONTROL_PERIOD_S
+from subenv.vehicles import Vehicle
+
+# Bryson's rule: each state weighted by the inverse square of its acceptable size.
+ACCEPTABLE: Final = {"pitch_rad": 0.1, "heave_mps": 0.1, "pitch_rate_radps": 0.05, "depth_error_m": 1.0,
+                     "depth_error_integral_ms": 30.0}
+DEPTH_ERROR_LIMIT_M: Final = 1.5
+"""Depth error fed back is clipped to this: far from the ordered depth the boat closes at a bounded pitch."""
+DEFAULT_POINTS: Final = np.linspace(0.12, 2.0, 95)
+"""Scheduling speeds [m/s], every 0.02 m/s."""
+
+
+def lqi_gain(vehicle: Vehicle, speed_mps: float, alpha: Allocation, plane_limit_rad: float) -> np.ndarray:
+    """LQR gain on (theta, w, q, e, integral of e) for the linear model at one speed.
+
+    The model is Riedel (1993) eqs 2.59-2.68 augmented with z_dot = e; Q by Bryson's rule
+    (:data:`ACCEPTABLE`), R = 1 / limit^2. Solved with ``scipy.linalg.solve_continuous_are``.
+    The depth gains come out with the sign the speed needs: reversed below the critical speed.
+    """
+    lm = linear_model(vehicle, speed_mps, alpha)
+    A = np.zeros((5, 5))
+    A[:4, :4] = lm.A
+    A[4, 3] = 1.0
+    B = np.zeros((5, 1))
+    B[:4, 0] = lm.B
+    Q = np.diag([1.0 / v**2 for v in ACCEPTABLE.values()])
+    R = np.array([[1.0 / plane_limit_rad**2]])
+    P = solve_continuous_are(A, B, Q, R)
+    return np.linalg.solve(R, B.T @ P)[0]
+
+
+class DepthIntegrator:
+    """Integral of the (clipped) depth error with conditional-integration anti-windup."""
+
+    def __init__(self, dt_s: float, limit: float) -> None:
+        self.dt_s, self.limit, self.value = dt_s, limit, 0.0
+
+    def update(self, error: float, integral_gain: float, saturated: bool) -> None:
+        # Integrate unless the planes are saturated and integrating would push them further.
+        if not saturated or np.sign(error) != np.sign(integral_gain * self.value):
+            self.value = float(np.clip(self.value + error * self.dt_s, -self.limit, self.limit))
+
+
+class ScheduledLQR:
+    """LQR with integral action on the stern planes (dual control, alpha = 0), scheduled over speed.
+
+    A modern reference: the optimal gain for the thesis's plane allocation at every speed, so it
+    carries the reversed depth gain below the critical speed. At u_cr itself the depth mode is
+    uncontrollable with this allocation (Fig. 3-14), so close to it the gains grow and the loop
+    weakens; compare :class:`baselines.reversal_aware.ReversalAware`, which moves u_cr away.
+    """
+
+    name = "lqr"
+    control = "dual"
+    alpha = 0.0
+
+    def __init__(self, points: np.ndarray = DEFAULT_POINTS, dt_s: float = CONTROL_PERIOD_S) -> None:
+        self.points = np.asarray(points, dtype=float)
+        self.schedule: GainSchedule | None = None
+        self._vehicle: Vehicle | None = None
+        self._limit = 0.4
+        self.integrator = DepthIntegrator(dt_s, ACCEPTABLE["depth_error_integral_ms"] * 3)
+
+    def reset(self, info: Mapping[str, Any], vehicle: Vehicle) -> None:
+        if vehicle is not self._vehicle:
+            self._limit = vehicle.planes.limit_rad
+            self.schedule = GainSchedule.design(
+                self.points, lambda u: lqi_gain(vehicle, u, self.alpha, self._limit)
+            )
+            self._vehicle = vehicle
+        self.integrator.value = 0.0
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        if self.schedule is None:
+            raise RuntimeError("call reset() first")
+        gain = self.schedule.at(float(observation[SPEED]))
+        x = feedback_state(observation, DEPTH_ERROR_LIMIT_M)
+        raw = -float(gain[:4] @ x + gain[4] * self.integrator.value)
+        delta = float(np.clip(raw, -self._limit, self._limit))
+        self.integrator.update(float(x[3]), float(gain[4]), saturated=delta != raw)
+        return np.array([delta / self._limit], dtype=np.float32)

@@ -1,0 +1,113 @@
+"""A reversal-aware depth controller for the whole speed range, through the critical speed."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, Final
+
+import numpy as np
+from scipy.optimize import brentq
+
+from baselines._common import SPEED, GainSchedule, feedback_state
+from baselines.lqr import ACCEPTABLE, DEFAULT_POINTS, DEPTH_ERROR_LIMIT_M, DepthIntegrator, lqi_gain
+from subenv.analysis import critical_speed
+from subenv.dynamics import CONTROL_PERIOD_S
+from subenv.vehicles import Vehicle
+
+ALLOCATIONS: Final = (-1.0, 1.0)
+"""The bow/stern allocations it chooses between: the extremes move u_cr furthest (Fig. 3-9)."""
+HYSTERESIS: Final = 0.03
+"""Relative speed band around the switching speed inside which the allocation is kept."""
+
+
+class ReversalAware:
+    """Depth control that knows where the planes reverse, and keeps away from it.
+
+    The physics (Riedel 1993 Ch. III, V): with one plane command and allocation alpha, the depth
+    mode is uncontrollable at u_cr(alpha) (eq. 3.9, Fig. 3-14); a linear design's depth gain goes
+    through infinity there and reverses sign below it (Fig. 5-3). No single gain works on both
+    sides, and no gain works near u_cr(alpha). But u_cr depends on the allocation: for SUBOFF
+    it runs from 0.44 m/s (alpha = -1, bow planes opposing the stern planes) to 0.67 m/s
+    (alpha = +1) (Fig. 3-9). So:
+
+    1. **Allocation.** At the current speed u, choose the alpha in {-1, +1} whose critical speed
+       is furthest from u, measured by the controllability margin |1 - (u / u_cr(alpha))^2|.
+       The two margins are equal at one switching speed (0.519 m/s for SUBOFF): below it
+       alpha = +1 (the boat is well below its u_cr = 0.67 m/s, in the reversed regime), above
+       it alpha = -1 (well above u_cr = 0.44 m/s, the normal regime). The margin never falls
+       below 22% for SUBOFF, whereas with alpha = 0 it is 0 at 0.578 m/s. A 3% hysteresis band
+       stops the allocation chattering at the switching speed during a speed transient. The
+       planes are driven independently (``control="independent"``) as stern = delta,
+       bow = alpha delta.
+    2. **Gains.** LQR with integral action on (theta, w, q, e, int e) for the chosen allocation,
+       designed at every 0.02 m/s and interpolated (:func:`baselines.lqr.lqi_gain`): the depth
+       gains carry the sign each regime needs (reversed below u_cr(alpha)), the integral removes
+       the steady error of excess buoyancy (surface suction) and ballast offsets. When the
+       allocation switches, the integrator is rescaled so that its contribution to the command
+       is continuous (bumpless transfer).
+    3. **Saturation.** The depth error fed back is clipped to +-1.5 m, so that a large depth
+       change is made at a bounded pitch rather than with pinned planes; the integrator stops
+       integrating while the planes are saturated in its direction (anti-windup).
+
+    Limits: where no depth-holding steady state exists inside the plane limits for either
+    allocation (for example a ballast offset of a few millimetres right at u_cr; see
+    :func:`subenv.analysis.equilibria`), it cannot hold depth either.
+    """
+
+    name = "reversal_aware"
+    control = "independent"
+    alpha = 0.0
+
+    def __init__(self, points: np.ndarray = DEFAULT_POINTS, dt_s: float = CONTROL_PERIOD_S) -> None:
+        self.points = np.asarray(points, dtype=float)
+        self.schedules: dict[float, GainSchedule] = {}
+        self.switch_speed_mps = float("nan")
+        self.allocation = ALLOCATIONS[0]
+        self._vehicle: Vehicle | None = None
+        self._limit = 0.4
+        self.integrator = DepthIntegrator(dt_s, ACCEPTABLE["depth_error_integral_ms"] * 3)
+
+    def reset(self, info: Mapping[str, Any], vehicle: Vehicle) -> None:
+        if vehicle is not self._vehicle:
+            self._limit = vehicle.planes.limit_rad
+            ucr = {a: critical_speed(vehicle, a) for a in ALLOCATIONS}
+            low, high = sorted(ucr.values())
+            self.switch_speed_mps = brentq(
+                lambda u: self._margin(u, ucr[ALLOCATIONS[0]]) - self._margin(u, ucr[ALLOCATIONS[1]]), low, high
+            )
+            self._slow, self._fast = (a for a, _ in sorted(ucr.items(), key=lambda kv: -kv[1]))
+            self.schedules = {
+                a: GainSchedule.design(self.points, lambda u, a=a: lqi_gain(vehicle, u, a, self._limit))
+                for a in ALLOCATIONS
+            }
+            self._vehicle = vehicle
+        self.integrator.value = 0.0
+        self.allocation = self._choose(float(info["speed_mps"]), None)
+
+    @staticmethod
+    def _margin(u: float, ucr: float) -> float:
+        return abs(1.0 - (u / ucr) ** 2)
+
+    def _choose(self, speed: float, current: float | None) -> float:
+        """The slow-speed allocation (largest u_cr) below the switching speed, the other above."""
+        band = HYSTERESIS * self.switch_speed_mps
+        if current is not None and abs(speed - self.switch_speed_mps) < band:
+            return current
+        return self._slow if speed < self.switch_speed_mps else self._fast
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        if not self.schedules:
+            raise RuntimeError("call reset() first")
+        speed = float(observation[SPEED])
+        allocation = self._choose(speed, self.allocation)
+        gain = self.schedules[allocation].at(speed)
+        if allocation != self.allocation:
+            old = self.schedules[self.allocation].at(speed)[4]
+            if gain[4] != 0:
+                self.integrator.value *= old / gain[4]  # bumpless: keep the integral's command
+            self.allocation = allocation
+        x = feedback_state(observation, DEPTH_ERROR_LIMIT_M)
+        raw = -float(gain[:4] @ x + gain[4] * self.integrator.value)
+        delta = float(np.clip(raw, -self._limit, self._limit))
+        self.integrator.update(float(x[3]), float(gain[4]), saturated=delta != raw)
+        return np.array([delta, allocation * delta], dtype=np.float32) / np.float32(self._limit)

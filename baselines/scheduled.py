@@ -1,0 +1,54 @@
+"""Gain scheduling: the thesis's pole placement repeated over a speed grid (Riedel 1993 Fig. 5-3)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from baselines._common import SPEED, GainSchedule, feedback_state
+from subenv.analysis import THESIS_POLES, place_gain
+from subenv.vehicles import Vehicle
+
+DEFAULT_POINTS = np.linspace(0.15, 2.0, 38)
+"""Scheduling speeds [m/s], every 0.05 m/s; for SUBOFF u_cr = 0.5785 m/s lies between two points."""
+
+
+class GainScheduledPolePlacement:
+    """Pole placement at every scheduling speed (same poles as the thesis), interpolated at the current speed.
+
+    What it does near the critical speed: the depth gain that places the poles is
+    k4 = p1 p2 p3 p4 / D(u) (eq. 2.97), and D(u_cr) = 0 (eq. 3.7), so k4 grows without bound as
+    u -> u_cr and changes sign below it (:func:`subenv.analysis.scheduled_depth_gain`). The
+    scheduled gains are therefore huge at the grid points around u_cr, and their interpolation
+    between the two points that straddle u_cr passes through zero at some speed: there the
+    controller has no depth feedback at all. Within roughly 10% of u_cr the planes saturate on
+    small errors and the loop degrades; away from u_cr it works on both sides, since the
+    schedule carries the reversed gain sign below critical.
+    """
+
+    name = "scheduled"
+    control = "dual"
+    alpha = 0.0
+
+    def __init__(self, points: np.ndarray = DEFAULT_POINTS) -> None:
+        self.points = np.asarray(points, dtype=float)
+        self.schedule: GainSchedule | None = None
+        self._vehicle: Vehicle | None = None
+        self._limit = 0.4
+
+    def reset(self, info: Mapping[str, Any], vehicle: Vehicle) -> None:
+        if vehicle is not self._vehicle:
+            self.schedule = GainSchedule.design(
+                self.points, lambda u: place_gain(vehicle, u, THESIS_POLES, self.alpha)
+            )
+            self._vehicle = vehicle
+            self._limit = vehicle.planes.limit_rad
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        if self.schedule is None:
+            raise RuntimeError("call reset() first")
+        gain = self.schedule.at(float(observation[SPEED]))
+        delta = -float(gain @ feedback_state(observation))
+        return np.array([np.clip(delta / self._limit, -1.0, 1.0)], dtype=np.float32)

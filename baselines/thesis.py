@@ -1,0 +1,46 @@
+"""The thesis's controller: full-state feedback placed once at 5 fps (Riedel 1993 Ch. II.B)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from baselines._common import feedback_state
+from subenv.analysis import THESIS_DESIGN_SPEED_MPS, THESIS_POLES, place_gain
+from subenv.vehicles import Vehicle
+
+
+class ThesisPolePlacement:
+    """delta = -K (theta, w, q, Z - Z_cmd), K placed at 5 fps with poles (-0.3, -0.31, -0.32, -0.33).
+
+    Designed once from the linear model of :mod:`subenv.analysis` (the gains of eq. 2.98, in SI)
+    and never changed: it holds depth at its design speed and, below the critical speed, drives
+    the boat to the pitched, plane-saturated equilibrium of Ch. III (dual control, alpha = 0).
+    """
+
+    name = "thesis"
+    control = "dual"
+    alpha = 0.0
+
+    def __init__(self) -> None:
+        self._gain: np.ndarray | None = None
+        self._vehicle: Vehicle | None = None
+        self._limit = 0.4
+
+    @property
+    def gain(self) -> np.ndarray:
+        if self._gain is None:
+            raise RuntimeError("call reset() first: the gain is designed for the episode's vehicle")
+        return self._gain
+
+    def reset(self, info: Mapping[str, Any], vehicle: Vehicle) -> None:
+        if vehicle is not self._vehicle:  # design once per design model
+            self._gain = place_gain(vehicle, THESIS_DESIGN_SPEED_MPS, THESIS_POLES, self.alpha)
+            self._vehicle = vehicle
+            self._limit = vehicle.planes.limit_rad
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        delta = -float(self.gain @ feedback_state(observation))
+        return np.array([np.clip(delta / self._limit, -1.0, 1.0)], dtype=np.float32)
