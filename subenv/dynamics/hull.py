@@ -6,19 +6,26 @@ is a polynomial, and the integrals reduce to the cumulative moments
 
     C_k(s) = int_{x_tail}^{s} x^k b(x) dx,   k = 0 .. 3,
 
-evaluated at s = x*: one ``searchsorted`` and a few multiplications per state, instead of a
-quadrature over the stations.
+evaluated at s = x*: one binary search over the stations and a few multiplications per state,
+instead of a quadrature over the stations.
+
+The integral is written once, for one state, in :func:`crossflow_point` (compiled with numba, see
+:mod:`subenv.dynamics._jit`); :func:`crossflow_integrals` is its batched form for NumPy callers and
+the right-hand side (:func:`subenv.dynamics.derivatives`) calls it directly.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
 
 import numpy as np
 
 from subenv._typing import FloatArray
+from subenv.dynamics._jit import gufunc, kernel
 
-__all__ = ["HullTable", "crossflow_integrals"]
+__all__ = ["HullTable", "crossflow_integrals", "crossflow_point", "cumulative_moments_point"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -50,21 +57,76 @@ class HullTable:
         prefix = np.concatenate([np.zeros((4, 1)), np.cumsum(p_hi - p_lo, axis=1)], axis=1)
         return cls(x=x, c0=c0, c1=c1, offset=prefix[:, :-1] - p_lo, total=prefix[:, -1].copy())
 
+    @cached_property
+    def packed(self) -> FloatArray:
+        """The table as one C-contiguous (7, n_stations) array, the form the kernels take.
+
+        Row 0 is ``x``; rows 1 and 2 are ``c0`` and ``c1``; rows 3-6 are ``offset[k]`` with
+        ``total[k]`` in the last column.
+        """
+        n = self.x.size
+        packed = np.zeros((7, n))
+        packed[0] = self.x
+        packed[1, :-1] = self.c0
+        packed[2, :-1] = self.c1
+        packed[3:, :-1] = self.offset
+        packed[3:, -1] = self.total
+        packed.flags.writeable = False
+        return packed
+
     def cumulative_moments(self, s: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """C_0..C_3 at positions ``s`` (clipped to the hull), each shaped like ``s``."""
-        s = np.clip(s, self.x[0], self.x[-1])
-        i = np.clip(np.searchsorted(self.x, s, side="right") - 1, 0, self.c0.size - 1)
-        c0, c1 = self.c0[i], self.c1[i]
-        s2 = s * s
-        s3 = s2 * s
-        s4 = s3 * s
-        s5 = s4 * s
-        return (
-            self.offset[0, i] + c0 * s + c1 * s2 / 2,
-            self.offset[1, i] + c0 * s2 / 2 + c1 * s3 / 3,
-            self.offset[2, i] + c0 * s3 / 3 + c1 * s4 / 4,
-            self.offset[3, i] + c0 * s4 / 4 + c1 * s5 / 5,
-        )
+        return tuple(_gufunc("moments")(s, self.packed))  # type: ignore[return-value]
+
+
+@kernel
+def cumulative_moments_point(s: float, hull: FloatArray) -> tuple[float, float, float, float]:
+    """C_0..C_3 at one position ``s`` [m] (clipped to the hull); ``hull`` is :attr:`HullTable.packed`."""
+    n_seg = hull.shape[1] - 1
+    lo, hi = hull[0, 0], hull[0, n_seg]
+    s = min(max(s, lo), hi)
+    # Segment i with x[i] <= s < x[i+1] (the last segment for s at the nose), as
+    # clip(searchsorted(x, s, side="right") - 1, 0, n_seg - 1).
+    a, b = 1, n_seg
+    while a < b:
+        mid = (a + b) >> 1
+        if hull[0, mid] <= s:
+            a = mid + 1
+        else:
+            b = mid
+    i = a - 1
+    c0, c1 = hull[1, i], hull[2, i]
+    s2 = s * s
+    s3 = s2 * s
+    s4 = s3 * s
+    s5 = s4 * s
+    return (
+        hull[3, i] + c0 * s + c1 * s2 / 2,
+        hull[4, i] + c0 * s2 / 2 + c1 * s3 / 3,
+        hull[5, i] + c0 * s3 / 3 + c1 * s4 / 4,
+        hull[6, i] + c0 * s4 / 4 + c1 * s5 / 5,
+    )
+
+
+@kernel
+def crossflow_point(w: float, q: float, hull: FloatArray) -> tuple[float, float]:
+    """Exact I_0, I_1 (see :func:`crossflow_integrals`) for one (w, q); ``hull`` is :attr:`HullTable.packed`."""
+    n_seg = hull.shape[1] - 1
+    # Root of w_loc; for q == 0 w_loc has the sign of w everywhere, which the ends reproduce.
+    if q != 0:
+        root = w / q
+    elif w >= 0:
+        root = hull[0, n_seg]
+    else:
+        root = hull[0, 0]
+    C0, C1, C2, C3 = cumulative_moments_point(root, hull)
+    T0, T1, T2, T3 = hull[3, n_seg], hull[4, n_seg], hull[5, n_seg], hull[6, n_seg]
+    ww, wq2, qq = w * w, 2.0 * w * q, q * q
+    # With F_k(s) = int_{tail}^{s} x^k b w_loc^2 dx: w_loc > 0 aft of the root when q > 0.
+    sigma = 1.0 if q >= 0 else -1.0
+    I0 = sigma * (2.0 * (ww * C0 - wq2 * C1 + qq * C2) - (ww * T0 - wq2 * T1 + qq * T2))
+    I1 = sigma * (2.0 * (ww * C1 - wq2 * C2 + qq * C3) - (ww * T1 - wq2 * T2 + qq * T3))
+    return I0, I1
 
 
 def crossflow_integrals(table: HullTable, w: FloatArray, q: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -85,17 +147,30 @@ def crossflow_integrals(table: HullTable, w: FloatArray, q: FloatArray) -> tuple
         [m^4/s^2]; the drag moment is M = +(rho/2) C_D I1 (from M = -x Z_F with x forward; the
         thesis prints the opposite sign in eqs 2.43 and 4.2).
     """
-    w = np.asarray(w, dtype=float)
-    q = np.asarray(q, dtype=float)
-    lo, hi = table.x[0], table.x[-1]
-    # Root of w_loc; for q == 0 w_loc has the sign of w everywhere, which the ends reproduce.
-    q_nonzero = q != 0
-    root = np.where(q_nonzero, w / np.where(q_nonzero, q, 1.0), np.where(w >= 0, hi, lo))
-    C0, C1, C2, C3 = table.cumulative_moments(root)
-    T0, T1, T2, T3 = table.total
-    ww, wq2, qq = w * w, 2.0 * w * q, q * q
-    # With F_k(s) = int_{tail}^{s} x^k b w_loc^2 dx: w_loc > 0 aft of the root when q > 0.
-    sigma = np.where(q >= 0, 1.0, -1.0)
-    I0 = sigma * (2.0 * (ww * C0 - wq2 * C1 + qq * C2) - (ww * T0 - wq2 * T1 + qq * T2))
-    I1 = sigma * (2.0 * (ww * C1 - wq2 * C2 + qq * C3) - (ww * T1 - wq2 * T2 + qq * T3))
-    return I0, I1
+    I0, I1 = _gufunc("crossflow")(w, q, table.packed)
+    return np.asarray(I0), np.asarray(I1)
+
+
+# --- the batched (generalized ufunc) forms, compiled on first use ------------------------------
+def _crossflow_loop(w: float, q: float, hull: FloatArray, I0: FloatArray, I1: FloatArray) -> None:
+    I0[0], I1[0] = crossflow_point(w, q, hull)
+
+
+def _moments_loop(s: float, hull: FloatArray, C0: FloatArray, C1: FloatArray, C2: FloatArray,
+                  C3: FloatArray) -> None:
+    C0[0], C1[0], C2[0], C3[0] = cumulative_moments_point(s, hull)
+
+
+_GUFUNC_SPECS: dict[str, tuple[Any, str, str]] = {
+    "crossflow": (_crossflow_loop, "void(f8, f8, f8[:, :], f8[:], f8[:])", "(),(),(r,n)->(),()"),
+    "moments": (_moments_loop, "void(f8, f8[:, :], f8[:], f8[:], f8[:], f8[:])", "(),(r,n)->(),(),(),()"),
+}
+_GUFUNCS: dict[str, Any] = {}
+
+
+def _gufunc(name: str) -> Any:
+    ufunc = _GUFUNCS.get(name)
+    if ufunc is None:
+        fn, signature, layout = _GUFUNC_SPECS[name]
+        ufunc = _GUFUNCS[name] = gufunc(fn, signature, layout)
+    return ufunc

@@ -4,6 +4,12 @@ The environments hold the planes and the external force constant over a control 
 hold) and integrate that step with ``substeps`` classical RK4 steps. The step was chosen by the
 accuracy tests in ``tests/dynamics/test_integrator.py``, which compare against
 ``scipy.integrate.solve_ivp`` at rtol 1e-10 over 600 s trajectories.
+
+:func:`rk4` integrates any batched right-hand side ``f(t, x)``. :func:`control_period_point` is the
+same scheme, compiled, for one state of :func:`subenv.dynamics.rhs_point` over one control
+period: the environments call it. It performs the same floating-point operations in the same
+order, so it reproduces ``rk4`` over :func:`subenv.dynamics.derivatives` bit for bit
+(``tests/envs/test_env_api.py::test_step_is_one_rk4_call_of_the_shared_dynamics``).
 """
 
 from __future__ import annotations
@@ -12,8 +18,10 @@ from collections.abc import Callable
 from typing import Final
 
 from subenv._typing import FloatArray
+from subenv.dynamics._jit import kernel
+from subenv.dynamics.model import rhs_point
 
-__all__ = ["CONTROL_PERIOD_S", "SUBSTEPS", "rk4", "rk4_step"]
+__all__ = ["CONTROL_PERIOD_S", "SUBSTEPS", "control_period_point", "rk4", "rk4_step"]
 
 CONTROL_PERIOD_S: Final = 0.5
 """Default control period of the environments [s]."""
@@ -41,3 +49,48 @@ def rk4(f: Rhs, t: float, x: FloatArray, dt: float, substeps: int) -> FloatArray
     for i in range(substeps):
         x = rk4_step(f, t + i * h, x, h)
     return x
+
+
+@kernel
+def control_period_point(
+    theta: float,
+    w: float,
+    q: float,
+    depth: float,
+    t0: float,
+    dt: float,
+    substeps: int,
+    speed0: float,
+    speed_slope: float,
+    stern: float,
+    bow: float,
+    force: float,
+    prm: FloatArray,
+    hull: FloatArray,
+) -> tuple[float, float, float, float]:
+    """:func:`rk4` of :func:`~subenv.dynamics.rhs_point` from ``t0`` over ``dt``, for one state.
+
+    The planes and the heave ``force`` are held; the speed is ``speed0 + speed_slope (t - t0)``
+    (a linear ramp, constant when ``speed_slope`` is 0). ``prm`` and ``hull`` as for ``rhs_point``.
+    """
+    h = dt / substeps
+    x0, x1, x2, x3 = theta, w, q, depth
+    for i in range(substeps):
+        t = t0 + i * h
+        # rk4_step, term by term: k1..k4 at t, t + h/2, t + h/2, t + h.
+        half = 0.5 * h
+        u = speed0 + speed_slope * (t - t0)
+        a0, a1, a2, a3 = rhs_point(x0, x1, x2, u, stern, bow, force, 0.0, prm, hull)
+        u = speed0 + speed_slope * (t + 0.5 * h - t0)
+        b0, b1, b2, b3 = rhs_point(x0 + half * a0, x1 + half * a1, x2 + half * a2, u, stern, bow, force,
+                                   0.0, prm, hull)
+        c0, c1, c2, c3 = rhs_point(x0 + half * b0, x1 + half * b1, x2 + half * b2, u, stern, bow, force,
+                                   0.0, prm, hull)
+        u = speed0 + speed_slope * (t + h - t0)
+        d0, d1, d2, d3 = rhs_point(x0 + h * c0, x1 + h * c1, x2 + h * c2, u, stern, bow, force, 0.0, prm, hull)
+        sixth = h / 6.0
+        x0 = x0 + sixth * (a0 + 2.0 * (b0 + c0) + d0)
+        x1 = x1 + sixth * (a1 + 2.0 * (b1 + c1) + d1)
+        x2 = x2 + sixth * (a2 + 2.0 * (b2 + c2) + d2)
+        x3 = x3 + sixth * (a3 + 2.0 * (b3 + c3) + d3)
+    return x0, x1, x2, x3

@@ -3,27 +3,33 @@
 State ``x = (theta, w, q, Z)``: pitch [rad, nose-up positive], heave velocity [m/s, down positive],
 pitch rate [rad/s] and depth [m, down positive]. Forward speed ``u`` [m/s] is an input.
 
-Everything that needs the physics (the single and vector environments, linearisation, controller
-design, analysis) calls :func:`derivatives`. It is a pure function, batched over any leading axes:
-states ``(..., 4)``, inputs and :class:`ModelParams` fields broadcast against ``(...)``.
+The equations are written once, for one state, in :func:`rhs_point`, compiled with numba (see
+:mod:`subenv.dynamics._jit`). Everything that needs the physics calls it: the environments'
+compiled transition directly, and the linearisation, controller design and analysis through
+:func:`derivatives`, its batched form: a pure function over any leading axes, states ``(..., 4)``,
+inputs and :class:`ModelParams` fields broadcast against ``(...)``.
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from subenv._typing import ArrayLike, FloatArray
-from subenv.dynamics.hull import HullTable, crossflow_integrals
+from subenv.dynamics._jit import gufunc, kernel
+from subenv.dynamics.hull import HullTable, crossflow_point
 from subenv.vehicles.vehicle import Vehicle
 
 __all__ = [
+    "PARAM_FIELDS",
     "STATE_NAMES",
     "ModelParams",
     "derivatives",
     "dual_plane_angles",
     "model_params",
+    "pack_params",
+    "rhs_point",
     "stack_params",
 ]
 
@@ -57,6 +63,10 @@ class ModelParams(NamedTuple):
     zGW_minus_zBB: ArrayLike  # z_G W - z_B B [N m]
     half_rho_CD: ArrayLike    # (rho/2) C_D [kg/m^3]
     hull: HullTable
+
+
+PARAM_FIELDS = ModelParams._fields[:-1]
+"""The numeric fields of :class:`ModelParams`, in the order of :func:`pack_params` (all but ``hull``)."""
 
 
 def model_params(vehicle: Vehicle) -> ModelParams:
@@ -116,6 +126,14 @@ def stack_params(params: list[ModelParams]) -> ModelParams:
     return ModelParams(**fields, hull=params[0].hull)
 
 
+def pack_params(params: ModelParams) -> FloatArray:
+    """The numeric fields of ``params`` as one array, shape ``(..., len(PARAM_FIELDS))``, for :func:`rhs_point`."""
+    fields = params[: len(PARAM_FIELDS)]
+    if not any(isinstance(f, np.ndarray) for f in fields):
+        return np.array(fields, dtype=float)
+    return np.stack(np.broadcast_arrays(*(np.asarray(f, dtype=float) for f in fields)), axis=-1)
+
+
 def dual_plane_angles(delta: ArrayLike, alpha: ArrayLike) -> tuple[FloatArray, FloatArray]:
     """Stern and bow plane angles for the dual-control command ``delta`` (Riedel 1993 eq. 2.58).
 
@@ -125,6 +143,60 @@ def dual_plane_angles(delta: ArrayLike, alpha: ArrayLike) -> tuple[FloatArray, F
     """
     delta = np.asarray(delta, dtype=float)
     return delta, np.asarray(alpha, dtype=float) * delta
+
+
+@kernel
+def rhs_point(
+    theta: float,
+    w: float,
+    q: float,
+    u: float,
+    stern: float,
+    bow: float,
+    force: float,
+    moment: float,
+    prm: FloatArray,
+    hull: FloatArray,
+) -> tuple[float, float, float, float]:
+    """d/dt (theta, w, q, Z) for one state (Riedel 1993 eqs 2.38-2.43); see :func:`derivatives`.
+
+    ``prm`` holds the fields of :class:`ModelParams` in :data:`PARAM_FIELDS` order
+    (:func:`pack_params`), ``hull`` is :attr:`HullTable.packed`. Depth does not enter.
+    """
+    (inv_m11, inv_m12, inv_m21, inv_m22, Z_uq, m_zG, Z_w, M_uq, M_w, Z_delta_s, Z_delta_b, M_delta_s,
+     M_delta_b, W_minus_B, xGW_minus_xBB, zGW_minus_zBB, half_rho_CD) = (
+        prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6], prm[7], prm[8], prm[9], prm[10],
+        prm[11], prm[12], prm[13], prm[14], prm[15], prm[16])
+    cos_t = np.cos(theta)
+    sin_t = np.sin(theta)
+    uu = u * u
+    I0, I1 = crossflow_point(w, q, hull)
+    # Riedel (1993) eqs 2.38 and 2.39, right-hand sides, with the forces of eqs 2.42 and 2.43.
+    heave = (
+        Z_uq * u * q
+        + m_zG * q * q
+        + Z_w * u * w
+        + W_minus_B * cos_t
+        + uu * (Z_delta_s * stern + Z_delta_b * bow)
+        - half_rho_CD * I0
+        + force
+    )
+    pitch = (
+        -m_zG * w * q
+        + M_uq * u * q
+        + M_w * u * w
+        - xGW_minus_xBB * cos_t
+        - zGW_minus_zBB * sin_t
+        + uu * (M_delta_s * stern + M_delta_b * bow)
+        + half_rho_CD * I1
+        + moment
+    )
+    return (
+        q,  # Riedel (1993) eq. 2.40
+        inv_m11 * heave + inv_m12 * pitch,
+        inv_m21 * heave + inv_m22 * pitch,
+        -u * sin_t + w * cos_t,  # Riedel (1993) eq. 2.41 (depth kinematics)
+    )
 
 
 def derivatives(
@@ -173,39 +245,26 @@ def derivatives(
     with the hull cross-flow drag Z_drag = -(rho/2) C_D int b w_loc|w_loc| dx and
     M_drag = +(rho/2) C_D int x b w_loc|w_loc| dx, w_loc = w - x q (see
     :func:`subenv.dynamics.hull.crossflow_integrals` for the sign of the moment).
+
+    This is :func:`rhs_point` broadcast over the batch (a generalized ufunc); the environments
+    call :func:`rhs_point` itself.
     """
-    p = params
-    theta = state[..., 0]
-    w = state[..., 1]
-    q = state[..., 2]
-    u = speed
-    cos_t = np.cos(theta)
-    sin_t = np.sin(theta)
-    uu = u * u
-    I0, I1 = crossflow_integrals(p.hull, w, q)
-    # Riedel (1993) eqs 2.38 and 2.39, right-hand sides, with the forces of eqs 2.42 and 2.43.
-    heave = (
-        p.Z_uq * u * q
-        + p.m_zG * q * q
-        + p.Z_w * u * w
-        + p.W_minus_B * cos_t
-        + uu * (p.Z_delta_s * stern + p.Z_delta_b * bow)
-        - p.half_rho_CD * I0
-        + force
-    )
-    pitch = (
-        -p.m_zG * w * q
-        + p.M_uq * u * q
-        + p.M_w * u * w
-        - p.xGW_minus_xBB * cos_t
-        - p.zGW_minus_zBB * sin_t
-        + uu * (p.M_delta_s * stern + p.M_delta_b * bow)
-        + p.half_rho_CD * I1
-        + moment
-    )
-    out = np.empty(np.broadcast_shapes(state.shape, np.shape(heave) + (4,)))
-    out[..., 0] = q  # Riedel (1993) eq. 2.40
-    out[..., 1] = p.inv_m11 * heave + p.inv_m12 * pitch
-    out[..., 2] = p.inv_m21 * heave + p.inv_m22 * pitch
-    out[..., 3] = -u * sin_t + w * cos_t  # Riedel (1993) eq. 2.41 (depth kinematics)
-    return out
+    state = np.asarray(state, dtype=float)
+    if state.shape[-1:] != (4,):
+        raise ValueError(f"state has shape {state.shape}: must have shape (..., 4) (pitch, heave, pitch rate, depth)")
+    return _derivatives_ufunc()(state, speed, stern, bow, force, moment, pack_params(params), params.hull.packed)
+
+
+def _derivatives_loop(state: FloatArray, u: float, stern: float, bow: float, force: float, moment: float,
+                      prm: FloatArray, hull: FloatArray, out: FloatArray) -> None:
+    out[0], out[1], out[2], out[3] = rhs_point(state[0], state[1], state[2], u, stern, bow, force, moment, prm, hull)
+
+
+_UFUNC: list[object] = []
+
+
+def _derivatives_ufunc() -> Any:
+    if not _UFUNC:  # compiled (or loaded from numba's cache) on first use, not on import
+        _UFUNC.append(gufunc(_derivatives_loop, "void(f8[:], f8, f8, f8, f8, f8, f8[:], f8[:, :], f8[:])",
+                             "(s),(),(),(),(),(),(p),(r,n)->(s)"))
+    return _UFUNC[0]

@@ -11,10 +11,13 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from subenv.analysis.critical import critical_speed, froude_number
+from numba import typed
+
+from subenv.analysis.critical import critical_speed
 from subenv.analysis.linear import check_alpha
-from subenv.dynamics.integrate import CONTROL_PERIOD_S, SUBSTEPS, rk4
-from subenv.dynamics.model import ModelParams, derivatives, model_params
+from subenv.dynamics.integrate import CONTROL_PERIOD_S, SUBSTEPS
+from subenv.dynamics.model import model_params, pack_params
+from subenv.envs import transition as tr
 from subenv.scenarios.registry import get_scenario
 from subenv.scenarios.scenario import EpisodeConfig, Scenario
 from subenv.vehicles.loader import load_vehicle
@@ -52,6 +55,7 @@ _MAX_DEPTH_COMMAND_M: Final = 1000.0
 _OBS_MARGIN_M: Final = 10.0  # room beyond the depth band for the terminal observation and noise
 _OPTIONS: Final = ("speed", "depth_command", "initial_state")
 _STATE_KEYS: Final = ("pitch", "heave", "pitch_rate", "depth")
+_LOADING_CACHE_SIZE: Final = 1024  # loadings kept per environment (each one: a Vehicle and its parameters)
 ControlMode = Literal["dual", "independent"]
 
 
@@ -164,8 +168,11 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ## Vectorized environment
 
-    ``gym.make_vec`` wraps this environment (``SyncVectorEnv``); the dynamics are batched
-    (:func:`subenv.dynamics.derivatives`), ready for a native vector environment.
+    ``gym.make_vec(id, num_envs=N)`` returns :class:`~subenv.envs.DivePlaneVectorEnv`, which steps
+    all N sub-environments as arrays through the same compiled transition
+    (:mod:`subenv.envs.transition`) and reproduces ``SyncVectorEnv`` over this environment step
+    for step; ``vectorization_mode="sync"`` gives the latter. For Stable-Baselines3 use
+    :func:`subenv.envs.sb3.make_sb3_vec_env`.
 
     ## Version History
 
@@ -243,20 +250,20 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         self._noise_std = np.array(
             [_NOISE_STD.get(name, 0.0) for name in OBSERVATION_NAMES], dtype=float
         )
+        self._hull = model_params(self.base_vehicle).hull.packed
+        self._cfg = self._constants(max_episode_steps=None)
+        self._loadings: dict[tuple[float, float, float, float | None], tuple[Vehicle, np.ndarray, float]] = {}
 
-        # Episode state, set by reset().
+        # Episode state, set by reset(): one row of the transition's table (subenv.envs.transition).
         self.vehicle: Vehicle = self.base_vehicle
         self.episode: EpisodeConfig | None = None
-        self._params: ModelParams = model_params(self.base_vehicle)
-        self.state = np.zeros(4)
-        self.time_s = 0.0
-        self.depth_command_m = 0.0
-        self.planes_rad = np.zeros(2)  # applied (stern, bow)
-        self.critical_speed_mps = math.nan
-        self._speed_times: np.ndarray = np.zeros(1)
-        self._speed_values: np.ndarray = np.zeros(1)
-        self._disturbance_N = 0.0
-        self._last_obs = np.zeros(len(OBSERVATION_NAMES), dtype=np.float32)
+        self._rows = np.zeros((1, tr.N_COLUMNS))
+        self._rows[0, tr.CRITICAL_SPEED] = math.nan
+        self._row = self._rows[0]
+        self._obs_rows = np.zeros((1, len(OBSERVATION_NAMES)), dtype=np.float32)
+        self._last_obs = self._obs_rows[0]
+        self._rngs: Any = None  # numba typed list holding self.np_random, for the transition
+        self._rngs_source: np.random.Generator | None = None
         self._history: list[tuple[float, float, float]] = []
         self._window: Any = None
 
@@ -265,128 +272,31 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
         super().reset(seed=seed)
-        options = dict(options or {})
-        unknown = set(options) - set(_OPTIONS)
-        if unknown:
-            raise ValueError(f"reset options {sorted(unknown)} are unknown: allowed options are {list(_OPTIONS)}")
-        config = self.scenario.sample(self.np_random, self.base_vehicle.weight_N)
-        base = self.base_vehicle
-        z_GB = config.z_GB_m if config.z_GB_m is not None else base.z_GB_m
-        self.vehicle = base.variant(
-            z_GB_m=z_GB * config.z_GB_scale,
-            x_GB_m=base.x_GB_m + config.x_GB_m,
-            excess_buoyancy_N=base.excess_buoyancy_N + config.excess_buoyancy_N,
-            crossflow_drag=config.crossflow_drag,
-        )
-        self._params = model_params(self.vehicle)
-        self.critical_speed_mps = self._critical_speed(self.vehicle)
-        if config.speed_relative and not math.isfinite(self.critical_speed_mps):
-            raise ValueError(
-                f"scenario {self.scenario.name!r} gives speeds relative to the critical speed, but "
-                f"vehicle {self.vehicle.name!r} (z_GB={self.vehicle.z_GB_m!r} m) has none"
-            )
-        scale = self.critical_speed_mps if config.speed_relative else 1.0
-        self._speed_times = np.array([k[0] for k in config.speed_knots])
-        self._speed_values = np.array([k[1] * scale for k in config.speed_knots])
-        self.depth_command_m = config.depth_command_m
-        state = list(config.initial_state)
-
-        if "speed" in options:
-            speed = _positive("options['speed']", options["speed"], upper=_MAX_SPEED_MPS)
-            self._speed_times, self._speed_values = np.zeros(1), np.array([speed])
-        if "depth_command" in options:
-            command = options["depth_command"]
-            if not (isinstance(command, (int, float)) and math.isfinite(command)
-                    and self.broach_depth_m < command <= _MAX_DEPTH_COMMAND_M):
-                raise ValueError(
-                    f"options['depth_command']={command!r} is invalid: must be a number in "
-                    f"({self.broach_depth_m:.4g}, {_MAX_DEPTH_COMMAND_M:g}] m (below the hull radius)"
-                )
-            # Keep the drawn initial offset from the ordered depth, unless it would broach.
-            offset = state[3] - self.depth_command_m
-            self.depth_command_m = float(command)
-            state[3] = self.depth_command_m + offset
-            if not state[3] > self.broach_depth_m:
-                state[3] = self.depth_command_m
-        if "initial_state" in options:
-            state = self._initial_state_option(options["initial_state"], state)
-        self.episode = config
-        self.state = np.array(state, dtype=float)
-        self.time_s = 0.0
-        self.planes_rad = np.zeros(2)
-        self._disturbance_N = (
-            float(self.np_random.normal(0.0, config.disturbance_std_N)) if config.disturbance_std_N > 0 else 0.0
-        )
-        self._history = [(0.0, self.state[3], self.depth_command_m)]
-        obs = self._observe()
-        self._last_obs = obs
+        self.vehicle, self.episode = self._begin_episode(self._row, self.np_random, options)
+        tr.observe_batch(self._rows, _FIRST, self._obs_rows, self._bound_rngs(), self._cfg)
+        self._history = [(0.0, self._row[tr.DEPTH], self._row[tr.COMMAND])]
         if self.render_mode == "human":
             self.render()
-        return obs, self._info(terminal_reason="", terms=None)
+        return self._last_obs.copy(), _info(self._row.tolist())
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, SupportsFloat, bool, bool, dict[str, Any]]:
         if self.episode is None:
             raise gym.error.ResetNeeded("Cannot call step() before reset()")
-        a = np.asarray(action, dtype=float).reshape(-1)
+        a = np.ascontiguousarray(action, dtype=np.float64).reshape(-1)
         if a.shape != self.action_space.shape:
             raise ValueError(
                 f"action has shape {np.shape(action)}: must have shape {self.action_space.shape} "
                 f"(control={self.control!r})"
             )
-        if not np.all(np.isfinite(a)):
+        rngs = self._rngs if self._rngs_source is self._np_random else self._bound_rngs()
+        if not tr.step_single(self._row, a, self._last_obs, rngs, self._cfg, self._hull):
             raise ValueError(f"action={np.asarray(action).tolist()!r} is invalid: must be finite (no NaN or inf)")
-        a = np.clip(a, -1.0, 1.0)
-        command = a * self.plane_limit_rad
-        if self.control == "dual":
-            command = np.array([command[0], self.alpha * command[0]])
-        if self.plane_rate_limit_radps is not None:
-            max_move = self.plane_rate_limit_radps * self.dt
-            command = self.planes_rad + np.clip(command - self.planes_rad, -max_move, max_move)
-        self.planes_rad = np.clip(command, -self.plane_limit_rad, self.plane_limit_rad)
-        stern, bow = float(self.planes_rad[0]), float(self.planes_rad[1])
-
-        t0 = self.time_s
-        u0, u1 = self.speed_at(t0), self.speed_at(t0 + self.dt)
-        slope = (u1 - u0) / self.dt
-        params, force = self._params, self._disturbance_N
-
-        def rhs(t: float, x: np.ndarray) -> np.ndarray:
-            return derivatives(x, u0 + slope * (t - t0), stern, bow, params, force=force)
-
-        new_state = rk4(rhs, t0, self.state, self.dt, self.substeps)
-        self.time_s = t0 + self.dt
-        self._advance_disturbance()
-
-        reason = ""
-        if not (np.all(np.isfinite(new_state)) and abs(new_state[1]) <= _MAX_HEAVE_MPS
-                and abs(new_state[2]) <= _MAX_PITCH_RATE_RADPS):
-            reason = "diverged"
-        else:
-            self.state = new_state
-            if abs(new_state[0]) > self.max_pitch_rad:
-                reason = "pitch_limit"
-            elif new_state[3] < self.broach_depth_m:
-                reason = "broached"
-            elif abs(new_state[3] - self.depth_command_m) > self.max_depth_error_m:
-                reason = "left_depth_band"
-        terminated = bool(reason)
-        truncated = not terminated and self.time_s >= self.episode.duration_s - 1e-9
-
-        depth_error = self.state[3] - self.depth_command_m
-        terms = {
-            "reward_depth": 1.0 - math.tanh(abs(depth_error) / self.depth_scale_m),
-            "reward_pitch": -self.pitch_weight * (self.state[0] / self.max_pitch_rad) ** 2,
-            "reward_effort": -self.effort_weight * float(np.mean(a * a)),
-            "reward_termination": -self.termination_penalty if terminated else 0.0,
-        }
-        reward = float(sum(terms.values()))
-        if reason != "diverged":
-            self._last_obs = self._observe()
+        r = self._row.tolist()
         if self.render_mode is not None:
-            self._history.append((self.time_s, self.state[3], self.depth_command_m))
+            self._history.append((r[tr.TIME], r[tr.DEPTH], r[tr.COMMAND]))
             if self.render_mode == "human":
                 self.render()
-        return self._last_obs.copy(), reward, terminated, truncated, self._info(reason, terms)
+        return self._last_obs.copy(), r[tr.REWARD], r[tr.TERMINATED] > 0.0, r[tr.TRUNCATED] > 0.0, _info(r)
 
     def render(self) -> np.ndarray | None:
         if self.render_mode is None:
@@ -395,25 +305,9 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
                 'Set render_mode at initialization, e.g. gym.make("subenv/DivePlane-v0", render_mode="rgb_array")'
             )
             return None
-        from subenv.envs.rendering import Frame, HumanWindow, render_rgb
+        from subenv.envs.rendering import HumanWindow, render_rgb
 
-        times, depths, commands = zip(*self._history) if self._history else ((), (), ())
-        frame = Frame(
-            hull_x_m=self.base_vehicle.hull.x_m,
-            hull_breadth_m=self.base_vehicle.hull.breadth_m,
-            length_m=self.base_vehicle.length_m,
-            pitch_rad=float(self.state[0]),
-            depth_m=float(self.state[3]),
-            depth_command_m=float(self.depth_command_m),
-            stern_plane_rad=float(self.planes_rad[0]),
-            bow_plane_rad=float(self.planes_rad[1]),
-            speed_mps=self.speed_at(self.time_s),
-            critical_speed_mps=float(self.critical_speed_mps),
-            time_s=self.time_s,
-            times_s=tuple(times),
-            depths_m=tuple(depths),
-            commands_m=tuple(commands),
-        )
+        frame = self._frame(self._row, self._history)
         if self.render_mode == "rgb_array":
             return render_rgb(frame)
         if self._window is None:
@@ -426,29 +320,189 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
             self._window.close()
             self._window = None
 
-    # --- helpers ----------------------------------------------------------------------------
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state["_rngs"] = state["_rngs_source"] = None  # a numba typed list does not pickle; rebuilt on use
+        state["_window"] = None
+        return state
+
+    # --- the episode's state, kept in the transition's row -----------------------------------
+    @property
+    def state(self) -> np.ndarray:
+        """(pitch [rad], heave [m/s], pitch rate [rad/s], depth [m]), a copy."""
+        return self._row[tr.PITCH:tr.DEPTH + 1].copy()
+
+    @state.setter
+    def state(self, value: np.ndarray) -> None:
+        self._row[tr.PITCH:tr.DEPTH + 1] = value
+
+    @property
+    def time_s(self) -> float:
+        """Time since the reset [s]."""
+        return float(self._row[tr.TIME])
+
+    @property
+    def depth_command_m(self) -> float:
+        """The ordered depth of the episode [m]."""
+        return float(self._row[tr.COMMAND])
+
+    @property
+    def planes_rad(self) -> np.ndarray:
+        """Applied (stern, bow) plane angles [rad], a copy."""
+        return self._row[tr.STERN:tr.BOW + 1].copy()
+
+    @property
+    def critical_speed_mps(self) -> float:
+        """Critical speed of the episode's loading [m/s] (nan: none, z_GB <= 0)."""
+        return float(self._row[tr.CRITICAL_SPEED])
+
+    def speed_at(self, t: float) -> float:
+        """Forward speed [m/s] of the current episode at time ``t`` [s]."""
+        return float(tr.speed_at_point(float(t), self._row))
+
+    # --- helpers, shared with DivePlaneVectorEnv ----------------------------------------------
+    def _constants(self, max_episode_steps: int | None) -> np.ndarray:
+        """The transition's constants (``subenv.envs.transition.C_*``) for this configuration."""
+        cfg = np.zeros(tr.N_CONFIG)
+        decay = math.exp(-self.dt / _DISTURBANCE_TIME_CONSTANT_S)
+        cfg[tr.C_DT] = self.dt
+        cfg[tr.C_SUBSTEPS] = self.substeps
+        cfg[tr.C_DUAL] = 1.0 if self.control == "dual" else 0.0
+        cfg[tr.C_ALPHA] = self.alpha
+        cfg[tr.C_PLANE_LIMIT] = self.plane_limit_rad
+        if self.plane_rate_limit_radps is not None:
+            cfg[tr.C_RATE_LIMITED] = 1.0
+            cfg[tr.C_MAX_MOVE] = self.plane_rate_limit_radps * self.dt
+        cfg[tr.C_MAX_PITCH] = self.max_pitch_rad
+        cfg[tr.C_MAX_DEPTH_ERROR] = self.max_depth_error_m
+        cfg[tr.C_BROACH_DEPTH] = self.broach_depth_m
+        cfg[tr.C_DEPTH_SCALE] = self.depth_scale_m
+        cfg[tr.C_PITCH_WEIGHT] = self.pitch_weight
+        cfg[tr.C_EFFORT_WEIGHT] = self.effort_weight
+        cfg[tr.C_TERMINATION_PENALTY] = self.termination_penalty
+        cfg[tr.C_DISTURBANCE_DECAY] = decay
+        cfg[tr.C_DISTURBANCE_GAIN] = math.sqrt(1 - decay * decay)
+        cfg[tr.C_MAX_STEPS] = tr.episode_time_limit(max_episode_steps)
+        cfg[tr.C_MAX_HEAVE] = _MAX_HEAVE_MPS
+        cfg[tr.C_MAX_PITCH_RATE] = _MAX_PITCH_RATE_RADPS
+        cfg[tr.C_OBS_LOW:tr.C_OBS_LOW + tr.N_OBS] = self._obs_low
+        cfg[tr.C_OBS_HIGH:tr.C_OBS_HIGH + tr.N_OBS] = self._obs_high
+        cfg[tr.C_NOISE_STD:tr.C_NOISE_STD + tr.N_OBS] = self._noise_std
+        cfg.flags.writeable = False
+        return cfg
+
+    def _bound_rngs(self) -> Any:
+        """A numba typed list holding ``self.np_random`` (rebuilt when the generator changes)."""
+        rng = self.np_random
+        if self._rngs_source is not rng:
+            self._rngs = typed.List([rng])
+            self._rngs_source = rng
+        return self._rngs
+
+    def _loading(self, config: EpisodeConfig) -> tuple[Vehicle, np.ndarray, float]:
+        """The episode's vehicle, its packed model parameters and its critical speed (memoised)."""
+        base = self.base_vehicle
+        z_GB = config.z_GB_m if config.z_GB_m is not None else base.z_GB_m
+        key = (z_GB * config.z_GB_scale, base.x_GB_m + config.x_GB_m,
+               base.excess_buoyancy_N + config.excess_buoyancy_N, config.crossflow_drag)
+        found = self._loadings.get(key)
+        if found is None:
+            vehicle = base.variant(z_GB_m=key[0], x_GB_m=key[1], excess_buoyancy_N=key[2], crossflow_drag=key[3])
+            if len(self._loadings) >= _LOADING_CACHE_SIZE:
+                self._loadings.clear()
+            found = self._loadings[key] = (vehicle, pack_params(model_params(vehicle)), self._critical_speed(vehicle))
+        return found
+
+    def _begin_episode(
+        self, row: np.ndarray, rng: np.random.Generator, options: dict[str, Any] | None
+    ) -> tuple[Vehicle, EpisodeConfig]:
+        """Draw an episode from ``rng`` (and ``options``) into the transition ``row``; the observation is not drawn."""
+        options = dict(options or {})
+        unknown = set(options) - set(_OPTIONS)
+        if unknown:
+            raise ValueError(f"reset options {sorted(unknown)} are unknown: allowed options are {list(_OPTIONS)}")
+        config = self.scenario.sample(rng, self.base_vehicle.weight_N)
+        vehicle, params, ucr = self._loading(config)
+        if config.speed_relative and not math.isfinite(ucr):
+            raise ValueError(
+                f"scenario {self.scenario.name!r} gives speeds relative to the critical speed, but "
+                f"vehicle {vehicle.name!r} (z_GB={vehicle.z_GB_m!r} m) has none"
+            )
+        scale = ucr if config.speed_relative else 1.0
+        knots = [(k[0], k[1] * scale) for k in config.speed_knots]
+        command = config.depth_command_m
+        state = list(config.initial_state)
+
+        if "speed" in options:
+            knots = [(0.0, _positive("options['speed']", options["speed"], upper=_MAX_SPEED_MPS))]
+        if "depth_command" in options:
+            value = options["depth_command"]
+            if not (isinstance(value, (int, float)) and math.isfinite(value)
+                    and self.broach_depth_m < value <= _MAX_DEPTH_COMMAND_M):
+                raise ValueError(
+                    f"options['depth_command']={value!r} is invalid: must be a number in "
+                    f"({self.broach_depth_m:.4g}, {_MAX_DEPTH_COMMAND_M:g}] m (below the hull radius)"
+                )
+            # Keep the drawn initial offset from the ordered depth, unless it would broach.
+            offset = state[3] - command
+            command = float(value)
+            state[3] = command + offset
+            if not state[3] > self.broach_depth_m:
+                state[3] = command
+        if "initial_state" in options:
+            state = self._initial_state_option(options["initial_state"], state, command)
+        if len(knots) > tr.MAX_KNOTS:
+            raise ValueError(f"the speed profile has {len(knots)} knots; the environment takes at most {tr.MAX_KNOTS}")
+        disturbance = (
+            float(rng.normal(0.0, config.disturbance_std_N)) if config.disturbance_std_N > 0 else 0.0
+        )
+
+        row[:] = 0.0
+        row[tr.PITCH:tr.DEPTH + 1] = state
+        row[tr.PARAMS:tr.STERN] = params
+        row[tr.N_KNOTS] = len(knots)
+        for k, (t, u) in enumerate(knots):
+            row[tr.KNOT_T + k] = t
+            row[tr.KNOT_U + k] = u
+        row[tr.COMMAND] = command
+        row[tr.DISTURBANCE] = disturbance
+        row[tr.DISTURBANCE_STD] = config.disturbance_std_N
+        row[tr.NOISE] = 1.0 if config.sensor_noise else 0.0
+        row[tr.DURATION] = config.duration_s
+        row[tr.CRITICAL_SPEED] = ucr
+        z_GB = vehicle.z_GB_m
+        row[tr.SQRT_G_ZGB] = math.sqrt(vehicle.gravity_m_s2 * z_GB) if z_GB > 0 else math.nan
+        return vehicle, config
+
+    def _frame(self, row: np.ndarray, history: Sequence[tuple[float, float, float]]) -> Any:
+        """The rendering :class:`~subenv.envs.rendering.Frame` of a transition row."""
+        from subenv.envs.rendering import Frame
+
+        times, depths, commands = zip(*history) if history else ((), (), ())
+        return Frame(
+            hull_x_m=self.base_vehicle.hull.x_m,
+            hull_breadth_m=self.base_vehicle.hull.breadth_m,
+            length_m=self.base_vehicle.length_m,
+            pitch_rad=float(row[tr.PITCH]),
+            depth_m=float(row[tr.DEPTH]),
+            depth_command_m=float(row[tr.COMMAND]),
+            stern_plane_rad=float(row[tr.STERN]),
+            bow_plane_rad=float(row[tr.BOW]),
+            speed_mps=float(tr.speed_at_point(float(row[tr.TIME]), row)),
+            critical_speed_mps=float(row[tr.CRITICAL_SPEED]),
+            time_s=float(row[tr.TIME]),
+            times_s=tuple(times),
+            depths_m=tuple(depths),
+            commands_m=tuple(commands),
+        )
+
     def _critical_speed(self, vehicle: Vehicle) -> float:
         try:
             return critical_speed(vehicle, self.alpha)
         except ValueError:
             return math.nan  # z_GB <= 0: no critical speed exists for this loading
 
-    def speed_at(self, t: float) -> float:
-        """Forward speed [m/s] of the current episode at time ``t`` [s]."""
-        if self._speed_values.size == 1:
-            return float(self._speed_values[0])
-        return float(np.interp(t, self._speed_times, self._speed_values))
-
-    def _advance_disturbance(self) -> None:
-        std = self.episode.disturbance_std_N if self.episode is not None else 0.0
-        if std > 0:
-            # First-order Gauss-Markov process with stationary standard deviation std.
-            a = math.exp(-self.dt / _DISTURBANCE_TIME_CONSTANT_S)
-            self._disturbance_N = a * self._disturbance_N + math.sqrt(1 - a * a) * float(
-                self.np_random.normal(0.0, std)
-            )
-
-    def _initial_state_option(self, value: Any, drawn: list[float]) -> list[float]:
+    def _initial_state_option(self, value: Any, drawn: list[float], command: float) -> list[float]:
         if isinstance(value, Mapping):
             unknown = set(value) - set(_STATE_KEYS)
             if unknown:
@@ -485,7 +539,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
                 f"options['initial_state']['pitch_rate']={rate!r} is invalid: must be in "
                 f"[-{_MAX_PITCH_RATE_RADPS}, {_MAX_PITCH_RATE_RADPS}] rad/s"
             )
-        low, high = self.broach_depth_m, self.depth_command_m + self.max_depth_error_m
+        low, high = self.broach_depth_m, command + self.max_depth_error_m
         if not low < depth <= high:
             raise ValueError(
                 f"options['initial_state']['depth']={depth!r} is invalid: must be in ({low:.4g}, {high:.4g}] m "
@@ -493,40 +547,32 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
             )
         return state
 
-    def _observe(self) -> np.ndarray:
-        theta, w, q, depth = self.state
-        obs = np.array(
-            [depth - self.depth_command_m, theta, w, q, self.speed_at(self.time_s),
-             self.planes_rad[0], self.planes_rad[1], depth]
-        )
-        if self.episode is not None and self.episode.sensor_noise:
-            noise = self.np_random.normal(0.0, 1.0, size=obs.shape) * self._noise_std
-            noise[0] = noise[7]  # one depth sensor
-            obs = obs + noise
-        # Only a terminal state (or noise at zero speed) can reach the bounds.
-        return np.clip(obs, self._obs_low, self._obs_high).astype(np.float32)
 
-    def _info(self, terminal_reason: str, terms: dict[str, float] | None) -> dict[str, Any]:
-        theta, w, q, depth = (float(v) for v in self.state)
-        speed = self.speed_at(self.time_s)
-        ucr = float(self.critical_speed_mps)
-        z_GB = self.vehicle.z_GB_m
-        info: dict[str, Any] = {
-            "time_s": self.time_s,
-            "depth_m": depth,
-            "depth_command_m": float(self.depth_command_m),
-            "depth_error_m": depth - float(self.depth_command_m),
-            "pitch_rad": theta,
-            "heave_mps": w,
-            "pitch_rate_radps": q,
-            "stern_plane_rad": float(self.planes_rad[0]),
-            "bow_plane_rad": float(self.planes_rad[1]),
-            "speed_mps": speed,
-            "froude_number": froude_number(self.vehicle, speed) if z_GB > 0 else math.nan,
-            "critical_speed_mps": ucr,
-            "critical_froude": froude_number(self.vehicle, ucr) if z_GB > 0 and math.isfinite(ucr) else math.nan,
-            "disturbance_N": self._disturbance_N,
-            "termination_reason": terminal_reason,
-        }
-        info.update(terms or dict.fromkeys(("reward_depth", "reward_pitch", "reward_effort", "reward_termination"), 0.0))
-        return info
+_FIRST: Final = np.zeros(1, dtype=np.intp)  # the row index of a single environment
+
+
+def _info(r: list[float]) -> dict[str, Any]:
+    """The step's ``info`` from a transition row (as a list of floats)."""
+    depth, command, speed = r[tr.DEPTH], r[tr.COMMAND], r[tr.SPEED]
+    froude_scale, ucr = r[tr.SQRT_G_ZGB], r[tr.CRITICAL_SPEED]  # nan when z_GB <= 0 (then no Froude numbers)
+    return {
+        "time_s": r[tr.TIME],
+        "depth_m": depth,
+        "depth_command_m": command,
+        "depth_error_m": depth - command,
+        "pitch_rad": r[tr.PITCH],
+        "heave_mps": r[tr.HEAVE],
+        "pitch_rate_radps": r[tr.PITCH_RATE],
+        "stern_plane_rad": r[tr.STERN],
+        "bow_plane_rad": r[tr.BOW],
+        "speed_mps": speed,
+        "froude_number": speed / froude_scale,  # Fn = u / sqrt(g z_GB)
+        "critical_speed_mps": ucr,
+        "critical_froude": ucr / froude_scale,
+        "disturbance_N": r[tr.DISTURBANCE],
+        "termination_reason": tr.REASONS[int(r[tr.REASON])],
+        "reward_depth": r[tr.REWARD_DEPTH],
+        "reward_pitch": r[tr.REWARD_PITCH],
+        "reward_effort": r[tr.REWARD_EFFORT],
+        "reward_termination": r[tr.REWARD_TERMINATION],
+    }

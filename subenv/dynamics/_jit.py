@@ -1,0 +1,37 @@
+"""How the physics is compiled: one numba configuration for every kernel.
+
+The right-hand side, the hull integral and the environment transition are written once as
+scalar functions and compiled with numba. There is no interpreted copy beside them: the batched
+NumPy-facing functions (:func:`subenv.dynamics.derivatives`,
+:func:`subenv.dynamics.crossflow_integrals`) are generalized ufuncs over the same compiled scalar
+functions that the environments call.
+
+- ``cache=True``: compiled code is stored next to the sources (or in ``NUMBA_CACHE_DIR``), so
+  only the first process on a machine pays the compile time (``benchmarks/speed.py`` reports it).
+- ``error_model="numpy"``: division by zero gives inf/nan as in NumPy instead of raising, and
+  saves the checks.
+- No ``fastmath``: results stay IEEE, so the compiled integrator reproduces
+  :func:`subenv.dynamics.rk4` over :func:`subenv.dynamics.derivatives` bit for bit.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any, Final
+
+import numba
+
+__all__ = ["KERNEL_OPTIONS", "gufunc", "kernel", "parallel_kernel"]
+
+KERNEL_OPTIONS: Final[dict[str, Any]] = {"cache": True, "nogil": True, "error_model": "numpy"}
+
+kernel = functools.partial(numba.njit, **KERNEL_OPTIONS)
+"""``numba.njit`` with the package's options, compiled lazily on the first call."""
+
+parallel_kernel = functools.partial(numba.njit, parallel=True, **KERNEL_OPTIONS)
+"""As :data:`kernel`, for loops over sub-environments written with ``numba.prange``."""
+
+
+def gufunc(fn: Any, signature: str, layout: str) -> Any:
+    """Compile ``fn`` as a generalized ufunc (NumPy broadcasting over the loop dimensions)."""
+    return numba.guvectorize([signature], layout, cache=True)(fn)
