@@ -21,12 +21,16 @@ from typing import Any, Final
 
 import numba
 
-__all__ = ["KERNEL_OPTIONS", "gufunc", "kernel", "parallel_kernel"]
+__all__ = ["KERNEL_OPTIONS", "gufunc", "inline_kernel", "kernel", "parallel_kernel"]
 
 KERNEL_OPTIONS: Final[dict[str, Any]] = {"cache": True, "nogil": True, "error_model": "numpy"}
 
 kernel = functools.partial(numba.njit, **KERNEL_OPTIONS)
 """``numba.njit`` with the package's options, compiled lazily on the first call."""
+
+inline_kernel = functools.partial(numba.njit, inline="always", **KERNEL_OPTIONS)
+"""As :data:`kernel`, and inlined into the compiled callers (no call overhead, no reference counting of the
+array arguments): for the small functions called per state."""
 
 parallel_kernel = functools.partial(numba.njit, parallel=True, **KERNEL_OPTIONS)
 """As :data:`kernel`, for loops over sub-environments written with ``numba.prange``."""

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from subenv._typing import FloatArray
-from subenv.dynamics._jit import gufunc, kernel
+from subenv.dynamics._jit import gufunc, inline_kernel
 
 __all__ = ["HullTable", "crossflow_integrals", "crossflow_point", "cumulative_moments_point"]
 
@@ -79,7 +79,7 @@ class HullTable:
         return tuple(_gufunc("moments")(s, self.packed))  # type: ignore[return-value]
 
 
-@kernel
+@inline_kernel
 def cumulative_moments_point(s: float, hull: FloatArray) -> tuple[float, float, float, float]:
     """C_0..C_3 at one position ``s`` [m] (clipped to the hull); ``hull`` is :attr:`HullTable.packed`."""
     n_seg = hull.shape[1] - 1
@@ -108,7 +108,7 @@ def cumulative_moments_point(s: float, hull: FloatArray) -> tuple[float, float, 
     )
 
 
-@kernel
+@inline_kernel
 def crossflow_point(w: float, q: float, hull: FloatArray) -> tuple[float, float]:
     """Exact I_0, I_1 (see :func:`crossflow_integrals`) for one (w, q); ``hull`` is :attr:`HullTable.packed`."""
     n_seg = hull.shape[1] - 1

@@ -18,7 +18,7 @@ from collections.abc import Callable
 from typing import Final
 
 from subenv._typing import FloatArray
-from subenv.dynamics._jit import kernel
+from subenv.dynamics._jit import inline_kernel
 from subenv.dynamics.model import rhs_point
 
 __all__ = ["CONTROL_PERIOD_S", "SUBSTEPS", "control_period_point", "rk4", "rk4_step"]
@@ -51,7 +51,7 @@ def rk4(f: Rhs, t: float, x: FloatArray, dt: float, substeps: int) -> FloatArray
     return x
 
 
-@kernel
+@inline_kernel
 def control_period_point(
     theta: float,
     w: float,

@@ -17,7 +17,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from subenv._typing import ArrayLike, FloatArray
-from subenv.dynamics._jit import gufunc, kernel
+from subenv.dynamics._jit import gufunc, inline_kernel
 from subenv.dynamics.hull import HullTable, crossflow_point
 from subenv.vehicles.vehicle import Vehicle
 
@@ -145,7 +145,7 @@ def dual_plane_angles(delta: ArrayLike, alpha: ArrayLike) -> tuple[FloatArray, F
     return delta, np.asarray(alpha, dtype=float) * delta
 
 
-@kernel
+@inline_kernel
 def rhs_point(
     theta: float,
     w: float,

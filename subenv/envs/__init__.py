@@ -2,5 +2,6 @@
 
 from subenv.envs.dive_plane import OBSERVATION_NAMES, DivePlaneEnv
 from subenv.envs.registration import HEADLINE_ID, env_ids, register_envs
+from subenv.envs.vector import DivePlaneVectorEnv
 
-__all__ = ["HEADLINE_ID", "OBSERVATION_NAMES", "DivePlaneEnv", "env_ids", "register_envs"]
+__all__ = ["HEADLINE_ID", "OBSERVATION_NAMES", "DivePlaneEnv", "DivePlaneVectorEnv", "env_ids", "register_envs"]

@@ -9,9 +9,11 @@ import gymnasium as gym
 from subenv.dynamics.integrate import CONTROL_PERIOD_S
 from subenv.scenarios.registry import registry_snapshot
 
-__all__ = ["ENTRY_POINT", "HEADLINE_ID", "env_ids", "register_envs"]
+__all__ = ["ENTRY_POINT", "HEADLINE_ID", "VECTOR_ENTRY_POINT", "env_ids", "register_envs"]
 
 ENTRY_POINT = "subenv.envs.dive_plane:DivePlaneEnv"
+VECTOR_ENTRY_POINT = "subenv.envs.vector:DivePlaneVectorEnv"
+"""What ``gym.make_vec(id, num_envs=N)`` builds for every id (``vectorization_mode="sync"`` for SyncVectorEnv)."""
 HEADLINE_ID = "subenv/DivePlane-v0"
 """The randomized scenario under the package's headline name."""
 _HEADLINE_SCENARIO = "Randomized"
@@ -33,7 +35,8 @@ def register_envs() -> None:
     """Register (or re-register) an id for every scenario in the registry.
 
     ``max_episode_steps`` is the scenario's longest duration at the default ``dt``; the
-    environment truncates at the drawn episode's own duration.
+    environment truncates at the drawn episode's own duration. ``gym.make_vec`` builds the
+    native :class:`~subenv.envs.DivePlaneVectorEnv` (:data:`VECTOR_ENTRY_POINT`).
     """
     for env_id in env_ids():
         name = _HEADLINE_SCENARIO if env_id == HEADLINE_ID else env_id.removeprefix("subenv/").removesuffix("-v0")
@@ -42,6 +45,7 @@ def register_envs() -> None:
         gym.register(
             id=env_id,
             entry_point=ENTRY_POINT,
+            vector_entry_point=VECTOR_ENTRY_POINT,
             kwargs={"scenario": name},
             max_episode_steps=_max_steps(name),
         )

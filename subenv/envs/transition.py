@@ -21,7 +21,7 @@ import numba
 import numpy as np
 
 from subenv._typing import FloatArray
-from subenv.dynamics._jit import kernel, parallel_kernel
+from subenv.dynamics._jit import inline_kernel, kernel, parallel_kernel
 from subenv.dynamics.integrate import control_period_point
 from subenv.dynamics.model import PARAM_FIELDS
 
@@ -88,7 +88,7 @@ def episode_time_limit(max_episode_steps: int | None) -> float:
     return math.inf if max_episode_steps is None else float(max_episode_steps)
 
 
-@kernel
+@inline_kernel
 def speed_at_point(t: float, row: FloatArray) -> float:
     """Speed [m/s] of the row's profile at time ``t`` [s]: ``numpy.interp`` over its knots."""
     n = int(row[N_KNOTS])
@@ -117,9 +117,10 @@ def speed_at_point(t: float, row: FloatArray) -> float:
     return u
 
 
-@kernel
-def observe_env(row: FloatArray, obs: np.ndarray, rng: np.random.Generator, cfg: FloatArray) -> None:
-    """Write the observation of the row's current state into ``obs`` (float32, 8), drawing its noise."""
+@inline_kernel
+def observe_env(row: FloatArray, obs: np.ndarray, rngs: numba.typed.List, i: int, cfg: FloatArray) -> None:
+    """Write the observation of the row's current state into ``obs`` (float32, 8), drawing its noise
+    from the sub-environment's generator ``rngs[i]``."""
     speed = speed_at_point(row[TIME], row)
     row[SPEED] = speed
     depth = row[DEPTH]
@@ -128,6 +129,7 @@ def observe_env(row: FloatArray, obs: np.ndarray, rng: np.random.Generator, cfg:
     v4, v5, v6, v7 = speed, row[STERN], row[BOW], depth
     if row[NOISE] > 0.0:
         # rng.normal(0, 1, size=8) * std, one depth sensor for components 0 and 7.
+        rng = rngs[i]
         n0 = rng.normal(0.0, 1.0) * cfg[C_NOISE_STD]
         n1 = rng.normal(0.0, 1.0) * cfg[C_NOISE_STD + 1]
         n2 = rng.normal(0.0, 1.0) * cfg[C_NOISE_STD + 2]
@@ -151,10 +153,10 @@ def observe_env(row: FloatArray, obs: np.ndarray, rng: np.random.Generator, cfg:
     obs[7] = min(max(v7, cfg[lo + 7]), cfg[hi + 7])
 
 
-@kernel
-def step_env(row: FloatArray, action: FloatArray, obs: np.ndarray, rng: np.random.Generator, cfg: FloatArray,
-             hull: FloatArray) -> None:
-    """One control period of one sub-environment (the action must be finite: see :func:`step_batch`)."""
+@inline_kernel
+def step_env(row: FloatArray, action: FloatArray, obs: np.ndarray, rngs: numba.typed.List, i: int,
+             cfg: FloatArray, hull: FloatArray) -> None:
+    """One control period of sub-environment ``i`` (its action must be finite: see :func:`step_batch`)."""
     limit = cfg[C_PLANE_LIMIT]
     a0 = min(max(action[0], -1.0), 1.0)
     stern = a0 * limit
@@ -185,7 +187,7 @@ def step_env(row: FloatArray, action: FloatArray, obs: np.ndarray, rng: np.rando
     std = row[DISTURBANCE_STD]
     if std > 0.0:
         # First-order Gauss-Markov process with stationary standard deviation std.
-        row[DISTURBANCE] = cfg[C_DISTURBANCE_DECAY] * row[DISTURBANCE] + cfg[C_DISTURBANCE_GAIN] * rng.normal(0.0, std)
+        row[DISTURBANCE] = cfg[C_DISTURBANCE_DECAY] * row[DISTURBANCE] + cfg[C_DISTURBANCE_GAIN] * rngs[i].normal(0.0, std)
 
     reason = 0
     if not (math.isfinite(x0) and math.isfinite(x1) and math.isfinite(x2) and math.isfinite(x3)
@@ -219,10 +221,10 @@ def step_env(row: FloatArray, action: FloatArray, obs: np.ndarray, rng: np.rando
     if reason == _DIVERGED:
         row[SPEED] = u1  # the observation stays the last valid one
     else:
-        observe_env(row, obs, rng, cfg)
+        observe_env(row, obs, rngs, i, cfg)
 
 
-@kernel
+@inline_kernel
 def _first_non_finite(actions: FloatArray, active: np.ndarray) -> int:
     for i in range(actions.shape[0]):
         if active[i]:
@@ -239,7 +241,7 @@ def step_single(row: FloatArray, action: FloatArray, obs: np.ndarray, rngs: numb
     for j in range(action.shape[0]):
         if not math.isfinite(action[j]):
             return False
-    step_env(row, action, obs, rngs[0], cfg, hull)
+    step_env(row, action, obs, rngs, 0, cfg, hull)
     return True
 
 
@@ -255,7 +257,7 @@ def step_batch(rows: FloatArray, actions: FloatArray, active: np.ndarray, obs: n
         return bad
     for i in range(rows.shape[0]):
         if active[i]:
-            step_env(rows[i], actions[i], obs[i], rngs[i], cfg, hull)
+            step_env(rows[i], actions[i], obs[i], rngs, i, cfg, hull)
     return -1
 
 
@@ -266,9 +268,10 @@ def step_batch_parallel(rows: FloatArray, actions: FloatArray, active: np.ndarra
     bad = _first_non_finite(actions, active)
     if bad >= 0:
         return bad
-    for i in numba.prange(rows.shape[0]):
+    for k in numba.prange(rows.shape[0]):
+        i = np.int64(k)  # prange counts in uint64; the typed list wants a signed index
         if active[i]:
-            step_env(rows[i], actions[i], obs[i], rngs[i], cfg, hull)
+            step_env(rows[i], actions[i], obs[i], rngs, i, cfg, hull)
     return -1
 
 
@@ -278,4 +281,4 @@ def observe_batch(rows: FloatArray, indices: np.ndarray, obs: np.ndarray, rngs: 
     """:func:`observe_env` for the rows in ``indices`` (after their reset)."""
     for k in range(indices.shape[0]):
         i = indices[k]
-        observe_env(rows[i], obs[i], rngs[i], cfg)
+        observe_env(rows[i], obs[i], rngs, i, cfg)

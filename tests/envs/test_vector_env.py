@@ -1,0 +1,219 @@
+"""DivePlaneVectorEnv against SyncVectorEnv over the single environment, and its contract."""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.vector import AutoresetMode, SyncVectorEnv
+
+import subenv
+from subenv.envs import DivePlaneEnv, DivePlaneVectorEnv
+
+ENV_IDS = subenv.env_ids()
+MODES = (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP)
+
+
+def assert_same(native, reference, where: str = "") -> None:
+    """Equal structure, dtypes and shapes; numbers equal to floating-point tolerance."""
+    if isinstance(reference, dict):
+        assert isinstance(native, dict) and native.keys() == reference.keys(), (where, native.keys() ^ reference.keys())
+        for key in reference:
+            assert_same(native[key], reference[key], f"{where}/{key}")
+        return
+    if isinstance(reference, tuple):
+        assert isinstance(native, tuple) and len(native) == len(reference), where
+        for k, (a, b) in enumerate(zip(native, reference)):
+            assert_same(a, b, f"{where}[{k}]")
+        return
+    native, reference = np.asarray(native), np.asarray(reference)
+    assert (native.dtype, native.shape) == (reference.dtype, reference.shape), where
+    if reference.dtype == object:
+        for a, b in zip(native, reference):
+            if isinstance(b, np.ndarray):
+                np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12, err_msg=where)
+            else:
+                assert a == b, (where, a, b)
+    elif reference.dtype == bool:
+        np.testing.assert_array_equal(native, reference, err_msg=where)
+    else:
+        np.testing.assert_allclose(native, reference, rtol=1e-12, atol=1e-12, err_msg=where)
+
+
+def run_both(env_id: str, mode: AutoresetMode, steps: int, num_envs: int = 4, seed: int = 3, **kwargs):
+    """Step the native env and SyncVectorEnv over gym.make(env_id) with the same seeds and actions."""
+    sync = gym.make_vec(env_id, num_envs=num_envs, vectorization_mode="sync",
+                        vector_kwargs={"autoreset_mode": mode}, **kwargs)
+    native = gym.make_vec(env_id, num_envs=num_envs, autoreset_mode=mode, **kwargs)
+    assert isinstance(native, DivePlaneVectorEnv) and isinstance(sync, SyncVectorEnv)
+    assert_same(native.reset(seed=seed), sync.reset(seed=seed), "reset")
+    rng = np.random.default_rng(seed)
+    ends = 0
+    for t in range(steps):
+        # Mostly small actions, with bursts of full planes that end episodes (pitch limit, broaching).
+        scale = 1.0 if (t // 25) % 3 == 0 else 0.2
+        actions = (scale * rng.uniform(-1, 1, size=native.action_space.shape)).astype(np.float32)
+        result, expected = native.step(actions), sync.step(actions)
+        assert_same(result, expected, f"{env_id} {mode.value} step {t}")
+        ends += int(np.sum(expected[2] | expected[3]))
+    return ends
+
+
+@pytest.mark.parametrize("mode", MODES, ids=lambda m: m.value)
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_reproduces_sync_vector_env_step_for_step(env_id, mode):
+    ends = run_both(env_id, mode, steps=250)
+    # Over 250 steps at most envs, episodes end in the short and the violent scenarios.
+    if env_id in ("subenv/Nominal-v0", "subenv/SpeedTransient-v0"):
+        assert ends > 0
+
+
+@pytest.mark.parametrize("mode", MODES, ids=lambda m: m.value)
+def test_reproduces_sync_vector_env_through_time_limits_and_other_configurations(mode):
+    # TimeLimit truncation (max_episode_steps passed through make_vec), both controls, rate limit.
+    assert run_both("subenv/DivePlane-v0", mode, steps=120, max_episode_steps=30) >= 4 * 3
+    run_both("subenv/PeriscopeDepth-v0", mode, steps=150, control="independent", plane_rate_limit_radps=0.05)
+    run_both("subenv/LowSpeed-v0", mode, steps=150, alpha=0.5, dt=0.25, substeps=1, max_pitch_rad=0.3)
+
+
+def test_a_single_env_matches_the_first_row_and_seeds_are_offset_per_env():
+    native = gym.make_vec("subenv/DivePlane-v0", num_envs=3)
+    obs, info = native.reset(seed=10)
+    for i in range(3):
+        single = gym.make("subenv/DivePlane-v0")
+        single_obs, single_info = single.reset(seed=10 + i)
+        np.testing.assert_array_equal(obs[i], single_obs)
+        assert info["depth_command_m"][i] == single_info["depth_command_m"]
+    assert native.unwrapped.np_random_seed == (10, 11, 12)
+
+
+def test_seed_lists_none_and_reset_mask_match_sync_vector_env():
+    sync = gym.make_vec("subenv/Nominal-v0", num_envs=3, vectorization_mode="sync")
+    native = gym.make_vec("subenv/Nominal-v0", num_envs=3)
+    assert_same(native.reset(seed=[5, 1, 9]), sync.reset(seed=[5, 1, 9]))
+    actions = np.full((3, 1), 0.5, dtype=np.float32)
+    assert_same(native.step(actions), sync.step(actions))
+    mask = np.array([False, True, False])
+    assert_same(native.reset(options={"reset_mask": mask.copy()}), sync.reset(options={"reset_mask": mask.copy()}))
+    assert_same(native.step(actions), sync.step(actions))
+    # seed=None keeps each sub-environment's generator: the next draws continue its stream.
+    assert_same(native.reset(options={"speed": 1.0}), sync.reset(options={"speed": 1.0}))
+    assert native.reset(options={"speed": 1.0})[1]["speed_mps"].tolist() == [1.0, 1.0, 1.0]
+
+
+def test_parallel_and_serial_stepping_agree():
+    results = []
+    for parallel in (False, True):
+        env = DivePlaneVectorEnv(num_envs=16, parallel=parallel, scenario="Randomized")
+        env.reset(seed=0)
+        rng = np.random.default_rng(0)
+        trace = [env.step(rng.uniform(-1, 1, size=(16, 1))) for _ in range(60)]
+        results.append(trace)
+    for a, b in zip(*results):
+        assert_same(a, b)
+
+
+def test_autoreset_modes_are_declared_and_same_step_keeps_the_final_observation():
+    env = gym.make_vec("subenv/Nominal-v0", num_envs=2, autoreset_mode="SameStep")
+    assert env.metadata["autoreset_mode"] is AutoresetMode.SAME_STEP
+    assert gym.make_vec("subenv/Nominal-v0", num_envs=2).metadata["autoreset_mode"] is AutoresetMode.NEXT_STEP
+    env.reset(seed=0)
+    while True:  # full planes pitch the boat past the limit
+        obs, _, terminated, _, info = env.step(np.ones((2, 1), dtype=np.float32))
+        if terminated.any():
+            break
+    i = int(np.flatnonzero(terminated)[0])
+    assert info["_final_obs"][i] and info["final_info"]["termination_reason"][i] == "pitch_limit"
+    assert abs(info["final_obs"][i][1]) > 0.6  # the terminal pitch, in the final observation
+    assert info["time_s"][i] == 0.0 and obs[i][1] == np.float32(info["pitch_rad"][i])  # the new episode
+
+
+def test_disabled_autoreset_needs_an_explicit_masked_reset():
+    env = DivePlaneVectorEnv(num_envs=2, scenario="Nominal", autoreset_mode="Disabled")
+    env.reset(seed=0)
+    while not env.step(np.ones((2, 1)))[2].any():
+        pass
+    with pytest.raises(RuntimeError, match="reset_mask"):
+        env.step(np.zeros((2, 1)))
+    env.reset(options={"reset_mask": np.array([True, True])})
+    env.step(np.zeros((2, 1)))
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"num_envs": 0}, r"num_envs=0 is invalid: must be an integer >= 1"),
+        ({"num_envs": -3}, r"num_envs=-3 is invalid"),
+        ({"num_envs": 2.5}, r"num_envs=2\.5 is invalid"),
+        ({"num_envs": True}, r"num_envs=True is invalid"),
+        ({"num_envs": 2, "max_episode_steps": 0}, r"max_episode_steps=0 is invalid"),
+        ({"num_envs": 2, "autoreset_mode": "Sometimes"}, r"autoreset_mode='Sometimes' is invalid: must be one of"),
+        ({"num_envs": 2, "render_mode": "human"}, r"render_mode='human' is invalid"),
+        ({"num_envs": 2, "scenario": "Fast"}, r"scenario='Fast' is unknown"),  # the single env's checks
+    ],
+)
+def test_bad_constructor_arguments(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        DivePlaneVectorEnv(**kwargs)
+    with pytest.raises(ValueError, match=message):
+        gym.make_vec("subenv/DivePlane-v0", **kwargs)
+
+
+def test_bad_actions_raise_before_any_sub_environment_steps():
+    env = gym.make_vec("subenv/Nominal-v0", num_envs=3)
+    with pytest.raises(gym.error.ResetNeeded):
+        env.step(np.zeros((3, 1)))
+    env.reset(seed=0)
+    state = env.unwrapped.state
+    for shape in [(3, 2), (2, 1), (3, 1, 1), (1,), ()]:
+        with pytest.raises(ValueError, match=r"actions has shape .*: must have shape \(3, 1\) \(num_envs=3"):
+            env.step(np.zeros(shape))
+    for bad in (np.nan, np.inf):
+        actions = np.zeros((3, 1))
+        actions[2, 0] = bad
+        with pytest.raises(ValueError, match=rf"actions\[2\]=\[{bad}\] is invalid: must be finite"):
+            env.step(actions)
+    np.testing.assert_array_equal(env.unwrapped.state, state)  # nothing moved
+    env.step(np.zeros(3))  # (num_envs,) is accepted for a one-dimensional action
+    independent = gym.make_vec("subenv/Nominal-v0", num_envs=2, control="independent")
+    independent.reset(seed=0)
+    with pytest.raises(ValueError, match=r"must have shape \(2, 2\) \(num_envs=2, control='independent'\)"):
+        independent.step(np.zeros(2))
+
+
+def test_render_rgb_array_shows_the_first_sub_environment():
+    native = gym.make_vec("subenv/PeriscopeDepth-v0", num_envs=3, render_mode="rgb_array")
+    single = gym.make("subenv/PeriscopeDepth-v0", render_mode="rgb_array")
+    native.reset(seed=4)
+    single.reset(seed=4)
+    for _ in range(15):
+        native.step(np.full((3, 1), 0.5, dtype=np.float32))
+        single.step(np.array([0.5], dtype=np.float32))
+    (frame,) = native.render()
+    assert frame.shape == (480, 720, 3) and frame.dtype == np.uint8
+    np.testing.assert_array_equal(frame, single.render())
+    with pytest.warns(UserWarning, match="without specifying any render mode"):
+        assert gym.make_vec("subenv/Nominal-v0", num_envs=2).render() is None
+
+
+def test_vector_env_pickles_and_continues_identically():
+    import pickle
+
+    env = DivePlaneVectorEnv(num_envs=4, scenario="Randomized")
+    env.reset(seed=1)
+    env.step(np.zeros((4, 1)))
+    copy = pickle.loads(pickle.dumps(env))
+    actions = np.random.default_rng(0).uniform(-1, 1, size=(4, 1))
+    assert_same(copy.step(actions), env.step(actions))
+
+
+def test_every_id_registers_the_vector_entry_point():
+    for env_id in ENV_IDS:
+        assert gym.spec(env_id).vector_entry_point == "subenv.envs.vector:DivePlaneVectorEnv"
+    env = gym.make_vec("subenv/LowSpeed-v0", num_envs=2)
+    assert env.unwrapped.max_episode_steps == gym.spec("subenv/LowSpeed-v0").max_episode_steps
+    assert isinstance(env.unwrapped.single_env, DivePlaneEnv)
+    assert env.single_action_space == gym.make("subenv/LowSpeed-v0").action_space
+    assert math.isfinite(env.reset(seed=0)[1]["critical_speed_mps"][0])
