@@ -20,13 +20,9 @@ import gymnasium as gym
 import numpy as np
 
 import subenv  # noqa: F401  (registers the environments)
-from subenv.analysis import critical_speed, linear_model
+from subenv.analysis import THESIS_POLES, critical_speed, thesis_gain
 from subenv.scenarios import DESIGN_SPEED_MPS
 from subenv.units import mps_to_fps
-
-THESIS_POLES = (-0.3, -0.31, -0.32, -0.33)
-"""Closed-loop poles of the thesis design at 5 fps, alpha = 0 (Riedel 1993 Ch. II.B)."""
-
 
 @dataclass
 class Run:
@@ -39,18 +35,10 @@ class Run:
     reason: str
 
 
-def thesis_gain(env: gym.Env) -> np.ndarray:  # type: ignore[type-arg]
-    """Full-state gain K (delta = -K x) placed at 5 fps on the env's vehicle (SI units)."""
-    from scipy.signal import place_poles
-
-    lm = linear_model(env.unwrapped.base_vehicle, DESIGN_SPEED_MPS, alpha=0.0)  # type: ignore[attr-defined]
-    return place_poles(lm.A, lm.B[:, None], THESIS_POLES).gain_matrix[0]
-
-
 def fly(env_id: str, speed_mps: float, seed: int, label: str) -> Run:
     """One episode of the thesis controller at a constant speed, starting 2 m above the ordered depth."""
     env = gym.make(env_id)
-    gain = thesis_gain(env)
+    gain = thesis_gain(env.unwrapped.base_vehicle)  # type: ignore[attr-defined]
     limit = env.unwrapped.plane_limit_rad  # type: ignore[attr-defined]
     obs, info = env.reset(seed=seed, options={"speed": speed_mps, "depth_command": 10.0,
                                               "initial_state": (0.0, 0.0, 0.0, 8.0)})
