@@ -1,5 +1,15 @@
-"""Evaluation: the controller interface and registry, and the harness that compares controllers."""
+"""Evaluation: the controller interface and registry, and the harness that compares controllers.
 
+- :mod:`~subenv.evaluation.controller`: the :class:`Controller` protocol and its registry.
+- :mod:`~subenv.evaluation.metrics`: per-episode metrics from a recorded trajectory.
+- :mod:`~subenv.evaluation.rollout`: running controllers on episodes (:func:`evaluate`).
+- :mod:`~subenv.evaluation.suites`: named sets of scenarios (``default``, ``reversal``, ...).
+- :mod:`~subenv.evaluation.results`: tables, confidence intervals, the leaderboard, atomic writes.
+- :mod:`~subenv.evaluation.plots`: trajectory and metrics-versus-speed figures (matplotlib).
+- :mod:`~subenv.evaluation.comparison`: :func:`run_comparison`, what ``subenv evaluate`` runs.
+"""
+
+from subenv.evaluation.comparison import DEFAULT_OUT_DIR, Comparison, run_comparison, write_comparison
 from subenv.evaluation.controller import (
     Controller,
     ControllerFactory,
@@ -7,5 +17,37 @@ from subenv.evaluation.controller import (
     make_controller,
     register_controller,
 )
+from subenv.evaluation.metrics import EpisodeMetrics, episode_metrics
+from subenv.evaluation.rollout import EpisodeResult, Trajectory, evaluate, run_episode
+from subenv.evaluation.suites import (
+    DEFAULT_SEED,
+    DEFAULT_SUITE,
+    Suite,
+    get_suite,
+    register_suite,
+    suite_names,
+)
 
-__all__ = ["Controller", "ControllerFactory", "controller_names", "make_controller", "register_controller"]
+__all__ = [
+    "DEFAULT_OUT_DIR",
+    "DEFAULT_SEED",
+    "DEFAULT_SUITE",
+    "Comparison",
+    "Controller",
+    "ControllerFactory",
+    "EpisodeMetrics",
+    "EpisodeResult",
+    "Suite",
+    "Trajectory",
+    "controller_names",
+    "episode_metrics",
+    "evaluate",
+    "get_suite",
+    "make_controller",
+    "register_controller",
+    "register_suite",
+    "run_comparison",
+    "run_episode",
+    "suite_names",
+    "write_comparison",
+]

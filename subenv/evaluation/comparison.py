@@ -1,0 +1,217 @@
+"""The comparison behind ``subenv evaluate``: run a suite, aggregate, write the results folder.
+
+:func:`run_comparison` checks every input before the first episode (unknown controller, suite or
+scenario names, an existing output folder, a missing matplotlib), then rolls out, aggregates and
+writes::
+
+    <out_dir>/
+        leaderboard.md      success rate per controller and scenario, 95% Wilson intervals
+        summary.md          every metric per controller x scenario, with intervals
+        summary.csv         the same, machine-readable
+        results.csv         the tidy per-episode table (one row per controller x scenario x episode)
+        run.json            what was run: suite, scenarios, episodes, seeds, controllers, tolerances
+        plots/trajectories_<Scenario>.png   every controller on the scenario's first episode
+        plots/metrics_vs_speed.png          success rate and IAE against speed, u_cr marked
+
+The folder appears complete or not at all (assembled in a temporary sibling, then renamed).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+from subenv.evaluation import metrics as m
+from subenv.evaluation.controller import Controller
+from subenv.evaluation.results import (
+    CONFIDENCE_LEVEL,
+    atomic_output_dir,
+    atomic_write_text,
+    check_output_dir,
+    episode_table,
+    leaderboard_markdown,
+    summarize,
+    summary_markdown,
+    write_csv,
+)
+from subenv.evaluation.rollout import EpisodeResult, evaluate, resolve_controllers, resolve_suite
+from subenv.evaluation.suites import DEFAULT_SEED, DEFAULT_SUITE, Suite
+from subenv.vehicles.vehicle import Vehicle
+
+__all__ = ["DEFAULT_OUT_DIR", "Comparison", "run_comparison", "write_comparison"]
+
+DEFAULT_OUT_DIR = "results/evaluation"
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """What :func:`run_comparison` ran and produced.
+
+    Attributes
+    ----------
+    suite : Suite
+    controllers : tuple of str
+        Controller names, in the order run.
+    episodes, seed : int
+        Episodes per scenario and controller; base seed (episode i: ``seed + i``).
+    results : list of EpisodeResult
+        Per episode, ordered by controller, scenario, episode.
+    summary : list of dict
+        Aggregates per controller x scenario (:func:`~subenv.evaluation.results.summarize`).
+    leaderboard : str
+        The Markdown leaderboard (what ``subenv evaluate`` prints).
+    out_dir : Path or None
+        The folder written (None if not asked to write).
+    elapsed_s : float
+        Wall-clock time of the rollouts [s] (not counting tables and plots).
+    """
+
+    suite: Suite
+    controllers: tuple[str, ...]
+    episodes: int
+    seed: int
+    results: list[EpisodeResult] = field(repr=False)
+    summary: list[dict[str, Any]] = field(repr=False)
+    leaderboard: str = field(repr=False)
+    out_dir: Path | None
+    elapsed_s: float
+
+
+def run_comparison(
+    controllers: Sequence[Controller | str] | None = None,
+    suite: Suite | str | Sequence[str] = DEFAULT_SUITE,
+    episodes: int | None = None,
+    out_dir: str | os.PathLike[str] | None = DEFAULT_OUT_DIR,
+    overwrite: bool = False,
+    seed: int = DEFAULT_SEED,
+    progress: bool = True,
+    *,
+    plots: bool = True,
+    vehicle: str | Vehicle = "suboff",
+) -> Comparison:
+    """Compare controllers on a suite and write the results folder.
+
+    Parameters
+    ----------
+    controllers : sequence of Controller or str, optional
+        Registered names (``subenv.evaluation.controller_names()``) or instances; None runs
+        every registered controller.
+    suite : Suite, str or sequence of str
+        A registered suite name (``suite_names()``), a :class:`Suite`, or scenario names.
+    episodes : int, optional
+        Episodes per scenario and controller; default the suite's.
+    out_dir : path, optional
+        The results folder; None writes nothing.
+    overwrite : bool
+        Replace ``out_dir`` if it exists (otherwise FileExistsError, raised before any episode).
+    seed : int
+        Base seed; episode i of every scenario is ``reset(seed=seed + i)`` for every controller.
+    progress : bool
+        Progress bar on stderr.
+    plots : bool
+        Write the figures (needs matplotlib, checked before any episode).
+    vehicle : str or Vehicle
+        The vehicle of every environment.
+
+    Raises
+    ------
+    ValueError
+        Unknown controller, suite or scenario (the message lists the known names); bad
+        ``episodes`` or ``seed``.
+    FileExistsError
+        ``out_dir`` exists and ``overwrite`` is false.
+    ImportError
+        ``plots`` without matplotlib installed.
+    """
+    ctrls = resolve_controllers(controllers)
+    the_suite = resolve_suite(suite)
+    n = the_suite.episodes if episodes is None else episodes
+    if not (isinstance(n, int) and not isinstance(n, bool) and n >= 1):
+        raise ValueError(f"episodes={episodes!r} is invalid: must be an integer >= 1")
+    if out_dir is not None:
+        check_output_dir(out_dir, overwrite)
+        if plots:
+            from subenv.evaluation.plots import require_matplotlib
+
+            require_matplotlib()
+
+    start = time.perf_counter()
+    results = evaluate(ctrls, the_suite, n, seed, progress, vehicle=vehicle, keep_trajectories=1)
+    elapsed = time.perf_counter() - start
+    summary = summarize(results)
+    board = leaderboard_markdown(results, title=f"Leaderboard: suite '{the_suite.name}'")
+    comparison = Comparison(
+        suite=the_suite, controllers=tuple(c.name for c in ctrls), episodes=n, seed=seed, results=results,
+        summary=summary, leaderboard=board, out_dir=None if out_dir is None else Path(out_dir),
+        elapsed_s=elapsed,
+    )
+    if out_dir is not None:
+        write_comparison(comparison, out_dir, overwrite=overwrite, plots=plots, controllers=ctrls)
+    return comparison
+
+
+def _run_record(comparison: Comparison, controllers: Sequence[Controller] | None) -> dict[str, Any]:
+    try:
+        version = metadata.version("subenv")
+    except metadata.PackageNotFoundError:
+        version = "unknown"
+    suite = comparison.suite
+    by_name = {c.name: c for c in controllers or ()}
+    return {
+        "subenv_version": version,
+        "suite": suite.name,
+        "scenarios": list(suite.scenarios),
+        "max_duration_s": suite.max_duration_s,
+        "episodes": comparison.episodes,
+        "seeds": [comparison.seed, comparison.seed + comparison.episodes - 1],
+        "controllers": [
+            {"name": name, "control": by_name[name].control, "alpha": float(by_name[name].alpha)}
+            if name in by_name else {"name": name}
+            for name in comparison.controllers
+        ],
+        "depth_tolerance_m": m.DEPTH_TOLERANCE_M,
+        "hold_window_s": m.HOLD_WINDOW_S,
+        "saturation_level": m.SATURATION_LEVEL,
+        "pinned_fraction": m.PINNED_FRACTION,
+        "non_level_pitch_deg": math.degrees(m.NON_LEVEL_PITCH_RAD),
+        "steady_pitch_rate_degps": math.degrees(m.STEADY_PITCH_RATE_RADPS),
+        "steady_depth_change_m": m.STEADY_DEPTH_CHANGE_M,
+        "confidence_level": CONFIDENCE_LEVEL,
+        "rollout_seconds": round(comparison.elapsed_s, 2),
+    }
+
+
+def write_comparison(
+    comparison: Comparison,
+    out_dir: str | os.PathLike[str],
+    *,
+    overwrite: bool = False,
+    plots: bool = True,
+    controllers: Sequence[Controller] | None = None,
+) -> Path:
+    """Write the results folder of ``comparison`` (complete or not at all); returns its path."""
+    with atomic_output_dir(out_dir, overwrite=overwrite) as tmp:
+        write_csv(tmp / "results.csv", episode_table(comparison.results))
+        write_csv(tmp / "summary.csv", comparison.summary)
+        atomic_write_text(tmp / "leaderboard.md", comparison.leaderboard)
+        atomic_write_text(
+            tmp / "summary.md", summary_markdown(comparison.summary, title=f"Suite '{comparison.suite.name}'")
+        )
+        atomic_write_text(tmp / "run.json", json.dumps(_run_record(comparison, controllers), indent=2) + "\n")
+        if plots:
+            from subenv.evaluation.plots import plot_metrics_vs_speed, plot_trajectories
+
+            for scenario in comparison.suite.scenarios:
+                shown = [r for r in comparison.results
+                         if r.scenario == scenario and r.episode == 0 and r.trajectory is not None]
+                if shown:
+                    plot_trajectories(shown, tmp / "plots" / f"trajectories_{scenario}.png")
+            plot_metrics_vs_speed(comparison.results, tmp / "plots" / "metrics_vs_speed.png")
+    return Path(out_dir)

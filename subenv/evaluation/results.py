@@ -1,0 +1,363 @@
+"""Result tables: the tidy per-episode table, aggregates with confidence intervals, the leaderboard.
+
+All tables are lists of flat dicts (one row per observation, one column per variable), written as
+CSV and Markdown. Every file is written atomically (a temporary file in the same folder, then
+``os.replace``), and a results folder is assembled in a temporary sibling folder and renamed into
+place, so a reader never sees a half-written file or folder.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import io
+import math
+import os
+import shutil
+import tempfile
+from collections.abc import Iterator, Mapping, Sequence
+from pathlib import Path
+from typing import Any, Final
+
+import numpy as np
+
+from subenv.evaluation.metrics import DEPTH_TOLERANCE_M, HOLD_WINDOW_S, OUTCOMES
+from subenv.evaluation.rollout import EpisodeResult
+
+__all__ = [
+    "CONFIDENCE_LEVEL",
+    "CONTINUOUS_METRICS",
+    "RATE_METRICS",
+    "atomic_output_dir",
+    "atomic_write_bytes",
+    "atomic_write_text",
+    "check_output_dir",
+    "episode_table",
+    "leaderboard_markdown",
+    "mean_interval",
+    "summarize",
+    "summary_markdown",
+    "table_csv",
+    "wilson_interval",
+    "write_csv",
+]
+
+CONFIDENCE_LEVEL: Final = 0.95
+"""Two-sided level of every confidence interval in the tables."""
+
+RATE_METRICS: Final = ("success", "wrong_branch", "steady_offset", "broached", "terminated")
+"""Boolean metrics aggregated as a rate with a Wilson interval."""
+
+CONTINUOUS_METRICS: Final = {
+    "iae_m_s": (0.0, math.inf),
+    "settling_time_s": (0.0, math.inf),
+    "overshoot_m": (0.0, math.inf),
+    "peak_pitch_deg": (0.0, 180.0),
+    "plane_rms_rad": (0.0, math.inf),
+    "saturated_fraction": (0.0, 1.0),
+    "hold_max_abs_error_m": (0.0, math.inf),
+}
+"""Continuous metrics aggregated as a mean with a Student-t interval, and the range each can take.
+
+``settling_time_s`` is averaged over the episodes that settled (finite values; their number is
+the ``settled`` column), since a never-settling episode has no settling time.
+"""
+
+
+# --- confidence intervals -------------------------------------------------------------------
+def wilson_interval(successes: int, n: int, confidence: float = CONFIDENCE_LEVEL) -> tuple[float, float]:
+    """Wilson score interval for a binomial proportion (``scipy.stats.binomtest``).
+
+    Chosen over the normal (Wald) interval because it stays inside [0, 1] and keeps its coverage
+    at rates of 0 or 1 and small n, which is exactly where controllers that always or never
+    succeed put a leaderboard. ``n == 0`` gives (nan, nan).
+
+    References
+    ----------
+    Wilson, E. B. (1927). Probable inference, the law of succession, and statistical inference.
+    JASA 22, 209-212.
+    """
+    if not (isinstance(n, (int, np.integer)) and n >= 0 and 0 <= successes <= n):
+        raise ValueError(f"successes={successes!r}, n={n!r} are invalid: need 0 <= successes <= n")
+    if n == 0:
+        return (math.nan, math.nan)
+    from scipy import stats  # imported on use: importing subenv.evaluation stays light
+
+    ci = stats.binomtest(int(successes), int(n)).proportion_ci(confidence_level=confidence, method="wilson")
+    return (float(ci.low), float(ci.high))
+
+
+def mean_interval(
+    values: Sequence[float] | np.ndarray,
+    confidence: float = CONFIDENCE_LEVEL,
+    support: tuple[float, float] = (-math.inf, math.inf),
+) -> tuple[float, float, float]:
+    """(mean, low, high): the mean and its Student-t confidence interval.
+
+    The t interval assumes a roughly normal sample mean, which the central limit theorem gives
+    with tens of episodes; with a handful it is wide, as it should be. Its bounds are clipped to
+    ``support``, the range the metric can take (the true mean lies inside it, so clipping never
+    excludes it). Fewer than 2 values give nan bounds; values that are all equal give a
+    zero-width interval.
+    """
+    x = np.asarray(values, dtype=float)
+    if x.size == 0:
+        return (math.nan, math.nan, math.nan)
+    mean = float(x.mean())
+    if x.size < 2:
+        return (mean, math.nan, math.nan)
+    from scipy import stats
+
+    sem = float(stats.sem(x))
+    if sem == 0.0 or not math.isfinite(sem):
+        return (mean, mean, mean) if sem == 0.0 else (mean, math.nan, math.nan)
+    low, high = stats.t.interval(confidence, x.size - 1, loc=mean, scale=sem)
+    return (mean, max(float(low), support[0]), min(float(high), support[1]))
+
+
+# --- tables ---------------------------------------------------------------------------------
+def episode_table(results: Sequence[EpisodeResult]) -> list[dict[str, Any]]:
+    """The tidy per-episode table: one row per controller x scenario x episode."""
+    return [r.row() for r in results]
+
+
+def _groups(results: Sequence[EpisodeResult]) -> dict[tuple[str, str], list[EpisodeResult]]:
+    groups: dict[tuple[str, str], list[EpisodeResult]] = {}
+    for r in results:
+        groups.setdefault((r.controller, r.scenario), []).append(r)
+    return groups
+
+
+def summarize(results: Sequence[EpisodeResult], confidence: float = CONFIDENCE_LEVEL) -> list[dict[str, Any]]:
+    """Aggregate per controller x scenario (in the order first seen).
+
+    Columns: ``controller``, ``scenario``, ``episodes``; for each of :data:`RATE_METRICS`
+    ``<m>_rate``, ``<m>_ci_low``, ``<m>_ci_high`` (Wilson); for each of
+    :data:`CONTINUOUS_METRICS` ``<m>_mean``, ``<m>_ci_low``, ``<m>_ci_high`` (Student t);
+    ``settled`` (episodes with a finite settling time); and ``outcome_<name>`` counts.
+    """
+    rows = []
+    for (controller, scenario), group in _groups(results).items():
+        row: dict[str, Any] = {"controller": controller, "scenario": scenario, "episodes": len(group)}
+        metrics = [r.metrics for r in group]
+        for name in RATE_METRICS:
+            k = sum(bool(getattr(m, name)) for m in metrics)
+            low, high = wilson_interval(k, len(metrics), confidence)
+            row |= {f"{name}_rate": k / len(metrics), f"{name}_ci_low": low, f"{name}_ci_high": high}
+        for name, support in CONTINUOUS_METRICS.items():
+            values = [float(getattr(m, name)) for m in metrics]
+            if name == "settling_time_s":
+                values = [v for v in values if math.isfinite(v)]
+                row["settled"] = len(values)
+            mean, low, high = mean_interval(values, confidence, support)
+            row |= {f"{name}_mean": mean, f"{name}_ci_low": low, f"{name}_ci_high": high}
+        for outcome in _outcomes(results):
+            row[f"outcome_{outcome}"] = sum(m.outcome == outcome for m in metrics)
+        rows.append(row)
+    return rows
+
+
+def _outcomes(results: Sequence[EpisodeResult]) -> list[str]:
+    seen = {r.metrics.outcome for r in results}
+    return [o for o in OUTCOMES if o in seen] + sorted(seen - set(OUTCOMES))
+
+
+def _pct(rate: float, low: float, high: float) -> str:
+    if math.isnan(rate):
+        return "-"
+    return f"{100 * rate:.0f}% [{100 * low:.0f}, {100 * high:.0f}]"
+
+
+def _num(mean: float, low: float, high: float, fmt: str = ".3g") -> str:
+    if math.isnan(mean):
+        return "-"
+    if math.isnan(low):
+        return f"{mean:{fmt}}"
+    return f"{mean:{fmt}} [{low:{fmt}}, {high:{fmt}}]"
+
+
+def _markdown_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
+    lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    lines += ["| " + " | ".join(row) + " |" for row in rows]
+    return "\n".join(lines)
+
+
+def leaderboard_markdown(
+    results: Sequence[EpisodeResult], *, title: str = "Leaderboard", confidence: float = CONFIDENCE_LEVEL
+) -> str:
+    """Markdown leaderboard: controllers as rows, success rate per scenario with its interval.
+
+    Rows are sorted by the success rate over all the suite's episodes (pooled), best first, then
+    by name. The last columns break the pooled failures down by outcome.
+    """
+    if not results:
+        raise ValueError("results is empty: nothing to rank")
+    scenarios = list(dict.fromkeys(r.scenario for r in results))
+    controllers = list(dict.fromkeys(r.controller for r in results))
+    groups = _groups(results)
+    pooled = {c: [r.metrics for r in results if r.controller == c] for c in controllers}
+    order = sorted(controllers, key=lambda c: (-sum(m.success for m in pooled[c]) / len(pooled[c]), c))
+    failure_outcomes = [o for o in _outcomes(results) if o != "success"]
+    rows = []
+    for c in order:
+        ms = pooled[c]
+        k = sum(m.success for m in ms)
+        cells = [c, _pct(k / len(ms), *wilson_interval(k, len(ms), confidence))]
+        for s in scenarios:
+            group = groups.get((c, s), [])
+            ks = sum(r.metrics.success for r in group)
+            ci = wilson_interval(ks, len(group), confidence) if group else (math.nan, math.nan)
+            cells.append(_pct(ks / len(group), *ci) if group else "-")
+        cells += [str(sum(m.outcome == o for m in ms)) for o in failure_outcomes]
+        rows.append(cells)
+    episodes = sorted({len(g) for g in groups.values()})
+    per = str(episodes[0]) if len(episodes) == 1 else f"{episodes[0]}-{episodes[-1]}"
+    header = ["controller", "all scenarios", *scenarios, *(o.replace("_", " ") for o in failure_outcomes)]
+    note = (
+        f"Success rate with {100 * confidence:.0f}% Wilson intervals, {per} episodes per scenario "
+        f"(the same seeds for every controller). Success: not terminated and |depth error| <= "
+        f"{DEPTH_TOLERANCE_M:g} m over the final {HOLD_WINDOW_S:g} s. Last columns: failures by outcome, "
+        "all scenarios (wrong branch: steady pitched state with the planes pinned, off depth; steady "
+        "offset: settled off depth, planes free; unsettled: still moving off depth at the time limit)."
+    )
+    return f"## {title}\n\n{_markdown_table(header, rows)}\n\n{note}\n"
+
+
+_SUMMARY_COLUMNS: Final = (
+    ("success", "success", "rate"),
+    ("wrong branch", "wrong_branch", "rate"),
+    ("broached", "broached", "rate"),
+    ("IAE [m s]", "iae_m_s", "mean"),
+    ("settling [s]", "settling_time_s", "mean"),
+    ("overshoot [m]", "overshoot_m", "mean"),
+    ("peak pitch [deg]", "peak_pitch_deg", "mean"),
+    ("plane RMS [rad]", "plane_rms_rad", "mean"),
+    ("saturated", "saturated_fraction", "mean"),
+)
+
+
+def summary_markdown(summary: Sequence[Mapping[str, Any]], *, title: str = "Per scenario") -> str:
+    """The aggregate table (from :func:`summarize`) as Markdown, one row per controller x scenario."""
+    header = ["scenario", "controller", "n", *(label for label, _, _ in _SUMMARY_COLUMNS), "settled"]
+    scenarios = list(dict.fromkeys(r["scenario"] for r in summary))
+    ordered = sorted(summary, key=lambda r: scenarios.index(r["scenario"]))  # stable: controllers keep order
+    rows = []
+    for r in ordered:
+        cells = [r["scenario"], r["controller"], str(r["episodes"])]
+        for _, name, kind in _SUMMARY_COLUMNS:
+            if kind == "rate":
+                cells.append(_pct(r[f"{name}_rate"], r[f"{name}_ci_low"], r[f"{name}_ci_high"]))
+            else:
+                cells.append(_num(r[f"{name}_mean"], r[f"{name}_ci_low"], r[f"{name}_ci_high"]))
+        cells.append(str(r["settled"]))
+        rows.append(cells)
+    note = (
+        "Means with 95% Student-t intervals (rates: Wilson). Settling time averages the episodes "
+        "that settled (column 'settled'). IAE charges a terminated episode its final error until "
+        "the scheduled end."
+    )
+    return f"## {title}\n\n{_markdown_table(header, rows)}\n\n{note}\n"
+
+
+def table_csv(rows: Sequence[Mapping[str, Any]]) -> str:
+    """CSV text of a table of flat dicts (columns: the union of keys, in first-seen order)."""
+    columns = list(dict.fromkeys(k for row in rows for k in row))
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=columns, lineterminator="\n")
+    writer.writeheader()
+    for row in rows:
+        writer.writerow({k: _cell(v) for k, v in row.items()})
+    return buffer.getvalue()
+
+
+def _cell(value: Any) -> Any:
+    if isinstance(value, (float, np.floating)):
+        return repr(float(value))  # round-trips exactly; nan and inf as 'nan' and 'inf'
+    if isinstance(value, (bool, np.bool_)):
+        return str(bool(value))
+    return value
+
+
+# --- atomic writing -------------------------------------------------------------------------
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> Path:
+    """Write ``data`` to ``path`` completely or not at all (temporary file, then ``os.replace``)."""
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp creates 0600; give the file the usual mode
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return target
+
+
+def atomic_write_text(path: str | os.PathLike[str], text: str) -> Path:
+    """Write ``text`` (UTF-8) to ``path`` completely or not at all."""
+    return atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def write_csv(path: str | os.PathLike[str], rows: Sequence[Mapping[str, Any]]) -> Path:
+    """Write a table of flat dicts as CSV, atomically."""
+    return atomic_write_text(path, table_csv(rows))
+
+
+def check_output_dir(path: str | os.PathLike[str], overwrite: bool) -> Path:
+    """Raise FileExistsError if ``path`` exists and ``overwrite`` is false (or it is not a folder)."""
+    out = Path(path)
+    if out.exists() or out.is_symlink():
+        if not out.is_dir() or out.is_symlink():
+            raise FileExistsError(f"{out} exists and is not a folder: choose another output folder")
+        if not overwrite:
+            raise FileExistsError(
+                f"{out} exists: choose another output folder or pass overwrite=True (--force)"
+            )
+    return out
+
+
+@contextlib.contextmanager
+def atomic_output_dir(path: str | os.PathLike[str], overwrite: bool = False) -> Iterator[Path]:
+    """Assemble a folder in a temporary sibling and rename it to ``path`` when the block succeeds.
+
+    Raises FileExistsError (before the block runs, and again before the rename) if ``path``
+    exists and ``overwrite`` is false. With ``overwrite`` the old folder is moved aside, the new
+    one renamed into place, then the old one deleted; if the block raises, nothing changes.
+
+    Examples
+    --------
+    >>> with atomic_output_dir("results/eval") as tmp:  # doctest: +SKIP
+    ...     write_csv(tmp / "results.csv", rows)
+    """
+    out = check_output_dir(path, overwrite)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.", suffix=".tmp"))
+    try:
+        os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp creates 0700
+        yield tmp
+        check_output_dir(out, overwrite)
+        if out.exists():
+            old = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.", suffix=".old"))
+            os.rmdir(old)
+            os.rename(out, old)
+            try:
+                os.rename(tmp, out)
+            except BaseException:
+                os.rename(old, out)
+                raise
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.rename(tmp, out)
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)

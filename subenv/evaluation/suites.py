@@ -1,0 +1,145 @@
+"""Named evaluation suites: which scenarios a comparison runs, how many episodes, how long.
+
+A suite is data (a frozen dataclass in a registry), like a scenario. The episodes of a suite are
+fixed by a base seed: episode ``i`` of every scenario is ``reset(seed=base_seed + i)``, for every
+controller, so all controllers meet the same episodes. (This is also how
+``gym.make_vec(id, num_envs=N).reset(seed=base_seed)`` seeds its sub-environments, so a batched
+run draws the same episodes.)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Final
+
+from subenv.scenarios.registry import scenario_names
+
+__all__ = [
+    "DEFAULT_SEED",
+    "DEFAULT_SUITE",
+    "Suite",
+    "check_scenarios",
+    "get_suite",
+    "register_suite",
+    "suite_names",
+]
+
+DEFAULT_SEED: Final = 10_000
+"""Base seed of evaluations: away from the small seeds (0, 1, 2, ...) that training runs and
+examples use, so an agent is not scored on the very episodes it was trained on."""
+
+DEFAULT_SUITE: Final = "default"
+
+
+@dataclass(frozen=True)
+class Suite:
+    """A named set of scenarios to compare controllers on.
+
+    Attributes
+    ----------
+    name : str
+        Registry key (``subenv evaluate --suite NAME``).
+    description : str
+        One line on what the suite measures.
+    scenarios : tuple of str
+        Registered scenario names (``subenv.scenarios.scenario_names()``), run in this order.
+    episodes : int
+        Episodes per scenario and controller when the caller does not say.
+    max_duration_s : float or None
+        Truncate every episode at this time [s] (the scenario's own duration applies too);
+        None runs the scenarios' full lengths.
+    """
+
+    name: str
+    description: str
+    scenarios: tuple[str, ...]
+    episodes: int
+    max_duration_s: float | None = None
+
+    def __post_init__(self) -> None:
+        if not self.name:
+            raise ValueError("a suite needs a name")
+        if not self.scenarios or len(set(self.scenarios)) != len(self.scenarios):
+            raise ValueError(
+                f"suite {self.name!r}: scenarios={self.scenarios!r} must be non-empty and distinct"
+            )
+        episodes = self.episodes
+        if not (isinstance(episodes, int) and not isinstance(episodes, bool) and episodes >= 1):
+            raise ValueError(f"suite {self.name!r}: episodes={self.episodes!r} must be an integer >= 1")
+        if self.max_duration_s is not None and not (
+            math.isfinite(self.max_duration_s) and self.max_duration_s > 0
+        ):
+            raise ValueError(
+                f"suite {self.name!r}: max_duration_s={self.max_duration_s!r} must be None or a "
+                "finite number > 0"
+            )
+
+
+_REGISTRY: dict[str, Suite] = {}
+
+
+def register_suite(suite: Suite, *, overwrite: bool = False) -> Suite:
+    """Make a suite selectable by name."""
+    if suite.name in _REGISTRY and not overwrite:
+        raise ValueError(f"suite {suite.name!r} is already registered; pass overwrite=True to replace it")
+    _REGISTRY[suite.name] = suite
+    return suite
+
+
+def suite_names() -> list[str]:
+    """Names of the registered suites, in registration order."""
+    return list(_REGISTRY)
+
+
+def check_scenarios(names: tuple[str, ...] | list[str]) -> None:
+    """Raise ValueError naming the first unknown scenario and listing the known ones."""
+    known = scenario_names()
+    for name in names:
+        if name not in known:
+            raise ValueError(f"scenario={name!r} is unknown: must be one of {known}")
+
+
+def get_suite(name: str) -> Suite:
+    """The registered suite ``name``, its scenarios checked against the scenario registry.
+
+    Raises ValueError listing the known suites (or the known scenarios, if the suite names one
+    that is not registered).
+    """
+    try:
+        suite = _REGISTRY[name]
+    except (KeyError, TypeError):
+        raise ValueError(f"suite={name!r} is unknown: must be one of {suite_names()}") from None
+    check_scenarios(suite.scenarios)
+    return suite
+
+
+register_suite(Suite(
+    name="default",
+    description=(
+        "The six base scenarios: design speed, below, near and through critical, periscope depth, "
+        "ballast offset."
+    ),
+    scenarios=("Nominal", "LowSpeed", "NearCritical", "SpeedTransient", "PeriscopeDepth", "BallastOffset"),
+    episodes=100,
+))
+register_suite(Suite(
+    name="reversal",
+    description="Where dive-plane reversal bites: below, near and decelerating through the critical speed.",
+    scenarios=("LowSpeed", "NearCritical", "SpeedTransient"),
+    episodes=100,
+))
+register_suite(Suite(
+    name="randomized",
+    description=(
+        "The Randomized scenario: any base scenario with z_GB, C_D, sensor noise and a disturbance drawn."
+    ),
+    scenarios=("Randomized",),
+    episodes=200,
+))
+register_suite(Suite(
+    name="tiny",
+    description="For tests and smoke runs: design speed and below critical, 2 episodes each.",
+    scenarios=("Nominal", "LowSpeed"),
+    episodes=2,
+))

@@ -1,0 +1,155 @@
+"""Confidence intervals, tables and the atomic writing of results."""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from subenv.evaluation import results as res
+from subenv.evaluation.metrics import episode_metrics
+from subenv.evaluation.rollout import EpisodeResult
+
+
+@pytest.mark.parametrize(
+    ("successes", "n", "low", "high"),
+    [
+        # Newcombe (1998), Statistics in Medicine 17:857-872, Table I, method 3 (Wilson score).
+        (81, 263, 0.2553, 0.3662),
+        (15, 148, 0.0624, 0.1605),
+        (0, 20, 0.0, 0.1611),
+        (1, 29, 0.0061, 0.1718),
+    ],
+)
+def test_wilson_interval_matches_published_values(successes, n, low, high):
+    lo, hi = res.wilson_interval(successes, n)
+    assert (round(lo, 4), round(hi, 4)) == (low, high)
+
+
+def test_wilson_interval_closed_form_and_edges():
+    z = 1.959963984540054
+    k, n = 7, 50
+    p = k / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z / (1 + z * z / n) * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
+    assert res.wilson_interval(k, n) == pytest.approx((centre - half, centre + half), rel=1e-12)
+    assert res.wilson_interval(10, 10)[1] == pytest.approx(1.0)
+    assert all(math.isnan(v) for v in res.wilson_interval(0, 0))
+    with pytest.raises(ValueError, match="successes"):
+        res.wilson_interval(3, 2)
+
+
+def test_mean_interval_is_the_student_t_interval():
+    mean, low, high = res.mean_interval([1.0, 2.0, 3.0])
+    half = 4.302652729749464 * 1.0 / math.sqrt(3)  # t_{0.975, 2} * s / sqrt(n)
+    assert (mean, low, high) == pytest.approx((2.0, 2.0 - half, 2.0 + half), rel=1e-9)
+    assert res.mean_interval([5.0, 5.0, 5.0]) == (5.0, 5.0, 5.0)  # no spread, no width
+    m1 = res.mean_interval([4.0])
+    assert m1[0] == 4.0 and math.isnan(m1[1]) and math.isnan(m1[2])
+    assert res.mean_interval([0.0, 0.0, 9.0], support=(0.0, math.inf))[1] == 0.0  # clipped at 0
+
+
+def _result(controller: str, scenario: str, episode: int, success: bool, iae: float = 1.0) -> EpisodeResult:
+    t = np.arange(0.0, 121.0, 1.0)
+    e = np.full_like(t, 0.0 if success else 2.0)
+    e[0] = iae  # only to vary the IAE a little
+    zeros = np.zeros_like(t)
+    metrics = episode_metrics(t, e, zeros, zeros, zeros, zeros, termination_reason="", plane_limit_rad=0.4)
+    return EpisodeResult(
+        controller=controller, scenario=scenario, episode=episode, seed=100 + episode, control="dual",
+        alpha=0.0, initial_speed_mps=0.4, final_speed_mps=0.4, critical_speed_mps=0.5785,
+        depth_command_m=10.0, initial_depth_error_m=float(e[0]), episode_duration_s=120.0, steps=120,
+        metrics=metrics,
+    )
+
+
+def _results():
+    out = []
+    for i in range(4):
+        out.append(_result("weak", "A", i, success=i == 0))
+        out.append(_result("weak", "B", i, success=False))
+        out.append(_result("strong", "A", i, success=True))
+        out.append(_result("strong", "B", i, success=i < 3))
+    return out
+
+
+def test_summary_aggregates_per_controller_and_scenario():
+    summary = res.summarize(_results())
+    by_key = {(r["controller"], r["scenario"]): r for r in summary}
+    assert set(by_key) == {("weak", "A"), ("weak", "B"), ("strong", "A"), ("strong", "B")}
+    strong_b = by_key[("strong", "B")]
+    assert strong_b["episodes"] == 4 and strong_b["success_rate"] == 0.75
+    ci = (strong_b["success_ci_low"], strong_b["success_ci_high"])
+    assert ci == pytest.approx(res.wilson_interval(3, 4))
+    assert strong_b["outcome_success"] == 3 and strong_b["outcome_steady_offset"] == 1
+    assert strong_b["settled"] == 3  # settling time averages the settled episodes only
+    weak_b = by_key[("weak", "B")]
+    assert weak_b["settled"] == 0 and math.isnan(weak_b["settling_time_s_mean"])
+
+
+def test_leaderboard_ranks_by_pooled_success_and_lists_every_scenario():
+    text = res.leaderboard_markdown(_results(), title="T")
+    lines = [line for line in text.splitlines() if line.startswith("| ")]
+    header, rows = lines[0], lines[1:]
+    assert header.startswith("| controller | all scenarios | A | B |")
+    assert [row.split("|")[1].strip() for row in rows] == ["strong", "weak"]
+    assert "88% [53, 98]" in rows[0]  # 7 of 8, Wilson
+    assert "Wilson" in text and "0.5 m" in text and "60 s" in text
+    with pytest.raises(ValueError, match="empty"):
+        res.leaderboard_markdown([])
+
+
+def test_episode_table_round_trips_through_csv(tmp_path: Path):
+    rows = res.episode_table(_results())
+    path = res.write_csv(tmp_path / "results.csv", rows)
+    read = list(csv.DictReader(io.StringIO(path.read_text())))
+    assert len(read) == 16
+    assert read[0]["controller"] == "weak" and read[0]["success"] == "True"
+    assert float(read[0]["critical_speed_mps"]) == 0.5785
+    assert float(read[1]["settling_time_s"]) == math.inf
+    for key in ("initial_speed_mps", "critical_speed_mps", "iae_m_s", "outcome", "wrong_branch", "seed"):
+        assert key in read[0]
+
+
+def test_atomic_write_leaves_the_old_file_when_it_fails(tmp_path: Path, monkeypatch):
+    path = tmp_path / "summary.csv"
+    res.atomic_write_text(path, "old\n")
+
+    def broken_replace(src, dst):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(os, "replace", broken_replace)
+    with pytest.raises(OSError, match="disk full"):
+        res.atomic_write_text(path, "new\n")
+    assert path.read_text() == "old\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["summary.csv"]  # no temporary file left
+
+
+def test_output_folder_is_refused_if_it_exists_and_replaced_with_overwrite(tmp_path: Path):
+    out = tmp_path / "eval"
+    with res.atomic_output_dir(out) as tmp:
+        res.atomic_write_text(tmp / "a.txt", "first")
+        assert not out.exists()  # nothing visible until the block succeeds
+    assert (out / "a.txt").read_text() == "first"
+    with pytest.raises(FileExistsError, match="exists"), res.atomic_output_dir(out):
+        pytest.fail("the block must not run when the folder exists")
+    with res.atomic_output_dir(out, overwrite=True) as tmp:
+        res.atomic_write_text(tmp / "b.txt", "second")
+    assert sorted(p.name for p in out.iterdir()) == ["b.txt"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["eval"]  # no temporary folders left
+
+
+def test_a_failed_run_writes_no_folder(tmp_path: Path):
+    out = tmp_path / "eval"
+    with pytest.raises(RuntimeError, match="crash"), res.atomic_output_dir(out) as tmp:
+        res.atomic_write_text(tmp / "half.csv", "x")
+        raise RuntimeError("crash")
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "file").write_text("not a folder")
+    with pytest.raises(FileExistsError, match="not a folder"):
+        res.check_output_dir(tmp_path / "file", overwrite=True)
