@@ -37,7 +37,7 @@ __all__ = [
 DEPTH_TOLERANCE_M: Final = 0.5
 """|depth error| within which the ordered depth counts as reached [m].
 
-About one hull diameter of SUBOFF (0.508 m, for a 4.356 m hull): a boat within its own diameter
+About one hull diameter of SUBOFF (0.508 m, for a 4.26 m hull): a boat within its own diameter
 of the ordered depth is where it was sent. It is 10 times the sensor noise of the ``Randomized``
 scenario (0.05 m), so noise alone never breaks it, and a quarter of the initial offsets the
 scenarios draw (up to 2 m), so an episode that never corrects its start does not pass.
@@ -47,10 +47,11 @@ HOLD_WINDOW_S: Final = 60.0
 """Length of the final stretch of an episode over which success and the wrong branch are judged [s].
 
 Long against the closed-loop time constants of the thesis design (poles at -0.3 to -0.33 1/s,
-about 3 s; a depth-keeping controller has settled after 20-30 s) and against the slowest
-low-speed motions (a drifting pitched equilibrium moves ~0.05-0.3 m/s, so it leaves a 0.5 m
-tolerance well within 60 s), yet short enough to fit after the transient of every scenario
-(episodes last 200-600 s; ``SpeedTransient`` reaches its final speed by 330 s at the latest).
+about 3 s; the baselines settle within 20-60 s) and long enough that the slowest drift of a
+pitched, plane-saturated equilibrium (0.014-0.026 m/s at 0.2-0.9 u_cr, from
+``subenv.analysis.equilibria``) covers more than the 0.5 m tolerance within it, yet short enough
+to fit after the transient of every scenario (episodes last 200-600 s; ``SpeedTransient``
+reaches its final speed by 330 s at the latest).
 """
 
 SATURATION_LEVEL: Final = 0.99
@@ -75,17 +76,18 @@ NON_LEVEL_PITCH_RAD: Final = math.radians(0.5)
 The saturated pitched equilibria of SUBOFF lie at 0.72 deg (0.3 u_cr, the slowest speed of
 ``LowSpeed``) to 6.5 deg (0.9 u_cr) with the thesis's gain, and higher with a ballast offset
 (``subenv.analysis.equilibria``; 0.32 deg only at 0.2 u_cr, below every scenario). 0.5 deg sits
-below all of them and above the pitch noise of a level boat pinned against, say, excess
-buoyancy, which is the other way to end up with saturated planes off depth.
+below all of them, and excludes a level boat whose planes are pinned for another reason (too
+little plane authority, e.g. against excess buoyancy), which is a different failure.
 """
 
 STEADY_PITCH_RATE_RADPS: Final = math.radians(0.2)
 """|pitch rate| at or below which the pitch counts as steady [rad/s] (0.2 deg/s).
 
-At a pitched equilibrium q is zero: without disturbance the baselines' wrong-branch windows have
-max |q| < 0.001 deg/s; with the ``Randomized`` scenario's 2 N heave-force disturbance up to
-0.16 deg/s (thesis controller, 40 episodes). A boat still swinging towards the pitch limit or
-oscillating about level moves faster than this at some point of the window.
+At a pitched equilibrium q is zero. Measured on the wrong-branch windows of the thesis
+controller and the baselines (40 episodes per scenario): max |q| below 0.05 deg/s (mostly below
+0.001) without a random disturbance, up to 0.16 deg/s under the ``Randomized`` scenario's 2 N
+heave-force disturbance. A boat still swinging towards the pitch limit or oscillating about level
+moves faster than this at some point of the window.
 """
 
 STEADY_DEPTH_CHANGE_M: Final = 0.25

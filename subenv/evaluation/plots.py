@@ -100,6 +100,10 @@ def plot_trajectories(
     return _save(fig, path)
 
 
+_MAX_CRITICAL_LINES: Final = 3
+"""With more distinct critical speeds than this (randomised loadings), speeds are plotted as u / u_cr."""
+
+
 def plot_metrics_vs_speed(
     results: Sequence[EpisodeResult], path: str | os.PathLike[str], *, bins: int | None = None
 ) -> Path:
@@ -108,15 +112,31 @@ def plot_metrics_vs_speed(
     The speed is the one at the end of the episode, over the hold window that decides success
     (the only speed, except in ``SpeedTransient``, whose decisive speed is its final one). Each
     distinct critical speed of the results (one per loading and plane allocation) is a vertical
-    line, labelled with the controllers it applies to.
+    line, labelled with the controllers it applies to. When the loadings vary (more than three
+    distinct critical speeds, as in ``Randomized``), the axis is the speed in units of each
+    episode's own critical speed instead, with u / u_cr = 1 marked.
     """
     from matplotlib.figure import Figure
 
     if not results:
         raise ValueError("results is empty: nothing to plot")
+    by_ucr: dict[float, list[str]] = {}
+    for r in results:
+        if math.isfinite(r.critical_speed_mps):
+            names = by_ucr.setdefault(round(r.critical_speed_mps, 4), [])
+            if r.controller not in names:
+                names.append(r.controller)
+    relative = len(by_ucr) > _MAX_CRITICAL_LINES
+
+    def x_of(r: EpisodeResult) -> float:
+        return r.final_speed_mps / r.critical_speed_mps if relative else r.final_speed_mps
+
     controllers = list(dict.fromkeys(r.controller for r in results))
     colors = _colors(controllers)
-    speeds = np.array([r.final_speed_mps for r in results])
+    speeds = np.array([x_of(r) for r in results])
+    speeds = speeds[np.isfinite(speeds)]
+    if speeds.size == 0:
+        raise ValueError("no episode has a finite speed to plot against (no critical speed?)")
     n_bins = bins or int(np.clip(math.ceil(math.sqrt(len(set(np.round(speeds, 6))))), 4, 15))
     low, high = float(speeds.min()), float(speeds.max())
     if high <= low:
@@ -126,8 +146,8 @@ def plot_metrics_vs_speed(
     fig = Figure(figsize=(9, 7.5))
     ax_success, ax_iae = fig.subplots(2, 1, sharex=True)
     for c in controllers:
-        mine = [r for r in results if r.controller == c]
-        u = np.array([r.final_speed_mps for r in mine])
+        mine = [r for r in results if r.controller == c and math.isfinite(x_of(r))]
+        u = np.array([x_of(r) for r in mine])
         ok = np.array([r.metrics.success for r in mine], dtype=float)
         which = np.clip(np.digitize(u, edges[1:-1]), 0, n_bins - 1)
         counts = np.bincount(which, minlength=n_bins)
@@ -137,25 +157,21 @@ def plot_metrics_vs_speed(
         ax_success.plot(at, rate, marker="o", color=colors[c], label=c)
         iae = np.array([r.metrics.iae_m_s for r in mine])
         ax_iae.scatter(u, iae, s=12, alpha=0.6, color=colors[c], label=c)
-    by_ucr: dict[float, list[str]] = {}
-    for r in results:
-        if math.isfinite(r.critical_speed_mps):
-            names = by_ucr.setdefault(round(r.critical_speed_mps, 4), [])
-            if r.controller not in names:
-                names.append(r.controller)
-    for i, (ucr, names) in enumerate(sorted(by_ucr.items())):
+    lines = [(1.0, "u = u_cr of each episode")] if relative else [
+        (ucr, f"u_cr = {ucr:.3f} m/s" + ("" if len(by_ucr) == 1 else f" ({', '.join(names)})"))
+        for ucr, names in sorted(by_ucr.items())
+    ]
+    for i, (x, label) in enumerate(lines):
         style = ("--", ":", "-.")[i % 3]
-        label = f"u_cr = {ucr:.3f} m/s" + ("" if len(by_ucr) == 1 else f" ({', '.join(names)})")
         for ax in (ax_success, ax_iae):
-            ax.axvline(ucr, color="k", linestyle=style, linewidth=1,
-                       label=label if ax is ax_success else None)
+            ax.axvline(x, color="k", linestyle=style, linewidth=1, label=label if ax is ax_success else None)
     ax_success.set_ylim(-0.05, 1.05)
     ax_success.set_ylabel(f"success rate\n({n_bins} equal speed bins,\nat their mean speed)")
     ax_success.legend(loc="best", fontsize="small")
     if np.all([r.metrics.iae_m_s > 0 for r in results]):
         ax_iae.set_yscale("log")
     ax_iae.set_ylabel("IAE [m s] per episode")
-    ax_iae.set_xlabel("speed over the final hold window [m/s]")
+    ax_iae.set_xlabel("speed over the final hold window " + ("/ u_cr" if relative else "[m/s]"))
     for ax in (ax_success, ax_iae):
         ax.grid(alpha=0.3)
     scenarios = ", ".join(dict.fromkeys(r.scenario for r in results))

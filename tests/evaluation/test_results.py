@@ -8,12 +8,9 @@ import math
 import os
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from subenv.evaluation import results as res
-from subenv.evaluation.metrics import episode_metrics
-from subenv.evaluation.rollout import EpisodeResult
 
 
 @pytest.mark.parametrize(
@@ -54,21 +51,8 @@ def test_mean_interval_is_the_student_t_interval():
     assert res.mean_interval([0.0, 0.0, 9.0], support=(0.0, math.inf))[1] == 0.0  # clipped at 0
 
 
-def _result(controller: str, scenario: str, episode: int, success: bool, iae: float = 1.0) -> EpisodeResult:
-    t = np.arange(0.0, 121.0, 1.0)
-    e = np.full_like(t, 0.0 if success else 2.0)
-    e[0] = iae  # only to vary the IAE a little
-    zeros = np.zeros_like(t)
-    metrics = episode_metrics(t, e, zeros, zeros, zeros, zeros, termination_reason="", plane_limit_rad=0.4)
-    return EpisodeResult(
-        controller=controller, scenario=scenario, episode=episode, seed=100 + episode, control="dual",
-        alpha=0.0, initial_speed_mps=0.4, final_speed_mps=0.4, critical_speed_mps=0.5785,
-        depth_command_m=10.0, initial_depth_error_m=float(e[0]), episode_duration_s=120.0, steps=120,
-        metrics=metrics,
-    )
-
-
-def _results():
+def _results(make_result):
+    _result = make_result
     out = []
     for i in range(4):
         out.append(_result("weak", "A", i, success=i == 0))
@@ -78,8 +62,8 @@ def _results():
     return out
 
 
-def test_summary_aggregates_per_controller_and_scenario():
-    summary = res.summarize(_results())
+def test_summary_aggregates_per_controller_and_scenario(make_result):
+    summary = res.summarize(_results(make_result))
     by_key = {(r["controller"], r["scenario"]): r for r in summary}
     assert set(by_key) == {("weak", "A"), ("weak", "B"), ("strong", "A"), ("strong", "B")}
     strong_b = by_key[("strong", "B")]
@@ -92,8 +76,8 @@ def test_summary_aggregates_per_controller_and_scenario():
     assert weak_b["settled"] == 0 and math.isnan(weak_b["settling_time_s_mean"])
 
 
-def test_leaderboard_ranks_by_pooled_success_and_lists_every_scenario():
-    text = res.leaderboard_markdown(_results(), title="T")
+def test_leaderboard_ranks_by_pooled_success_and_lists_every_scenario(make_result):
+    text = res.leaderboard_markdown(_results(make_result), title="T")
     lines = [line for line in text.splitlines() if line.startswith("| ")]
     header, rows = lines[0], lines[1:]
     assert header.startswith("| controller | all scenarios | A | B |")
@@ -104,8 +88,8 @@ def test_leaderboard_ranks_by_pooled_success_and_lists_every_scenario():
         res.leaderboard_markdown([])
 
 
-def test_episode_table_round_trips_through_csv(tmp_path: Path):
-    rows = res.episode_table(_results())
+def test_episode_table_round_trips_through_csv(tmp_path: Path, make_result):
+    rows = res.episode_table(_results(make_result))
     path = res.write_csv(tmp_path / "results.csv", rows)
     read = list(csv.DictReader(io.StringIO(path.read_text())))
     assert len(read) == 16
