@@ -6,6 +6,8 @@ NumPy-facing functions (:func:`subenv.dynamics.derivatives`,
 :func:`subenv.dynamics.crossflow_integrals`) are generalized ufuncs over the same compiled scalar
 functions that the environments call.
 
+- ``nogil=True``: the kernels release the GIL, so the vector environment steps slices of its
+  sub-environments on Python threads (no OpenMP runtime, which does not survive ``fork``).
 - ``cache=True``: compiled code is stored next to the sources (or in ``NUMBA_CACHE_DIR``), so
   only the first process on a machine pays the compile time (``benchmarks/speed.py`` reports it).
 - ``error_model="numpy"``: division by zero gives inf/nan as in NumPy instead of raising, and
@@ -21,7 +23,7 @@ from typing import Any, Final
 
 import numba
 
-__all__ = ["KERNEL_OPTIONS", "gufunc", "inline_kernel", "kernel", "parallel_kernel"]
+__all__ = ["KERNEL_OPTIONS", "gufunc", "inline_kernel", "kernel"]
 
 KERNEL_OPTIONS: Final[dict[str, Any]] = {"cache": True, "nogil": True, "error_model": "numpy"}
 
@@ -31,9 +33,6 @@ kernel = functools.partial(numba.njit, **KERNEL_OPTIONS)
 inline_kernel = functools.partial(numba.njit, inline="always", **KERNEL_OPTIONS)
 """As :data:`kernel`, and inlined into the compiled callers (no call overhead, no reference counting of the
 array arguments): for the small functions called per state."""
-
-parallel_kernel = functools.partial(numba.njit, parallel=True, **KERNEL_OPTIONS)
-"""As :data:`kernel`, for loops over sub-environments written with ``numba.prange``."""
 
 
 def gufunc(fn: Any, signature: str, layout: str) -> Any:

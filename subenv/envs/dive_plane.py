@@ -252,7 +252,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         )
         self._hull = model_params(self.base_vehicle).hull.packed
         self._cfg = self._constants(max_episode_steps=None)
-        self._loadings: dict[tuple[float, float, float, float | None], tuple[Vehicle, np.ndarray, float]] = {}
+        self._loadings: dict[tuple[float, float, float, float | None], tuple[Vehicle, list[float], float, float]] = {}
 
         # Episode state, set by reset(): one row of the transition's table (subenv.envs.transition).
         self.vehicle: Vehicle = self.base_vehicle
@@ -261,6 +261,8 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         self._rows[0, tr.CRITICAL_SPEED] = math.nan
         self._row = self._rows[0]
         self._obs_rows = np.zeros((1, len(OBSERVATION_NAMES)), dtype=np.float32)
+        self._report = np.zeros((tr.N_REPORT, 1))  # (unused here: the info is built from the row)
+        self._active = np.ones(1, dtype=bool)
         self._last_obs = self._obs_rows[0]
         self._rngs: Any = None  # numba typed list holding self.np_random, for the transition
         self._rngs_source: np.random.Generator | None = None
@@ -273,7 +275,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
     ) -> tuple[np.ndarray, dict[str, Any]]:
         super().reset(seed=seed)
         self.vehicle, self.episode = self._begin_episode(self._row, self.np_random, options)
-        tr.observe_batch(self._rows, _FIRST, self._obs_rows, self._bound_rngs(), self._cfg)
+        tr.observe_batch(self._rows, _FIRST, self._obs_rows, self._bound_rngs(), self._cfg, self._report)
         self._history = [(0.0, self._row[tr.DEPTH], self._row[tr.COMMAND])]
         if self.render_mode == "human":
             self.render()
@@ -282,14 +284,14 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
     def step(self, action: np.ndarray) -> tuple[np.ndarray, SupportsFloat, bool, bool, dict[str, Any]]:
         if self.episode is None:
             raise gym.error.ResetNeeded("Cannot call step() before reset()")
-        a = np.ascontiguousarray(action, dtype=np.float64).reshape(-1)
-        if a.shape != self.action_space.shape:
+        a = np.ascontiguousarray(action, dtype=np.float64).reshape(1, -1)
+        if a.shape[1:] != self.action_space.shape:
             raise ValueError(
                 f"action has shape {np.shape(action)}: must have shape {self.action_space.shape} "
                 f"(control={self.control!r})"
             )
         rngs = self._rngs if self._rngs_source is self._np_random else self._bound_rngs()
-        if not tr.step_single(self._row, a, self._last_obs, rngs, self._cfg, self._hull):
+        if tr.step_batch(self._rows, a, self._active, self._obs_rows, rngs, 0, self._cfg, self._hull, self._report) >= 0:
             raise ValueError(f"action={np.asarray(action).tolist()!r} is invalid: must be finite (no NaN or inf)")
         r = self._row.tolist()
         if self.render_mode is not None:
@@ -399,8 +401,9 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
             self._rngs_source = rng
         return self._rngs
 
-    def _loading(self, config: EpisodeConfig) -> tuple[Vehicle, np.ndarray, float]:
-        """The episode's vehicle, its packed model parameters and its critical speed (memoised)."""
+    def _loading(self, config: EpisodeConfig) -> tuple[Vehicle, list[float], float, float]:
+        """The episode's vehicle, its model parameters (``PARAM_FIELDS``), critical speed and
+        sqrt(g z_GB) (nan for z_GB <= 0), memoised."""
         base = self.base_vehicle
         z_GB = config.z_GB_m if config.z_GB_m is not None else base.z_GB_m
         key = (z_GB * config.z_GB_scale, base.x_GB_m + config.x_GB_m,
@@ -410,19 +413,25 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
             vehicle = base.variant(z_GB_m=key[0], x_GB_m=key[1], excess_buoyancy_N=key[2], crossflow_drag=key[3])
             if len(self._loadings) >= _LOADING_CACHE_SIZE:
                 self._loadings.clear()
-            found = self._loadings[key] = (vehicle, pack_params(model_params(vehicle)), self._critical_speed(vehicle))
+            z_GB = vehicle.z_GB_m
+            found = self._loadings[key] = (
+                vehicle,
+                pack_params(model_params(vehicle)).tolist(),
+                self._critical_speed(vehicle),
+                math.sqrt(vehicle.gravity_m_s2 * z_GB) if z_GB > 0 else math.nan,
+            )
         return found
 
     def _begin_episode(
         self, row: np.ndarray, rng: np.random.Generator, options: dict[str, Any] | None
     ) -> tuple[Vehicle, EpisodeConfig]:
         """Draw an episode from ``rng`` (and ``options``) into the transition ``row``; the observation is not drawn."""
-        options = dict(options or {})
+        options = options or {}
         unknown = set(options) - set(_OPTIONS)
         if unknown:
             raise ValueError(f"reset options {sorted(unknown)} are unknown: allowed options are {list(_OPTIONS)}")
         config = self.scenario.sample(rng, self.base_vehicle.weight_N)
-        vehicle, params, ucr = self._loading(config)
+        vehicle, params, ucr, froude_scale = self._loading(config)
         if config.speed_relative and not math.isfinite(ucr):
             raise ValueError(
                 f"scenario {self.scenario.name!r} gives speeds relative to the critical speed, but "
@@ -457,21 +466,21 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
             float(rng.normal(0.0, config.disturbance_std_N)) if config.disturbance_std_N > 0 else 0.0
         )
 
-        row[:] = 0.0
-        row[tr.PITCH:tr.DEPTH + 1] = state
-        row[tr.PARAMS:tr.STERN] = params
-        row[tr.N_KNOTS] = len(knots)
+        values = [0.0] * tr.N_COLUMNS  # one assignment to the row: per-element ones cost more than the rest
+        values[tr.PITCH:tr.DEPTH + 1] = state
+        values[tr.PARAMS:tr.STERN] = params
+        values[tr.N_KNOTS] = len(knots)
         for k, (t, u) in enumerate(knots):
-            row[tr.KNOT_T + k] = t
-            row[tr.KNOT_U + k] = u
-        row[tr.COMMAND] = command
-        row[tr.DISTURBANCE] = disturbance
-        row[tr.DISTURBANCE_STD] = config.disturbance_std_N
-        row[tr.NOISE] = 1.0 if config.sensor_noise else 0.0
-        row[tr.DURATION] = config.duration_s
-        row[tr.CRITICAL_SPEED] = ucr
-        z_GB = vehicle.z_GB_m
-        row[tr.SQRT_G_ZGB] = math.sqrt(vehicle.gravity_m_s2 * z_GB) if z_GB > 0 else math.nan
+            values[tr.KNOT_T + k] = t
+            values[tr.KNOT_U + k] = u
+        values[tr.COMMAND] = command
+        values[tr.DISTURBANCE] = disturbance
+        values[tr.DISTURBANCE_STD] = config.disturbance_std_N
+        values[tr.NOISE] = 1.0 if config.sensor_noise else 0.0
+        values[tr.DURATION] = config.duration_s
+        values[tr.CRITICAL_SPEED] = ucr
+        values[tr.SQRT_G_ZGB] = froude_scale
+        row[:] = values
         return vehicle, config
 
     def _frame(self, row: np.ndarray, history: Sequence[tuple[float, float, float]]) -> Any:

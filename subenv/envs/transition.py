@@ -21,21 +21,22 @@ import numba
 import numpy as np
 
 from subenv._typing import FloatArray
-from subenv.dynamics._jit import inline_kernel, kernel, parallel_kernel
+from subenv.dynamics._jit import inline_kernel, kernel
 from subenv.dynamics.integrate import control_period_point
 from subenv.dynamics.model import PARAM_FIELDS
 
 __all__ = [
     "N_COLUMNS",
     "N_CONFIG",
+    "N_REPORT",
     "REASONS",
+    "REPORT_KEYS",
     "observe_batch",
     "observe_env",
     "speed_at_point",
+    "first_non_finite",
     "step_batch",
-    "step_batch_parallel",
     "step_env",
-    "step_single",
 ]
 
 # --- columns of a sub-environment's row ------------------------------------------------------
@@ -70,6 +71,17 @@ N_COLUMNS: Final = TRUNCATED + 1
 REASONS: Final = ("", "diverged", "pitch_limit", "broached", "left_depth_band")
 """``info["termination_reason"]`` for each value of the ``REASON`` column."""
 _DIVERGED, _PITCH_LIMIT, _BROACHED, _LEFT_DEPTH_BAND = 1, 2, 3, 4
+
+# --- rows of a step's report: the single env's info (subenv.envs.dive_plane._info), key by key,
+# then the step's outcome. The vector env hands each row out as an array over the sub-environments.
+REPORT_KEYS: Final = ("time_s", "depth_m", "depth_command_m", "depth_error_m", "pitch_rad", "heave_mps",
+                      "pitch_rate_radps", "stern_plane_rad", "bow_plane_rad", "speed_mps", "froude_number",
+                      "critical_speed_mps", "critical_froude", "disturbance_N", "reward_depth", "reward_pitch",
+                      "reward_effort", "reward_termination", "reason", "reward", "terminated", "truncated")
+(R_TIME, R_DEPTH, R_COMMAND, R_DEPTH_ERROR, R_PITCH, R_HEAVE, R_PITCH_RATE, R_STERN, R_BOW, R_SPEED, R_FROUDE,
+ R_CRITICAL_SPEED, R_CRITICAL_FROUDE, R_DISTURBANCE, R_REWARD_DEPTH, R_REWARD_PITCH, R_REWARD_EFFORT,
+ R_REWARD_TERMINATION, R_REASON, R_REWARD, R_TERMINATED, R_TRUNCATED) = range(len(REPORT_KEYS))
+N_REPORT: Final = len(REPORT_KEYS)
 
 # --- the environment's constants ---------------------------------------------------------------
 C_DT, C_SUBSTEPS, C_DUAL, C_ALPHA, C_PLANE_LIMIT, C_RATE_LIMITED, C_MAX_MOVE = 0, 1, 2, 3, 4, 5, 6
@@ -225,6 +237,35 @@ def step_env(row: FloatArray, action: FloatArray, obs: np.ndarray, rngs: numba.t
 
 
 @inline_kernel
+def report_env(row: FloatArray, report: FloatArray, j: int) -> None:
+    """Write column ``j`` of a step's report (rows ``R_*``) from a row, as the single env's info computes it."""
+    depth, command, speed = row[DEPTH], row[COMMAND], row[SPEED]
+    froude_scale, ucr = row[SQRT_G_ZGB], row[CRITICAL_SPEED]  # nan when z_GB <= 0 (then no Froude numbers)
+    report[R_TIME, j] = row[TIME]
+    report[R_DEPTH, j] = depth
+    report[R_COMMAND, j] = command
+    report[R_DEPTH_ERROR, j] = depth - command
+    report[R_PITCH, j] = row[PITCH]
+    report[R_HEAVE, j] = row[HEAVE]
+    report[R_PITCH_RATE, j] = row[PITCH_RATE]
+    report[R_STERN, j] = row[STERN]
+    report[R_BOW, j] = row[BOW]
+    report[R_SPEED, j] = speed
+    report[R_FROUDE, j] = speed / froude_scale
+    report[R_CRITICAL_SPEED, j] = ucr
+    report[R_CRITICAL_FROUDE, j] = ucr / froude_scale
+    report[R_DISTURBANCE, j] = row[DISTURBANCE]
+    report[R_REWARD_DEPTH, j] = row[REWARD_DEPTH]
+    report[R_REWARD_PITCH, j] = row[REWARD_PITCH]
+    report[R_REWARD_EFFORT, j] = row[REWARD_EFFORT]
+    report[R_REWARD_TERMINATION, j] = row[REWARD_TERMINATION]
+    report[R_REASON, j] = row[REASON]
+    report[R_REWARD, j] = row[REWARD]
+    report[R_TERMINATED, j] = row[TERMINATED]
+    report[R_TRUNCATED, j] = row[TRUNCATED]
+
+
+@inline_kernel
 def _first_non_finite(actions: FloatArray, active: np.ndarray) -> int:
     for i in range(actions.shape[0]):
         if active[i]:
@@ -235,50 +276,36 @@ def _first_non_finite(actions: FloatArray, active: np.ndarray) -> int:
 
 
 @kernel
-def step_single(row: FloatArray, action: FloatArray, obs: np.ndarray, rngs: numba.typed.List, cfg: FloatArray,
-                hull: FloatArray) -> bool:
-    """:func:`step_env` for a single environment; False (and nothing done) for a non-finite action."""
-    for j in range(action.shape[0]):
-        if not math.isfinite(action[j]):
-            return False
-    step_env(row, action, obs, rngs, 0, cfg, hull)
-    return True
+def first_non_finite(actions: FloatArray, active: np.ndarray) -> int:
+    """The index of the first ``active`` row of ``actions`` with a NaN or infinite entry, or -1."""
+    return _first_non_finite(actions, active)
 
 
 @kernel
 def step_batch(rows: FloatArray, actions: FloatArray, active: np.ndarray, obs: np.ndarray, rngs: numba.typed.List,
-               cfg: FloatArray, hull: FloatArray) -> int:
-    """:func:`step_env` for each row with ``active`` set.
+               first: int, cfg: FloatArray, hull: FloatArray, report: FloatArray) -> int:
+    """:func:`step_env` and :func:`report_env` for each row with ``active`` set; the single env is one row.
 
-    Returns -1, or the index of the first active row with a non-finite action (then nothing is stepped).
+    Returns -1, or the index (in ``rows``) of the first active row with a non-finite action, and
+    then steps nothing. ``rows``, ``actions``, ``active`` and ``obs`` may be a slice of the
+    sub-environments starting at ``first`` (``rngs`` and ``report`` are for all of them): slices
+    can be stepped on separate threads (the kernel releases the GIL).
     """
     bad = _first_non_finite(actions, active)
     if bad >= 0:
         return bad
     for i in range(rows.shape[0]):
         if active[i]:
-            step_env(rows[i], actions[i], obs[i], rngs, i, cfg, hull)
-    return -1
-
-
-@parallel_kernel
-def step_batch_parallel(rows: FloatArray, actions: FloatArray, active: np.ndarray, obs: np.ndarray,
-                        rngs: numba.typed.List, cfg: FloatArray, hull: FloatArray) -> int:
-    """:func:`step_batch` with the rows split over numba's threads (same results: rows are independent)."""
-    bad = _first_non_finite(actions, active)
-    if bad >= 0:
-        return bad
-    for k in numba.prange(rows.shape[0]):
-        i = np.int64(k)  # prange counts in uint64; the typed list wants a signed index
-        if active[i]:
-            step_env(rows[i], actions[i], obs[i], rngs, i, cfg, hull)
+            step_env(rows[i], actions[i], obs[i], rngs, first + i, cfg, hull)
+            report_env(rows[i], report, first + i)
     return -1
 
 
 @kernel
-def observe_batch(rows: FloatArray, indices: np.ndarray, obs: np.ndarray, rngs: numba.typed.List,
-                  cfg: FloatArray) -> None:
-    """:func:`observe_env` for the rows in ``indices`` (after their reset)."""
+def observe_batch(rows: FloatArray, indices: np.ndarray, obs: np.ndarray, rngs: numba.typed.List, cfg: FloatArray,
+                  report: FloatArray) -> None:
+    """:func:`observe_env` and :func:`report_env` for the rows in ``indices`` (after their reset)."""
     for k in range(indices.shape[0]):
         i = indices[k]
         observe_env(rows[i], obs[i], rngs, i, cfg)
+        report_env(rows[i], report, i)

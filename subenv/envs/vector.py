@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import os
+import threading
+import time
 from collections.abc import Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any, Final
 
 import numpy as np
@@ -19,15 +23,12 @@ from subenv.vehicles.vehicle import Vehicle
 __all__ = ["DivePlaneVectorEnv"]
 
 _REASONS: Final = np.array(tr.REASONS, dtype=object)
-# info key -> row column, in the single environment's order (subenv.envs.dive_plane._info).
-_COLUMNS: Final = {"time_s": tr.TIME, "depth_m": tr.DEPTH, "depth_command_m": tr.COMMAND}
-_STATE_COLUMNS: Final = {"pitch_rad": tr.PITCH, "heave_mps": tr.HEAVE, "pitch_rate_radps": tr.PITCH_RATE,
-                         "stern_plane_rad": tr.STERN, "bow_plane_rad": tr.BOW, "speed_mps": tr.SPEED}
-_REWARD_COLUMNS: Final = {"reward_depth": tr.REWARD_DEPTH, "reward_pitch": tr.REWARD_PITCH,
-                          "reward_effort": tr.REWARD_EFFORT, "reward_termination": tr.REWARD_TERMINATION}
+_INFO_KEYS: Final = (*tr.REPORT_KEYS[: tr.R_REASON], "termination_reason")
+"""The single environment's info keys (subenv.envs.dive_plane._info), as the report's rows."""
+_MASK_KEYS: Final = tuple("_" + key for key in _INFO_KEYS)
 _AUTORESET_MODES: Final = (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP, AutoresetMode.DISABLED)
-PARALLEL_MIN_ENVS: Final = 256
-"""From this many sub-environments on, ``parallel=None`` steps them on numba's threads."""
+ENVS_PER_THREAD: Final = 512
+"""``threads=None`` uses one thread per this many sub-environments, up to the available cores."""
 
 
 class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
@@ -56,9 +57,10 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         ``reset(options={"reset_mask": mask})``). Stored in ``metadata["autoreset_mode"]``.
     render_mode : {None, "rgb_array"}
         ``render()`` returns a one-element tuple with the first sub-environment's frame.
-    parallel : bool, optional
-        Step the sub-environments on numba's threads (``numba.set_num_threads``). Default:
-        from :data:`PARALLEL_MIN_ENVS` sub-environments on. Results do not depend on it.
+    threads : int, optional
+        Step slices of the sub-environments on this many threads (the compiled transition
+        releases the GIL). Default: one per :data:`ENVS_PER_THREAD` sub-environments, at most
+        the cores available to the process. Results do not depend on it.
     **kwargs
         The arguments of :class:`~subenv.envs.DivePlaneEnv` (scenario, vehicle, control, ...),
         shared by all sub-environments.
@@ -85,7 +87,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         max_episode_steps: int | None = None,
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
         render_mode: str | None = None,
-        parallel: bool | None = None,
+        threads: int | None = None,
         **kwargs: Any,
     ) -> None:
         if not (isinstance(num_envs, (int, np.integer)) and not isinstance(num_envs, bool) and num_envs >= 1):
@@ -106,8 +108,10 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
                 f"render_mode={render_mode!r} is invalid: must be None or one of {self.metadata['render_modes']} "
                 "(the vector environment renders its first sub-environment)"
             )
-        if parallel is not None and not isinstance(parallel, bool):
-            raise ValueError(f"parallel={parallel!r} is invalid: must be None, True or False")
+        if threads is not None and not (
+            isinstance(threads, (int, np.integer)) and not isinstance(threads, bool) and threads >= 1
+        ):
+            raise ValueError(f"threads={threads!r} is invalid: must be None or an integer >= 1")
         self.single_env = DivePlaneEnv(**kwargs)
         """An environment that is never stepped: it holds the configuration all sub-environments share."""
 
@@ -116,7 +120,14 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         self.autoreset_mode = mode
         self.metadata = {**type(self).metadata, "autoreset_mode": mode}
         self.render_mode = render_mode
-        self.parallel = self.num_envs >= PARALLEL_MIN_ENVS if parallel is None else parallel
+        if threads is None:
+            threads = min(_available_cores(), max(1, self.num_envs // ENVS_PER_THREAD))
+        self.threads = min(int(threads), self.num_envs)
+        edges = np.linspace(0, self.num_envs, self.threads + 1).round().astype(int)
+        self._slices = [slice(a, b) for a, b in zip(edges[:-1].tolist(), edges[1:].tolist())]
+        # Measured costs [s] of stepping and of resetting one sub-environment, to share work between threads.
+        self._kernel_s_per_env = 300e-9
+        self._reset_s_per_env = 10e-6
         self.single_action_space = self.single_env.action_space
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.single_observation_space = self.single_env.observation_space
@@ -132,7 +143,9 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         self._seeds: list[int | None] = [None] * n
         self._rngs: Any = None  # numba typed list of the generators, built on the first reset
         self._done = np.zeros(n, dtype=bool)  # the episode ended on the last step
+        self._any_done = False
         self._started = np.zeros(n, dtype=bool)
+        self._ready = False  # every sub-environment has been reset once
         self._everyone = np.ones(n, dtype=bool)
         self.vehicles: list[Vehicle] = [self.single_env.base_vehicle] * n
         """Each sub-environment's vehicle (its episode's loading)."""
@@ -175,51 +188,66 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
                     self._rngs[i] = self._generators[i]
         if self._rngs is None:
             self._rngs = typed.List(self._generators)
-        self._reset_envs(indices, options)
+        report = np.zeros((tr.N_REPORT, n))
+        self._reset_envs(indices, options, report)
         self._done[indices] = False
-        return self._obs.copy(), self._infos(None if mask is self._everyone else mask)
+        self._any_done = bool(self._done.any())
+        return self._obs.copy(), self._infos(report, None if mask is self._everyone else mask)
 
     def step(
         self, actions: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
-        if not self._started.all():
-            raise _reset_needed(np.flatnonzero(~self._started))
+        if not self._ready:
+            if not self._started.all():
+                raise _reset_needed(np.flatnonzero(~self._started))
+            self._ready = True
         actions = self._check_actions(actions)
         mode = self.autoreset_mode
-        resetting = np.flatnonzero(self._done) if mode is AutoresetMode.NEXT_STEP else ()
-        if mode is AutoresetMode.DISABLED and self._done.any():
-            raise RuntimeError(
-                f"sub-environments {np.flatnonzero(self._done).tolist()} have ended their episodes and "
-                "autoreset_mode is DISABLED: reset them with reset(options={'reset_mask': mask})"
-            )
-        active = self._everyone if len(resetting) == 0 else ~self._done
-        step = tr.step_batch_parallel if self.parallel else tr.step_batch
-        bad = step(self._rows, actions, active, self._obs, self._rngs, self._cfg, self._hull)
+        active = self._everyone
+        resetting: np.ndarray | None = None
+        if self._any_done:
+            if mode is AutoresetMode.DISABLED:
+                raise RuntimeError(
+                    f"sub-environments {np.flatnonzero(self._done).tolist()} have ended their episodes and "
+                    "autoreset_mode is DISABLED: reset them with reset(options={'reset_mask': mask})"
+                )
+            resetting = np.flatnonzero(self._done)  # NEXT_STEP: these reset instead of stepping
+            active = ~self._done
+        bad = tr.first_non_finite(actions, active)
         if bad >= 0:
             raise ValueError(
                 f"actions[{bad}]={actions[bad].tolist()!r} is invalid: must be finite (no NaN or inf)"
             )
-        rows = self._rows
+        report = np.empty((tr.N_REPORT, self.num_envs))
+        if resetting is None:
+            self._step_rows(actions, active, report)
+        elif self.threads == 1:
+            self._step_rows(actions, active, report)
+            self._reset_envs(resetting, {}, report)  # reported as reward 0, not terminated, not truncated
+        else:
+            self._step_rows_while_resetting(actions, active, report, resetting)
         if self.render_mode is not None and active[0]:
-            self._history.append((rows[0, tr.TIME], rows[0, tr.DEPTH], rows[0, tr.COMMAND]))
-        if len(resetting):
-            self._reset_envs(resetting, {})  # their rows now give reward 0, not terminated, not truncated
-        rewards = rows[:, tr.REWARD].copy()
-        terminated = rows[:, tr.TERMINATED] > 0.0
-        truncated = rows[:, tr.TRUNCATED] > 0.0
-        final: dict[str, Any] = {}
+            row = self._rows[0]
+            self._history.append((row[tr.TIME], row[tr.DEPTH], row[tr.COMMAND]))
+        rewards = report[tr.R_REWARD]
+        terminated = report[tr.R_TERMINATED] > 0.0
+        truncated = report[tr.R_TRUNCATED] > 0.0
         done = terminated | truncated
-        if mode is AutoresetMode.SAME_STEP and done.any():
-            ended = np.flatnonzero(done)
-            final_obs = np.full(self.num_envs, None, dtype=object)
-            for i in ended:
-                final_obs[i] = self._obs[i].copy()
-            final = {"final_obs": final_obs, "_final_obs": done.copy(), "final_info": self._infos(done),
-                     "_final_info": done.copy()}
-            self._reset_envs(ended, {})
-            done = np.zeros(self.num_envs, dtype=bool)
+        self._any_done = bool(done.any())
         self._done = done
-        infos = self._infos(None)
+        if mode is not AutoresetMode.SAME_STEP or not self._any_done:
+            return self._obs.copy(), rewards, terminated, truncated, self._infos(report, None)
+        rewards = rewards.copy()  # the report's columns of the ended envs now take their reset
+        final_obs = np.full(self.num_envs, None, dtype=object)
+        ended = np.flatnonzero(done)
+        for i in ended:
+            final_obs[i] = self._obs[i].copy()
+        final = {"final_obs": final_obs, "_final_obs": done.copy(), "final_info": self._infos(report.copy(), done),
+                 "_final_info": done.copy()}
+        self._reset_envs(ended, {}, report)
+        self._done = np.zeros(self.num_envs, dtype=bool)
+        self._any_done = False
+        infos = self._infos(report, None)
         infos.update(final)
         return self._obs.copy(), rewards, terminated, truncated, infos
 
@@ -264,6 +292,63 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
             self._rngs = typed.List([g if g is not None else np.random.default_rng() for g in self._generators])
 
     # --- helpers ----------------------------------------------------------------------------
+    def _step_rows(self, actions: np.ndarray, active: np.ndarray, report: np.ndarray) -> None:
+        """Step the active rows, on :attr:`threads` threads (this one and the pool's)."""
+        start = time.perf_counter()
+        if self.threads == 1:
+            tr.step_batch(self._rows, actions, active, self._obs, self._rngs, 0, self._cfg, self._hull, report)
+        else:
+            first, *others = self._slices
+            pending = self._submit_rows(actions, active, report, others)
+            self._step_slice(first, actions, active, report)
+            for future, _ in pending:
+                future.result()
+        self._kernel_s_per_env += 0.1 * ((time.perf_counter() - start) * self.threads / self.num_envs
+                                         - self._kernel_s_per_env)
+
+    def _step_rows_while_resetting(self, actions: np.ndarray, active: np.ndarray, report: np.ndarray,
+                                   resetting: np.ndarray) -> None:
+        """Step the active rows on the pool's threads and part of them here, then reset ``resetting`` here.
+
+        Resets run in Python and hold the GIL; the compiled steps release it. So this thread first
+        steps a slice of rows (which lets the pool's threads start theirs), then draws the new
+        episodes while they run. The slice is sized from the measured costs so that all threads
+        finish together. The threads touch different rows, generators and report columns.
+        """
+        n, n_reset = self.num_envs, len(resetting)
+        kernel_s = self._kernel_s_per_env * (n - n_reset)
+        reset_s = self._reset_s_per_env * n_reset
+        here_s = max((kernel_s + reset_s) / self.threads - reset_s, 0.05 * kernel_s)
+        here = min(n - 1, max(1, round(n * here_s / kernel_s))) if kernel_s > 0 else 1
+        edges = np.linspace(here, n, self.threads).round().astype(int).tolist()
+        pending = self._submit_rows(actions, active, report, [slice(a, b) for a, b in zip(edges[:-1], edges[1:])])
+        try:
+            self._step_slice(slice(0, here), actions, active, report)
+            for _, started in pending:  # (releases the GIL:) the others are in their compiled steps
+                started.wait()
+            start = time.perf_counter()
+            self._reset_envs(resetting, {}, report)
+            self._reset_s_per_env += 0.1 * ((time.perf_counter() - start) / n_reset - self._reset_s_per_env)
+        finally:
+            for future, _ in pending:
+                future.result()
+
+    def _step_slice(self, s: slice, actions: np.ndarray, active: np.ndarray, report: np.ndarray) -> None:
+        tr.step_batch(self._rows[s], actions[s], active[s], self._obs[s], self._rngs, s.start, self._cfg,
+                      self._hull, report)
+
+    def _submit_rows(self, actions: np.ndarray, active: np.ndarray, report: np.ndarray,
+                     slices: Sequence[slice]) -> list[tuple[Future[None], threading.Event]]:
+        """Step ``slices`` on the pool; each comes with an event set just before its compiled step."""
+        pool = _thread_pool(self.threads)
+        pending = []
+        for s in slices:
+            started = threading.Event()
+            args = (self._rows[s], actions[s], active[s], self._obs[s], self._rngs, s.start, self._cfg, self._hull,
+                    report)
+            pending.append((pool.submit(_step_batch_after, started, args), started))
+        return pending
+
     def _check_actions(self, actions: Any) -> np.ndarray:
         n, shape = self.num_envs, self.single_action_space.shape
         a = np.asarray(actions, dtype=np.float64)
@@ -277,47 +362,56 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
                 )
         return np.ascontiguousarray(a)
 
-    def _reset_envs(self, indices: Sequence[int] | np.ndarray, options: dict[str, Any]) -> None:
+    def _reset_envs(self, indices: Sequence[int] | np.ndarray, options: dict[str, Any], report: np.ndarray) -> None:
+        """Draw new episodes for ``indices`` (and write their columns of ``report``)."""
         begin = self.single_env._begin_episode
-        rows, generators = self._rows, self._generators
-        for i in indices:
-            self.vehicles[i], self.episodes[i] = begin(rows[i], generators[i], options)  # type: ignore[arg-type]
+        rows, generators, vehicles, episodes = self._rows, self._generators, self.vehicles, self.episodes
         index = np.asarray(indices, dtype=np.intp)
-        tr.observe_batch(rows, index, self._obs, self._rngs, self._cfg)
+        for i in index.tolist():
+            vehicles[i], episodes[i] = begin(rows[i], generators[i], options)  # type: ignore[arg-type]
+        tr.observe_batch(rows, index, self._obs, self._rngs, self._cfg, report)
         self._started[index] = True
         if self.render_mode is not None and 0 in index:
             self._history = [(0.0, rows[0, tr.DEPTH], rows[0, tr.COMMAND])]
 
-    def _infos(self, mask: np.ndarray | None) -> dict[str, Any]:
-        """Gymnasium's vector ``info`` of the rows; with ``mask``, only those sub-environments report."""
-        rows = self._rows
-        depth = rows[:, tr.DEPTH].copy()
-        command = rows[:, tr.COMMAND].copy()
-        speed = rows[:, tr.SPEED].copy()
-        froude_scale = rows[:, tr.SQRT_G_ZGB]
-        ucr = rows[:, tr.CRITICAL_SPEED].copy()
-        values: dict[str, np.ndarray] = {"time_s": rows[:, tr.TIME].copy(), "depth_m": depth,
-                                         "depth_command_m": command, "depth_error_m": depth - command}
-        for key, column in _STATE_COLUMNS.items():
-            values[key] = speed if column == tr.SPEED else rows[:, column].copy()
-        values["froude_number"] = speed / froude_scale  # nan when z_GB <= 0, as the single env
-        values["critical_speed_mps"] = ucr
-        values["critical_froude"] = ucr / froude_scale
-        values["disturbance_N"] = rows[:, tr.DISTURBANCE].copy()
-        values["termination_reason"] = _REASONS[rows[:, tr.REASON].astype(np.intp)]
-        for key, column in _REWARD_COLUMNS.items():
-            values[key] = rows[:, column].copy()
-        infos: dict[str, Any] = {}
+    def _infos(self, report: np.ndarray, mask: np.ndarray | None) -> dict[str, Any]:
+        """Gymnasium's vector ``info`` from a step's report (whose rows it hands out);
+        with ``mask``, only those sub-environments report, as in ``SyncVectorEnv``."""
+        values = list(report[: tr.R_REASON])
+        values.append(_REASONS.take(report[tr.R_REASON].astype(np.intp)))
         if mask is None:
-            for key, value in values.items():
-                infos[key] = value
-                infos["_" + key] = np.ones(self.num_envs, dtype=bool)
+            masks = np.ones((len(_INFO_KEYS), self.num_envs), dtype=bool)
         else:  # SyncVectorEnv leaves the others at zero (None for strings)
-            for key, value in values.items():
+            for value in values:
                 value[~mask] = None if value.dtype == object else 0.0
-                infos[key] = value
-                infos["_" + key] = mask.copy()
+            masks = np.tile(mask, (len(_INFO_KEYS), 1))
+        infos: dict[str, Any] = {}
+        for key, mask_key, value, key_mask in zip(_INFO_KEYS, _MASK_KEYS, values, masks):
+            infos[key] = value
+            infos[mask_key] = key_mask
         return infos
+
+
+def _step_batch_after(started: threading.Event, args: tuple[Any, ...]) -> None:
+    started.set()
+    tr.step_batch(*args)
+
+
+def _available_cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+_POOL: list[Any] = []  # (pid, ThreadPoolExecutor): a pool does not survive fork, so it is per process
+
+
+def _thread_pool(workers: int) -> ThreadPoolExecutor:
+    if not _POOL or _POOL[0][0] != os.getpid() or _POOL[0][1]._max_workers < workers:
+        _POOL[:] = [(os.getpid(), ThreadPoolExecutor(max_workers=max(workers, _available_cores()),
+                                                     thread_name_prefix="subenv-vector"))]
+    return _POOL[0][1]
 
 
 def _reset_needed(indices: np.ndarray) -> Exception:

@@ -103,10 +103,10 @@ def test_seed_lists_none_and_reset_mask_match_sync_vector_env():
     assert native.reset(options={"speed": 1.0})[1]["speed_mps"].tolist() == [1.0, 1.0, 1.0]
 
 
-def test_parallel_and_serial_stepping_agree():
+def test_threaded_and_serial_stepping_agree():
     results = []
-    for parallel in (False, True):
-        env = DivePlaneVectorEnv(num_envs=16, parallel=parallel, scenario="Randomized")
+    for threads in (1, 3):
+        env = DivePlaneVectorEnv(num_envs=16, threads=threads, scenario="Randomized")
         env.reset(seed=0)
         rng = np.random.default_rng(0)
         trace = [env.step(rng.uniform(-1, 1, size=(16, 1))) for _ in range(60)]
@@ -151,6 +151,7 @@ def test_disabled_autoreset_needs_an_explicit_masked_reset():
         ({"num_envs": 2, "max_episode_steps": 0}, r"max_episode_steps=0 is invalid"),
         ({"num_envs": 2, "autoreset_mode": "Sometimes"}, r"autoreset_mode='Sometimes' is invalid: must be one of"),
         ({"num_envs": 2, "render_mode": "human"}, r"render_mode='human' is invalid"),
+        ({"num_envs": 2, "threads": 0}, r"threads=0 is invalid: must be None or an integer >= 1"),
         ({"num_envs": 2, "scenario": "Fast"}, r"scenario='Fast' is unknown"),  # the single env's checks
     ],
 )

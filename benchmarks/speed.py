@@ -1,0 +1,303 @@
+"""How fast subenv steps, next to Gymnasium's own environments, measured in one run on one machine.
+
+    .venv/bin/python benchmarks/speed.py [--seconds 1.0] [--repeats 3] [--quick]
+
+Prints Markdown tables of ratios against references measured in the same process (absolute
+numbers depend on the machine; the ratios are what to compare):
+
+1. single environment steps/s, raw (``env.unwrapped``) and through ``gym.make``, next to
+   Pendulum-v1 and CartPole-v1;
+2. vector environment env-steps/s at N = 1, 64, 1024, 4096: ``gym.make_vec(id, num_envs=N)``
+   (DivePlaneVectorEnv, on numba's threads from 256 envs, and on one thread), next to
+   ``SyncVectorEnv`` over the single environment and Gymnasium's ``CartPoleVectorEnv``;
+3. integrator cost: simulated seconds per wall second, the envs' compiled RK4 against
+   ``rk4`` over ``derivatives`` and ``scipy.integrate.solve_ivp``;
+4. peak memory at N = 4096 (a fresh process per environment);
+5. numba compile time: the first calls in a fresh process with an empty cache, then with the
+   cache written by that process.
+
+Every rate is the best of ``--repeats`` runs of ``--seconds`` each (machines share their cores);
+actions are uniform random, drawn before timing; resets are included in the time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
+
+import subenv  # noqa: F401  (registers the environments)
+
+SUBENV_IDS = ("subenv/Nominal-v0", "subenv/DivePlane-v0")
+VECTOR_SIZES = (1, 64, 1024, 4096)
+ROOT = Path(__file__).resolve().parents[1]
+
+
+# --- timing ----------------------------------------------------------------------------------
+def best_rate(run: Callable[[int], None], per_call: int, seconds: float, repeats: int) -> float:
+    """Best over ``repeats`` of (env-steps per second) for ``run(k)``, which makes call k, ``per_call`` env-steps."""
+    best = 0.0
+    calls_per_check = max(1, 4096 // per_call)
+    for _ in range(repeats):
+        calls = 0
+        start = time.perf_counter()
+        deadline = start + seconds
+        while True:
+            for _ in range(calls_per_check):
+                run(calls)
+                calls += 1
+            now = time.perf_counter()
+            if now >= deadline:
+                break
+        best = max(best, calls * per_call / (now - start))
+    return best
+
+
+def single_env_rate(env: gym.Env, seconds: float, repeats: int) -> float:  # type: ignore[type-arg]
+    """Steps/s of one environment with random actions; an ended episode is reset (timed)."""
+    env.action_space.seed(0)
+    actions = [env.action_space.sample() for _ in range(4096)]
+    env.reset(seed=0)
+
+    def run(k: int) -> None:
+        _, _, terminated, truncated, _ = env.step(actions[k % 4096])
+        if terminated or truncated:
+            env.reset()
+
+    for k in range(100):  # warm-up (and the first compiled call)
+        run(k)
+    return best_rate(run, 1, seconds, repeats)
+
+
+def vector_env_rate(env: gym.vector.VectorEnv, seconds: float, repeats: int) -> float:  # type: ignore[type-arg]
+    """Env-steps/s of a vector environment with random actions (it autoresets)."""
+    env.action_space.seed(0)
+    actions = [env.action_space.sample() for _ in range(16)]
+    env.reset(seed=0)
+
+    def run(k: int) -> None:
+        env.step(actions[k % 16])
+
+    for k in range(3):
+        run(k)
+    return best_rate(run, env.num_envs, seconds, repeats)
+
+
+# --- the sections ---------------------------------------------------------------------------
+def single_env_table(seconds: float, repeats: int) -> list[str]:
+    rows = []
+    for env_id in ("Pendulum-v1", "CartPole-v1", *SUBENV_IDS):
+        made = gym.make(env_id)
+        raw = single_env_rate(made.unwrapped, seconds, repeats)
+        wrapped = single_env_rate(gym.make(env_id), seconds, repeats)
+        rows.append((env_id, raw, wrapped))
+    ref_raw, ref_made = rows[0][1], rows[0][2]
+    lines = ["| environment | raw steps/s | x Pendulum-v1 raw | gym.make steps/s | x Pendulum-v1 gym.make |",
+             "|---|---:|---:|---:|---:|"]
+    for env_id, raw, wrapped in rows:
+        lines.append(f"| {env_id} | {raw:,.0f} | {raw / ref_raw:.2f} | {wrapped:,.0f} | {wrapped / ref_made:.2f} |")
+    return lines
+
+
+def vector_env_table(seconds: float, repeats: int, sizes: tuple[int, ...]) -> list[str]:
+    lines = ["| environment | N | native env-steps/s | native, 1 thread | SyncVectorEnv | CartPoleVectorEnv "
+             "| native / Sync | native / CartPoleVectorEnv |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|"]
+    for n in sizes:
+        cartpole = vector_env_rate(CartPoleVectorEnv(num_envs=n), seconds, repeats)
+        for env_id in SUBENV_IDS:
+            native = vector_env_rate(gym.make_vec(env_id, num_envs=n), seconds, repeats)
+            serial = vector_env_rate(gym.make_vec(env_id, num_envs=n, threads=1), seconds, repeats)
+            sync_env = gym.make_vec(env_id, num_envs=n, vectorization_mode="sync")
+            sync = vector_env_rate(sync_env, seconds, 1 if n >= 1024 else repeats)
+            sync_env.close()
+            lines.append(f"| {env_id} | {n} | {native:,.0f} | {serial:,.0f} | {sync:,.0f} | {cartpole:,.0f} "
+                         f"| {native / sync:.1f} | {native / cartpole:.2f} |")
+    return lines
+
+
+def integrator_table(seconds: float) -> list[str]:
+    import numba
+    from scipy.integrate import solve_ivp
+
+    from subenv.dynamics import (CONTROL_PERIOD_S, SUBSTEPS, control_period_point, derivatives, model_params,
+                                 pack_params, rk4)
+
+    vehicle = subenv.load_vehicle("suboff")  # C_D = 0.3: hull drag on
+    params = model_params(vehicle)
+    prm, hull = pack_params(params), params.hull.packed
+    speed, plane, x0 = 1.0, 0.05, np.array([0.02, 0.0, 0.0, 10.0])
+    horizon_s = 600.0
+    periods = round(horizon_s / CONTROL_PERIOD_S)
+
+    @numba.njit
+    def compiled(x: np.ndarray, periods: int) -> np.ndarray:
+        a, b, c, d = x[0], x[1], x[2], x[3]
+        for k in range(periods):
+            a, b, c, d = control_period_point(a, b, c, d, k * CONTROL_PERIOD_S, CONTROL_PERIOD_S, SUBSTEPS, speed,
+                                              0.0, plane, 0.0, 0.0, prm, hull)
+        return np.array([a, b, c, d])
+
+    def python_rk4(x: np.ndarray, periods: int) -> np.ndarray:
+        for k in range(periods):
+            x = rk4(lambda t, s: derivatives(s, speed, plane, 0.0, params), k * CONTROL_PERIOD_S, x,
+                    CONTROL_PERIOD_S, SUBSTEPS)
+        return x
+
+    def scipy(rtol: float, atol: float) -> Callable[[np.ndarray, int], np.ndarray]:
+        def run(x: np.ndarray, periods: int) -> np.ndarray:
+            for k in range(periods):  # the planes are held over a control period: one solve per period
+                t = k * CONTROL_PERIOD_S
+                x = solve_ivp(lambda _, s: derivatives(s, speed, plane, 0.0, params), (t, t + CONTROL_PERIOD_S), x,
+                              rtol=rtol, atol=atol).y[:, -1]
+            return x
+        return run
+
+    compiled(x0, 1)
+    rows = []
+    for label, run in [("RK4, compiled (what the environments run)", compiled),
+                       ("RK4, `rk4` over `derivatives` (Python loop)", python_rk4),
+                       ("`solve_ivp` RK45, default tolerances", scipy(1e-3, 1e-6)),
+                       ("`solve_ivp` RK45, rtol 1e-10, atol 1e-12", scipy(1e-10, 1e-12))]:
+        count, start = 0, time.perf_counter()
+        while True:
+            run(x0, periods)
+            count += 1
+            elapsed = time.perf_counter() - start
+            if elapsed >= seconds:
+                break
+        rows.append((label, count * horizon_s / elapsed))
+    lines = ["| integrator (600 s at 1 m/s, dt 0.5 s held planes, hull drag on) | simulated s per wall s "
+             "| x compiled RK4 |", "|---|---:|---:|"]
+    for label, rate in rows:
+        lines.append(f"| {label} | {rate:,.0f} | {rate / rows[0][1]:.2g} |")
+    return lines
+
+
+_MEMORY_PROBE = r"""
+import json, resource, sys, time, tracemalloc
+import numpy as np, gymnasium as gym, subenv
+from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
+kind, n = sys.argv[1], int(sys.argv[2])
+warm = gym.make_vec("subenv/DivePlane-v0", num_envs=2)  # load the compiled kernels before measuring
+warm.reset(seed=0); warm.step(np.zeros((2, 1))); del warm
+base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+tracemalloc.start()
+if kind == "native":
+    env = gym.make_vec("subenv/DivePlane-v0", num_envs=n)
+elif kind == "sync":
+    env = gym.make_vec("subenv/DivePlane-v0", num_envs=n, vectorization_mode="sync")
+else:
+    env = CartPoleVectorEnv(num_envs=n)
+env.reset(seed=0)
+env.action_space.seed(0)
+for _ in range(50):
+    env.step(env.action_space.sample())
+traced = tracemalloc.get_traced_memory()[1]
+peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+print(json.dumps({"traced_peak_bytes": traced, "rss_kib": peak, "rss_growth_kib": peak - base}))
+"""
+
+
+def memory_table(n: int) -> list[str]:
+    lines = [f"| at N = {n}, 50 steps | peak Python/NumPy allocations (tracemalloc) | peak RSS growth | peak RSS |",
+             "|---|---:|---:|---:|"]
+    for kind, label in [("native", "subenv/DivePlane-v0, native"), ("sync", "subenv/DivePlane-v0, SyncVectorEnv"),
+                        ("cartpole", "CartPoleVectorEnv")]:
+        out = subprocess.run([sys.executable, "-c", _MEMORY_PROBE, kind, str(n)], capture_output=True, text=True,
+                             check=True, cwd=ROOT)
+        m = json.loads(out.stdout.strip().splitlines()[-1])
+        lines.append(f"| {label} | {m['traced_peak_bytes'] / 2**20:.1f} MiB | {m['rss_growth_kib'] / 1024:.1f} MiB "
+                     f"| {m['rss_kib'] / 1024:.0f} MiB |")
+    return lines
+
+
+_COMPILE_PROBE = r"""
+import json, time
+t0 = time.perf_counter()
+import numpy as np, gymnasium as gym, subenv
+from subenv.dynamics import derivatives, model_params
+t1 = time.perf_counter()
+env = gym.make("subenv/DivePlane-v0"); env.reset(seed=0); env.step(np.zeros(1, dtype=np.float32))
+t2 = time.perf_counter()
+venv = gym.make_vec("subenv/DivePlane-v0", num_envs=8); venv.reset(seed=0); venv.step(np.zeros((8, 1)))
+t3 = time.perf_counter()
+derivatives(np.zeros(4), 1.0, 0.0, 0.0, model_params(subenv.load_vehicle("suboff")))
+t4 = time.perf_counter()
+print(json.dumps({"import": t1 - t0, "single env": t2 - t1, "vector env": t3 - t2, "derivatives": t4 - t3}))
+"""
+
+
+def compile_table() -> list[str]:
+    with tempfile.TemporaryDirectory() as cache:
+        env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+        runs = []
+        for _ in range(2):  # empty cache, then the cache the first process wrote
+            out = subprocess.run([sys.executable, "-c", _COMPILE_PROBE], capture_output=True, text=True, check=True,
+                                 env=env, cwd=ROOT)
+            runs.append(json.loads(out.stdout.strip().splitlines()[-1]))
+    lines = ["| first call in a fresh process | empty numba cache (compiles) | cached |", "|---|---:|---:|"]
+    labels = {"import": "`import subenv` (compiles nothing)",
+              "single env": "`gym.make` + `reset` + `step` (single env kernels)",
+              "vector env": "`make_vec` + `reset` + `step` (vector env kernels)",
+              "derivatives": "`derivatives` (its generalized ufunc)"}
+    for key, label in labels.items():
+        lines.append(f"| {label} | {runs[0][key]:.2f} s | {runs[1][key]:.2f} s |")
+    total_cold, total_warm = sum(runs[0].values()), sum(runs[1].values())
+    lines.append(f"| total | {total_cold:.2f} s | {total_warm:.2f} s |")
+    return lines
+
+
+def machine() -> str:
+    import numba
+
+    cpu = platform.processor() or "unknown CPU"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return (f"{cpu}, {os.cpu_count()} cores, {numba.get_num_threads()} numba threads; "
+            f"Python {platform.python_version()}, NumPy {np.__version__}, numba {numba.__version__}, "
+            f"Gymnasium {gym.__version__}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--seconds", type=float, default=1.0, help="time per run (default: %(default)s)")
+    parser.add_argument("--repeats", type=int, default=3, help="runs per measurement, best kept (default: %(default)s)")
+    parser.add_argument("--quick", action="store_true", help="0.2 s, one run, N up to 1024, no memory/compile probes")
+    args = parser.parse_args()
+    seconds, repeats = (0.2, 1) if args.quick else (args.seconds, args.repeats)
+    sizes = VECTOR_SIZES[:-1] if args.quick else VECTOR_SIZES
+    print(f"Machine: {machine()}\n")
+    sections = [("Single environment", lambda: single_env_table(seconds, repeats)),
+                ("Vector environment (random actions, autoreset)", lambda: vector_env_table(seconds, repeats, sizes)),
+                ("Integrator cost", lambda: integrator_table(max(seconds, 1.0)))]
+    if not args.quick:
+        sections += [("Peak memory", lambda: memory_table(4096)), ("numba compile time", compile_table)]
+    for title, table in sections:
+        print(f"### {title}\n")
+        print("\n".join(table()))
+        print(flush=True)
+    import numba
+
+    print(f"numba threading layer: {numba.threading_layer()}")
+
+
+if __name__ == "__main__":
+    main()
