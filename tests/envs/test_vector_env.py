@@ -103,16 +103,40 @@ def test_seed_lists_none_and_reset_mask_match_sync_vector_env():
     assert native.reset(options={"speed": 1.0})[1]["speed_mps"].tolist() == [1.0, 1.0, 1.0]
 
 
-def test_threaded_and_serial_stepping_agree():
-    results = []
+@pytest.mark.parametrize("scenario", ["Randomized", "Nominal"])
+def test_threaded_and_serial_stepping_agree(scenario):
+    results, ends = [], 0
     for threads in (1, 3):
-        env = DivePlaneVectorEnv(num_envs=16, threads=threads, scenario="Randomized")
+        env = DivePlaneVectorEnv(num_envs=16, threads=threads, scenario=scenario)
         env.reset(seed=0)
         rng = np.random.default_rng(0)
-        trace = [env.step(rng.uniform(-1, 1, size=(16, 1))) for _ in range(60)]
+        trace = [env.step(rng.uniform(-1, 1, size=(16, 1))) for _ in range(80)]
+        ends = sum(int(np.sum(t[2] | t[3])) for t in trace)
         results.append(trace)
     for a, b in zip(*results):
         assert_same(a, b)
+    if scenario == "Nominal":
+        assert ends > 16  # resets ran beside the threaded steps
+
+
+def _step_threaded_in_child(queue) -> None:  # runs in a forked process
+    env = DivePlaneVectorEnv(num_envs=64, threads=2)
+    env.reset(seed=0)
+    queue.put(env.step(np.zeros((64, 1)))[0].shape)
+
+
+def test_threaded_stepping_survives_fork():
+    import multiprocessing
+
+    env = DivePlaneVectorEnv(num_envs=64, threads=2)
+    env.reset(seed=0)
+    env.step(np.zeros((64, 1)))  # the parent's thread pool is running
+    context = multiprocessing.get_context("fork")
+    queue = context.Queue()
+    child = context.Process(target=_step_threaded_in_child, args=(queue,))
+    child.start()
+    child.join(60)
+    assert child.exitcode == 0 and queue.get(timeout=1) == (64, 8)
 
 
 def test_autoreset_modes_are_declared_and_same_step_keeps_the_final_observation():
