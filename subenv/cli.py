@@ -8,10 +8,12 @@ critical speed, prints a summary and writes a plot.
 from __future__ import annotations
 
 import argparse
+import importlib
 import math
 import os
 import sys
 import tempfile
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -138,6 +140,48 @@ def analyze(args: argparse.Namespace) -> int:
     return 0
 
 
+DEFAULT_PLUGINS = ("baselines", "agents")
+"""Packages imported by ``subenv evaluate`` to register their controllers (the repository's own)."""
+
+
+def _load_plugins(names: Sequence[str], explicit: bool) -> None:
+    """Import controller packages by name; they register themselves with subenv.evaluation."""
+    for name in names:
+        try:
+            importlib.import_module(name)
+        except ModuleNotFoundError as exc:
+            if explicit or exc.name != name:
+                raise SystemExit(f"subenv evaluate: cannot import controller package {name!r}: {exc}") from None
+            print(f"(controller package {name!r} not importable here; run from the repository root with "
+                  "'python -m subenv evaluate')", file=sys.stderr)
+
+
+def evaluate(args: argparse.Namespace) -> int:
+    from subenv.evaluation import DEFAULT_SEED, DEFAULT_SUITE, controller_names, run_comparison, suite_names
+
+    _load_plugins(args.plugins.split(",") if args.plugins else DEFAULT_PLUGINS, explicit=bool(args.plugins))
+    if args.list:
+        print("controllers:", ", ".join(controller_names()) or "(none registered)")
+        print("suites:", ", ".join(suite_names()))
+        return 0
+    if not controller_names():
+        raise SystemExit("subenv evaluate: no controllers are registered (see --plugins)")
+    controllers = args.controllers.split(",") if args.controllers else None
+    suite = args.suite.split(",") if args.suite and "," in args.suite else (args.suite or DEFAULT_SUITE)
+    out = args.out or f"results/evaluation/{time.strftime('%Y%m%d-%H%M%S')}"
+    try:
+        comparison = run_comparison(
+            controllers, suite, args.episodes, out, overwrite=args.force,
+            seed=DEFAULT_SEED if args.seed is None else args.seed,
+            progress=not args.no_progress and sys.stderr.isatty(), plots=not args.no_plots,
+        )
+    except (ValueError, FileExistsError) as exc:
+        raise SystemExit(f"subenv evaluate: {exc}") from None
+    print(comparison.leaderboard)
+    print(f"\n{len(comparison.results)} episodes in {comparison.elapsed_s:.1f} s; results in {comparison.out_dir}/")
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="subenv", description=__doc__.split("\n\n")[0])
     sub = parser.add_subparsers(dest="command")
@@ -155,7 +199,23 @@ def main(argv: Sequence[str] | None = None) -> int:
     p_analyze.add_argument("--out", default="results/analysis", help="report folder (default: %(default)s)")
     p_analyze.add_argument("--vehicle", default="suboff", help="vehicle name or file (default: %(default)s)")
     p_analyze.add_argument("--force", action="store_true", help="replace the folder if it exists")
+    p_eval = sub.add_parser("evaluate", help="compare controllers on a suite of scenarios (the main job)")
+    p_eval.add_argument("--controllers", help="comma-separated controller names (default: all registered)")
+    p_eval.add_argument("--suite", help="suite name or comma-separated scenario names (default: 'default')")
+    p_eval.add_argument("--episodes", type=int, help="episodes per scenario and controller (default: the suite's)")
+    p_eval.add_argument("--seed", type=int, help="base seed; episode i uses seed + i (default: the suite's, 10000)")
+    p_eval.add_argument("--out", help="results folder, must not exist unless --force "
+                                      "(default: results/evaluation/<date-time>)")
+    p_eval.add_argument("--force", action="store_true", help="replace the results folder if it exists")
+    p_eval.add_argument("--no-plots", action="store_true", help="write tables only")
+    p_eval.add_argument("--no-progress", action="store_true",
+                        help="no progress bar (it is shown only when stderr is a terminal)")
+    p_eval.add_argument("--plugins", help=f"comma-separated packages that register controllers "
+                                          f"(default: {','.join(DEFAULT_PLUGINS)})")
+    p_eval.add_argument("--list", action="store_true", help="list the controllers and suites, and exit")
     args = parser.parse_args(argv)
+    if args.command == "evaluate":
+        return evaluate(args)
     if args.command in (None, "demo"):
         if args.command is None:
             args = parser.parse_args(["demo", *(argv or [])])

@@ -43,3 +43,23 @@ def test_analyze_writes_the_report_and_refuses_to_overwrite(tmp_path: Path, caps
     with pytest.raises(SystemExit, match="exists; pass overwrite=True"):
         main(["analyze", "--out", str(out)])
     assert main(["analyze", "--out", str(out), "--force"]) == 0
+
+
+def test_evaluate_end_to_end_on_the_tiny_suite(tmp_path: Path, capsys):
+    out = tmp_path / "eval"
+    assert main(["evaluate", "--suite", "tiny", "--episodes", "1", "--controllers", "thesis,reversal_aware",
+                 "--out", str(out), "--no-progress"]) == 0
+    text = capsys.readouterr().out
+    assert "| controller |" in text and "reversal_aware" in text and "thesis" in text
+    assert (out / "results.csv").is_file() and (out / "leaderboard.md").is_file()
+    with pytest.raises(SystemExit, match="exists"):
+        main(["evaluate", "--suite", "tiny", "--episodes", "1", "--out", str(out), "--no-progress"])
+
+
+def test_evaluate_rejects_unknown_names(tmp_path: Path):
+    with pytest.raises(SystemExit, match=r"controller='pid' is unknown: must be one of \['thesis'"):
+        main(["evaluate", "--controllers", "pid", "--out", str(tmp_path / "x"), "--no-progress"])
+    with pytest.raises(SystemExit, match=r"suite|scenario"):
+        main(["evaluate", "--suite", "Fastest", "--out", str(tmp_path / "y"), "--no-progress"])
+    with pytest.raises(SystemExit, match="cannot import controller package 'nopkg'"):
+        main(["evaluate", "--plugins", "nopkg", "--out", str(tmp_path / "z")])
