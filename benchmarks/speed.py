@@ -32,13 +32,12 @@ import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
 
 import gymnasium as gym
 import numpy as np
 from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
 
-import subenv  # noqa: F401  (registers the environments)
+import subenv  # registers the environments
 
 SUBENV_IDS = ("subenv/Nominal-v0", "subenv/DivePlane-v0")
 VECTOR_SIZES = (1, 64, 1024, 4096)
@@ -112,8 +111,8 @@ def single_env_table(seconds: float, repeats: int) -> list[str]:
 
 
 def vector_env_table(seconds: float, repeats: int, sizes: tuple[int, ...]) -> list[str]:
-    lines = ["| environment | N | native env-steps/s | native, 1 thread | SyncVectorEnv | CartPoleVectorEnv "
-             "| native / Sync | native / CartPoleVectorEnv |",
+    lines = [("| environment | N | native env-steps/s | native, 1 thread | SyncVectorEnv | CartPoleVectorEnv "
+              "| native / Sync | native / CartPoleVectorEnv |"),
              "|---|---:|---:|---:|---:|---:|---:|---:|"]
     for n in sizes:
         cartpole = vector_env_rate(CartPoleVectorEnv(num_envs=n), seconds, repeats)
@@ -132,8 +131,15 @@ def integrator_table(seconds: float) -> list[str]:
     import numba
     from scipy.integrate import solve_ivp
 
-    from subenv.dynamics import (CONTROL_PERIOD_S, SUBSTEPS, control_period_point, derivatives, model_params,
-                                 pack_params, rk4)
+    from subenv.dynamics import (
+        CONTROL_PERIOD_S,
+        SUBSTEPS,
+        control_period_point,
+        derivatives,
+        model_params,
+        pack_params,
+        rk4,
+    )
 
     vehicle = subenv.load_vehicle("suboff")  # C_D = 0.3: hull drag on
     params = model_params(vehicle)
@@ -167,10 +173,13 @@ def integrator_table(seconds: float) -> list[str]:
 
     compiled(x0, 1)
     rows = []
-    for label, run in [("RK4, compiled (what the environments run)", compiled),
-                       ("RK4, `rk4` over `derivatives` (Python loop)", python_rk4),
-                       ("`solve_ivp` RK45, default tolerances", scipy(1e-3, 1e-6)),
-                       ("`solve_ivp` RK45, rtol 1e-10, atol 1e-12", scipy(1e-10, 1e-12))]:
+    integrators: list[tuple[str, Callable[[np.ndarray, int], np.ndarray]]] = [
+        ("RK4, compiled (what the environments run)", compiled),
+        ("RK4, `rk4` over `derivatives` (Python loop)", python_rk4),
+        ("`solve_ivp` RK45, default tolerances", scipy(1e-3, 1e-6)),
+        ("`solve_ivp` RK45, rtol 1e-10, atol 1e-12", scipy(1e-10, 1e-12)),
+    ]
+    for label, run in integrators:
         count, start = 0, time.perf_counter()
         while True:
             run(x0, periods)
@@ -179,8 +188,8 @@ def integrator_table(seconds: float) -> list[str]:
             if elapsed >= seconds:
                 break
         rows.append((label, count * horizon_s / elapsed))
-    lines = ["| integrator (600 s at 1 m/s, dt 0.5 s held planes, hull drag on) | simulated s per wall s "
-             "| x compiled RK4 |", "|---|---:|---:|"]
+    lines = [("| integrator (600 s at 1 m/s, dt 0.5 s held planes, hull drag on) | simulated s per wall s "
+              "| x compiled RK4 |"), "|---|---:|---:|"]
     for label, rate in rows:
         lines.append(f"| {label} | {rate:,.0f} | {rate / rows[0][1]:.2g} |")
     return lines

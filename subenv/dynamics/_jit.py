@@ -18,8 +18,8 @@ functions that the environments call.
 
 from __future__ import annotations
 
-import functools
-from typing import Any, Final
+from collections.abc import Callable
+from typing import Any, Final, TypeVar, cast
 
 import numba
 
@@ -27,12 +27,18 @@ __all__ = ["KERNEL_OPTIONS", "gufunc", "inline_kernel", "kernel"]
 
 KERNEL_OPTIONS: Final[dict[str, Any]] = {"cache": True, "nogil": True, "error_model": "numpy"}
 
-kernel = functools.partial(numba.njit, **KERNEL_OPTIONS)
-"""``numba.njit`` with the package's options, compiled lazily on the first call."""
+FunctionT = TypeVar("FunctionT", bound=Callable[..., Any])
 
-inline_kernel = functools.partial(numba.njit, inline="always", **KERNEL_OPTIONS)
-"""As :data:`kernel`, and inlined into the compiled callers (no call overhead, no reference counting of the
-array arguments): for the small functions called per state."""
+
+def kernel(fn: FunctionT) -> FunctionT:
+    """``numba.njit`` with the package's options, compiled lazily on the first call."""
+    return cast(FunctionT, numba.njit(**KERNEL_OPTIONS)(fn))
+
+
+def inline_kernel(fn: FunctionT) -> FunctionT:
+    """As :func:`kernel`, and inlined into the compiled callers (no call overhead, no reference counting
+    of the array arguments): for the small functions called per state."""
+    return cast(FunctionT, numba.njit(inline="always", **KERNEL_OPTIONS)(fn))
 
 
 def gufunc(fn: Any, signature: str, layout: str) -> Any:

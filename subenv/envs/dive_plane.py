@@ -10,7 +10,6 @@ from typing import Any, Final, Literal, SupportsFloat
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
-
 from numba import typed
 
 from subenv.analysis.critical import critical_speed

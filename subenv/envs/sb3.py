@@ -20,14 +20,19 @@ Needs the ``rl`` extra (``pip install "subenv[rl]"``); ``import subenv`` never i
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
 from gymnasium.vector import AutoresetMode
 
 try:
-    from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices, VecEnvObs, VecEnvStepReturn
+    from stable_baselines3.common.vec_env.base_vec_env import (
+        VecEnv,
+        VecEnvIndices,
+        VecEnvObs,
+        VecEnvStepReturn,
+    )
 except ImportError as error:  # pragma: no cover - depends on the installation
     raise ImportError(
         "subenv.envs.sb3 needs stable-baselines3: install the 'rl' extra, pip install \"subenv[rl]\""
@@ -81,12 +86,12 @@ class SB3VecEnv(VecEnv):
                 mask[indices] = True
                 opts["reset_mask"] = mask
             seed = None if all(s is None for s in seeds) else seeds
-            obs, infos = self.venv.reset(seed=seed, options=opts or None)
+            obs, infos = self.venv.reset(seed=seed, options=opts or None)  # type: ignore[arg-type]
             for i, info in zip(indices, self._split(infos, indices)):
                 self.reset_infos[i] = info
         self._reset_seeds()
         self._reset_options()
-        return obs
+        return cast(VecEnvObs, obs)
 
     def step_async(self, actions: np.ndarray) -> None:
         self._actions = actions
@@ -134,7 +139,7 @@ class SB3VecEnv(VecEnv):
     def get_images(self) -> Sequence[np.ndarray | None]:
         """The frames the vector env renders (the first sub-environment's for subenv)."""
         frames = self.venv.render()
-        return list(frames) if frames is not None else []
+        return list(cast(Sequence[np.ndarray], frames)) if frames is not None else []
 
     # --- helpers --------------------------------------------------------------------------------
     def _split(self, infos: dict[str, Any], indices: Iterable[int]) -> list[dict[str, Any]]:

@@ -31,10 +31,10 @@ __all__ = [
     "N_REPORT",
     "REASONS",
     "REPORT_KEYS",
+    "first_non_finite",
     "observe_batch",
     "observe_env",
     "speed_at_point",
-    "first_non_finite",
     "step_batch",
     "step_env",
 ]
@@ -107,7 +107,7 @@ def speed_at_point(t: float, row: FloatArray) -> float:
     if n == 1:
         return row[KNOT_U]
     # numpy.interp (numpy/_core/src/multiarray/compiled_base.c, arr_interp), operation for operation.
-    if t != t:
+    if math.isnan(t):
         return t
     if t < row[KNOT_T]:
         return row[KNOT_U]
@@ -122,9 +122,9 @@ def speed_at_point(t: float, row: FloatArray) -> float:
     x0, x1, y0, y1 = row[KNOT_T + j], row[KNOT_T + j + 1], row[KNOT_U + j], row[KNOT_U + j + 1]
     slope = (y1 - y0) / (x1 - x0)
     u = slope * (t - x0) + y0
-    if u != u:
+    if math.isnan(u):
         u = slope * (t - x1) + y1
-        if u != u and y0 == y1:
+        if math.isnan(u) and y0 == y1:
             u = y0
     return u
 

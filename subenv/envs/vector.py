@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import itertools
 import os
 import threading
 import time
 from collections.abc import Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
-from typing import Any, Final
+from typing import Any, Final, cast
 
 import numpy as np
 from gymnasium.utils import seeding
@@ -16,7 +17,7 @@ from gymnasium.vector.utils import batch_space
 from numba import typed
 
 from subenv.envs import transition as tr
-from subenv.envs.dive_plane import DivePlaneEnv
+from subenv.envs.dive_plane import OBSERVATION_NAMES, DivePlaneEnv
 from subenv.scenarios.scenario import EpisodeConfig
 from subenv.vehicles.vehicle import Vehicle
 
@@ -138,7 +139,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         self._hull = self.single_env._hull
         self._rows = np.zeros((n, tr.N_COLUMNS))
         self._rows[:, tr.CRITICAL_SPEED] = np.nan
-        self._obs = np.zeros((n, *self.single_observation_space.shape), dtype=np.float32)
+        self._obs = np.zeros((n, len(OBSERVATION_NAMES)), dtype=np.float32)
         self._generators: list[np.random.Generator | None] = [None] * n
         self._seeds: list[int | None] = [None] * n
         self._rngs: Any = None  # numba typed list of the generators, built on the first reset
@@ -169,7 +170,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         elif isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
             seeds = [int(seed) + i for i in range(n)]
         else:
-            seeds = list(seed)
+            seeds = list(cast(Sequence[Any], seed))
             if len(seeds) != n:
                 raise ValueError(f"seed has {len(seeds)} entries: a list of seeds must have num_envs={n} entries")
         options = dict(options or {})
@@ -266,7 +267,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
 
         return (render_rgb(self.single_env._frame(self._rows[0], self._history)),)
 
-    @property
+    @property  # type: ignore[misc]  # a tuple, as SyncVectorEnv.np_random
     def np_random(self) -> tuple[np.random.Generator | None, ...]:  # type: ignore[override]
         """Each sub-environment's generator (None before its first reset), as ``SyncVectorEnv.np_random``."""
         return tuple(self._generators)
@@ -321,7 +322,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         here_s = max((kernel_s + reset_s) / self.threads - reset_s, 0.05 * kernel_s)
         here = min(n - 1, max(1, round(n * here_s / kernel_s))) if kernel_s > 0 else 1
         edges = np.linspace(here, n, self.threads).round().astype(int).tolist()
-        pending = self._submit_rows(actions, active, report, [slice(a, b) for a, b in zip(edges[:-1], edges[1:])])
+        pending = self._submit_rows(actions, active, report, [slice(a, b) for a, b in itertools.pairwise(edges)])
         try:
             self._step_slice(slice(0, here), actions, active, report)
             for _, started in pending:  # (releases the GIL:) the others are in their compiled steps
@@ -350,7 +351,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         return pending
 
     def _check_actions(self, actions: Any) -> np.ndarray:
-        n, shape = self.num_envs, self.single_action_space.shape
+        n, shape = self.num_envs, tuple(self.single_action_space.shape or ())
         a = np.asarray(actions, dtype=np.float64)
         if a.shape != (n, *shape):
             if shape == (1,) and a.shape == (n,):

@@ -8,22 +8,22 @@ import pytest
 
 pytest.importorskip("stable_baselines3")
 
-from stable_baselines3 import PPO, SAC  # noqa: E402
-from stable_baselines3.common.evaluation import evaluate_policy  # noqa: E402
-from stable_baselines3.common.vec_env import DummyVecEnv, VecMonitor  # noqa: E402
+from stable_baselines3 import PPO, SAC
+from stable_baselines3.common.evaluation import evaluate_policy
+from stable_baselines3.common.vec_env import DummyVecEnv, VecMonitor
 
-from subenv.envs.sb3 import SB3VecEnv, make_sb3_vec_env  # noqa: E402
+from subenv.envs.sb3 import SB3VecEnv, make_sb3_vec_env
 
 
 def _same_info(a: dict, b: dict) -> None:
     assert a.keys() == b.keys(), a.keys() ^ b.keys()
-    for key in b:
-        if isinstance(b[key], np.ndarray):
-            np.testing.assert_allclose(a[key], b[key], rtol=1e-12, atol=1e-12)
-        elif isinstance(b[key], float):
-            assert a[key] == pytest.approx(b[key], rel=1e-12, abs=1e-12, nan_ok=True), key
+    for key, expected in b.items():
+        if isinstance(expected, np.ndarray):
+            np.testing.assert_allclose(a[key], expected, rtol=1e-12, atol=1e-12)
+        elif isinstance(expected, float):
+            assert a[key] == pytest.approx(expected, rel=1e-12, abs=1e-12, nan_ok=True), key
         else:
-            assert a[key] == b[key], key
+            assert a[key] == expected, key
 
 
 @pytest.mark.parametrize(("env_id", "kwargs"), [("subenv/Nominal-v0", {}),
