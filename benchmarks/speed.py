@@ -8,7 +8,7 @@ numbers depend on the machine; the ratios are what to compare):
 1. single environment steps/s, raw (``env.unwrapped``) and through ``gym.make``, next to
    Pendulum-v1 and CartPole-v1;
 2. vector environment env-steps/s at N = 1, 64, 1024, 4096: ``gym.make_vec(id, num_envs=N)``
-   (DivePlaneVectorEnv, on numba's threads from 256 envs, and on one thread), next to
+   (DivePlaneVectorEnv, on one thread per 512 envs up to the cores, and on one thread), next to
    ``SyncVectorEnv`` over the single environment and Gymnasium's ``CartPoleVectorEnv``;
 3. integrator cost: simulated seconds per wall second, the envs' compiled RK4 against
    ``rk4`` over ``derivatives`` and ``scipy.integrate.solve_ivp``;
@@ -269,6 +269,36 @@ def compile_table() -> list[str]:
     return lines
 
 
+def free_cores_probe() -> str:
+    """How many cores this process really gets: a compiled loop on 1 thread, then on 2 (another
+    process using a core shows as a speedup near 1)."""
+    import threading
+
+    import numba
+
+    @numba.njit(nogil=True)
+    def spin(n: int) -> float:
+        total = 0.0
+        for i in range(n):
+            total += np.sin(i * 1e-6)
+        return total
+
+    spin(10)
+    n = 20_000_000
+    start = time.perf_counter()
+    spin(n)
+    one = time.perf_counter() - start
+    threads = [threading.Thread(target=spin, args=(n,)) for _ in range(2)]
+    start = time.perf_counter()
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    two = time.perf_counter() - start
+    load = ", ".join(f"{x:.2f}" for x in os.getloadavg())
+    return f"two-thread speedup of a compute probe {2 * one / two:.2f}x; load average {load}"
+
+
 def machine() -> str:
     import numba
 
@@ -280,7 +310,7 @@ def machine() -> str:
                 break
     except OSError:
         pass
-    return (f"{cpu}, {os.cpu_count()} cores, {numba.get_num_threads()} numba threads; "
+    return (f"{cpu}, {os.cpu_count()} cores; "
             f"Python {platform.python_version()}, NumPy {np.__version__}, numba {numba.__version__}, "
             f"Gymnasium {gym.__version__}")
 
@@ -293,7 +323,8 @@ def main() -> None:
     args = parser.parse_args()
     seconds, repeats = (0.2, 1) if args.quick else (args.seconds, args.repeats)
     sizes = VECTOR_SIZES[:-1] if args.quick else VECTOR_SIZES
-    print(f"Machine: {machine()}\n")
+    print(f"Machine: {machine()}")
+    print(f"Before: {free_cores_probe()}\n")
     sections = [("Single environment", lambda: single_env_table(seconds, repeats)),
                 ("Vector environment (random actions, autoreset)", lambda: vector_env_table(seconds, repeats, sizes)),
                 ("Integrator cost", lambda: integrator_table(max(seconds, 1.0)))]
@@ -303,9 +334,7 @@ def main() -> None:
         print(f"### {title}\n")
         print("\n".join(table()))
         print(flush=True)
-    import numba
-
-    print(f"numba threading layer: {numba.threading_layer()}")
+    print(f"After: {free_cores_probe()}")
 
 
 if __name__ == "__main__":

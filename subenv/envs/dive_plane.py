@@ -260,7 +260,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         self._rows[0, tr.CRITICAL_SPEED] = math.nan
         self._row = self._rows[0]
         self._obs_rows = np.zeros((1, len(OBSERVATION_NAMES)), dtype=np.float32)
-        self._report = np.zeros((tr.N_REPORT, 1))  # (unused here: the info is built from the row)
+        self._report = np.zeros((1, tr.N_REPORT))  # (unused here: the info is built from the row)
         self._active = np.ones(1, dtype=bool)
         self._last_obs = self._obs_rows[0]
         self._rngs: Any = None  # numba typed list holding self.np_random, for the transition
@@ -273,7 +273,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
         super().reset(seed=seed)
-        self.vehicle, self.episode = self._begin_episode(self._row, self.np_random, options)
+        self.vehicle, self.episode, self._row[:] = self._draw_episode(self.np_random, options)
         tr.observe_batch(self._rows, _FIRST, self._obs_rows, self._bound_rngs(), self._cfg, self._report)
         self._history = [(0.0, self._row[tr.DEPTH], self._row[tr.COMMAND])]
         if self.render_mode == "human":
@@ -421,14 +421,18 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
             )
         return found
 
-    def _begin_episode(
-        self, row: np.ndarray, rng: np.random.Generator, options: dict[str, Any] | None
-    ) -> tuple[Vehicle, EpisodeConfig]:
-        """Draw an episode from ``rng`` (and ``options``) into the transition ``row``; the observation is not drawn."""
+    def _draw_episode(
+        self, rng: np.random.Generator, options: dict[str, Any] | None
+    ) -> tuple[Vehicle, EpisodeConfig, list[float]]:
+        """Draw an episode from ``rng`` (and ``options``): its vehicle, its draw and its transition row
+        (``subenv.envs.transition`` columns); the observation is not drawn yet."""
         options = options or {}
-        unknown = set(options) - set(_OPTIONS)
-        if unknown:
-            raise ValueError(f"reset options {sorted(unknown)} are unknown: allowed options are {list(_OPTIONS)}")
+        if options:
+            unknown = set(options) - set(_OPTIONS)
+            if unknown:
+                raise ValueError(
+                    f"reset options {sorted(unknown)} are unknown: allowed options are {list(_OPTIONS)}"
+                )
         config = self.scenario.sample(rng, self.base_vehicle.weight_N)
         vehicle, params, ucr, froude_scale = self._loading(config)
         if config.speed_relative and not math.isfinite(ucr):
@@ -465,7 +469,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
             float(rng.normal(0.0, config.disturbance_std_N)) if config.disturbance_std_N > 0 else 0.0
         )
 
-        values = [0.0] * tr.N_COLUMNS  # one assignment to the row: per-element ones cost more than the rest
+        values = [0.0] * tr.N_COLUMNS
         values[tr.PITCH:tr.DEPTH + 1] = state
         values[tr.PARAMS:tr.STERN] = params
         values[tr.N_KNOTS] = len(knots)
@@ -479,8 +483,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         values[tr.DURATION] = config.duration_s
         values[tr.CRITICAL_SPEED] = ucr
         values[tr.SQRT_G_ZGB] = froude_scale
-        row[:] = values
-        return vehicle, config
+        return vehicle, config, values
 
     def _frame(self, row: np.ndarray, history: Sequence[tuple[float, float, float]]) -> Any:
         """The rendering :class:`~subenv.envs.rendering.Frame` of a transition row."""

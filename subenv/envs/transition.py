@@ -72,8 +72,9 @@ REASONS: Final = ("", "diverged", "pitch_limit", "broached", "left_depth_band")
 """``info["termination_reason"]`` for each value of the ``REASON`` column."""
 _DIVERGED, _PITCH_LIMIT, _BROACHED, _LEFT_DEPTH_BAND = 1, 2, 3, 4
 
-# --- rows of a step's report: the single env's info (subenv.envs.dive_plane._info), key by key,
-# then the step's outcome. The vector env hands each row out as an array over the sub-environments.
+# --- columns of a step's report, one row per sub-environment: the single env's info
+# (subenv.envs.dive_plane._info), key by key, then the step's outcome. The vector env hands each
+# column out as an array over the sub-environments.
 REPORT_KEYS: Final = ("time_s", "depth_m", "depth_command_m", "depth_error_m", "pitch_rad", "heave_mps",
                       "pitch_rate_radps", "stern_plane_rad", "bow_plane_rad", "speed_mps", "froude_number",
                       "critical_speed_mps", "critical_froude", "disturbance_N", "reward_depth", "reward_pitch",
@@ -238,31 +239,32 @@ def step_env(row: FloatArray, action: FloatArray, obs: np.ndarray, rngs: numba.t
 
 @inline_kernel
 def report_env(row: FloatArray, report: FloatArray, j: int) -> None:
-    """Write column ``j`` of a step's report (rows ``R_*``) from a row, as the single env's info computes it."""
+    """Write row ``j`` of a step's report (columns ``R_*``) from a transition row, as the single env's
+    info computes it. (Row-major: one env's report is contiguous, which the threads write fastest.)"""
     depth, command, speed = row[DEPTH], row[COMMAND], row[SPEED]
     froude_scale, ucr = row[SQRT_G_ZGB], row[CRITICAL_SPEED]  # nan when z_GB <= 0 (then no Froude numbers)
-    report[R_TIME, j] = row[TIME]
-    report[R_DEPTH, j] = depth
-    report[R_COMMAND, j] = command
-    report[R_DEPTH_ERROR, j] = depth - command
-    report[R_PITCH, j] = row[PITCH]
-    report[R_HEAVE, j] = row[HEAVE]
-    report[R_PITCH_RATE, j] = row[PITCH_RATE]
-    report[R_STERN, j] = row[STERN]
-    report[R_BOW, j] = row[BOW]
-    report[R_SPEED, j] = speed
-    report[R_FROUDE, j] = speed / froude_scale
-    report[R_CRITICAL_SPEED, j] = ucr
-    report[R_CRITICAL_FROUDE, j] = ucr / froude_scale
-    report[R_DISTURBANCE, j] = row[DISTURBANCE]
-    report[R_REWARD_DEPTH, j] = row[REWARD_DEPTH]
-    report[R_REWARD_PITCH, j] = row[REWARD_PITCH]
-    report[R_REWARD_EFFORT, j] = row[REWARD_EFFORT]
-    report[R_REWARD_TERMINATION, j] = row[REWARD_TERMINATION]
-    report[R_REASON, j] = row[REASON]
-    report[R_REWARD, j] = row[REWARD]
-    report[R_TERMINATED, j] = row[TERMINATED]
-    report[R_TRUNCATED, j] = row[TRUNCATED]
+    report[j, R_TIME] = row[TIME]
+    report[j, R_DEPTH] = depth
+    report[j, R_COMMAND] = command
+    report[j, R_DEPTH_ERROR] = depth - command
+    report[j, R_PITCH] = row[PITCH]
+    report[j, R_HEAVE] = row[HEAVE]
+    report[j, R_PITCH_RATE] = row[PITCH_RATE]
+    report[j, R_STERN] = row[STERN]
+    report[j, R_BOW] = row[BOW]
+    report[j, R_SPEED] = speed
+    report[j, R_FROUDE] = speed / froude_scale
+    report[j, R_CRITICAL_SPEED] = ucr
+    report[j, R_CRITICAL_FROUDE] = ucr / froude_scale
+    report[j, R_DISTURBANCE] = row[DISTURBANCE]
+    report[j, R_REWARD_DEPTH] = row[REWARD_DEPTH]
+    report[j, R_REWARD_PITCH] = row[REWARD_PITCH]
+    report[j, R_REWARD_EFFORT] = row[REWARD_EFFORT]
+    report[j, R_REWARD_TERMINATION] = row[REWARD_TERMINATION]
+    report[j, R_REASON] = row[REASON]
+    report[j, R_REWARD] = row[REWARD]
+    report[j, R_TERMINATED] = row[TERMINATED]
+    report[j, R_TRUNCATED] = row[TRUNCATED]
 
 
 @inline_kernel

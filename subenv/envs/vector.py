@@ -25,7 +25,7 @@ __all__ = ["DivePlaneVectorEnv"]
 
 _REASONS: Final = np.array(tr.REASONS, dtype=object)
 _INFO_KEYS: Final = (*tr.REPORT_KEYS[: tr.R_REASON], "termination_reason")
-"""The single environment's info keys (subenv.envs.dive_plane._info), as the report's rows."""
+"""The single environment's info keys (subenv.envs.dive_plane._info), as the report's columns."""
 _MASK_KEYS: Final = tuple("_" + key for key in _INFO_KEYS)
 _AUTORESET_MODES: Final = (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP, AutoresetMode.DISABLED)
 ENVS_PER_THREAD: Final = 512
@@ -189,11 +189,11 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
                     self._rngs[i] = self._generators[i]
         if self._rngs is None:
             self._rngs = typed.List(self._generators)
-        report = np.zeros((tr.N_REPORT, n))
+        report = np.zeros((n, tr.N_REPORT))
         self._reset_envs(indices, options, report)
         self._done[indices] = False
         self._any_done = bool(self._done.any())
-        return self._obs.copy(), self._infos(report, None if mask is self._everyone else mask)
+        return self._obs.copy(), self._infos(report.T.copy(), None if mask is self._everyone else mask)
 
     def step(
         self, actions: np.ndarray
@@ -219,7 +219,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
             raise ValueError(
                 f"actions[{bad}]={actions[bad].tolist()!r} is invalid: must be finite (no NaN or inf)"
             )
-        report = np.empty((tr.N_REPORT, self.num_envs))
+        report = np.empty((self.num_envs, tr.N_REPORT))
         if resetting is None:
             self._step_rows(actions, active, report)
         elif self.threads == 1:
@@ -230,25 +230,25 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         if self.render_mode is not None and active[0]:
             row = self._rows[0]
             self._history.append((row[tr.TIME], row[tr.DEPTH], row[tr.COMMAND]))
-        rewards = report[tr.R_REWARD]
-        terminated = report[tr.R_TERMINATED] > 0.0
-        truncated = report[tr.R_TRUNCATED] > 0.0
+        columns = report.T.copy()  # one array per key
+        rewards = columns[tr.R_REWARD]
+        terminated = columns[tr.R_TERMINATED] > 0.0
+        truncated = columns[tr.R_TRUNCATED] > 0.0
         done = terminated | truncated
         self._any_done = bool(done.any())
         self._done = done
         if mode is not AutoresetMode.SAME_STEP or not self._any_done:
-            return self._obs.copy(), rewards, terminated, truncated, self._infos(report, None)
-        rewards = rewards.copy()  # the report's columns of the ended envs now take their reset
+            return self._obs.copy(), rewards, terminated, truncated, self._infos(columns, None)
         final_obs = np.full(self.num_envs, None, dtype=object)
         ended = np.flatnonzero(done)
         for i in ended:
             final_obs[i] = self._obs[i].copy()
-        final = {"final_obs": final_obs, "_final_obs": done.copy(), "final_info": self._infos(report.copy(), done),
+        final = {"final_obs": final_obs, "_final_obs": done.copy(), "final_info": self._infos(columns.copy(), done),
                  "_final_info": done.copy()}
         self._reset_envs(ended, {}, report)
         self._done = np.zeros(self.num_envs, dtype=bool)
         self._any_done = False
-        infos = self._infos(report, None)
+        infos = self._infos(report.T.copy(), None)
         infos.update(final)
         return self._obs.copy(), rewards, terminated, truncated, infos
 
@@ -314,7 +314,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         Resets run in Python and hold the GIL; the compiled steps release it. So this thread first
         steps a slice of rows (which lets the pool's threads start theirs), then draws the new
         episodes while they run. The slice is sized from the measured costs so that all threads
-        finish together. The threads touch different rows, generators and report columns.
+        finish together. The threads touch different rows, generators and report rows.
         """
         n, n_reset = self.num_envs, len(resetting)
         kernel_s = self._kernel_s_per_env * (n - n_reset)
@@ -331,15 +331,15 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
             self._reset_envs(resetting, {}, report)
             self._reset_s_per_env += 0.1 * ((time.perf_counter() - start) / n_reset - self._reset_s_per_env)
         finally:
-            for future, _ in pending:
-                future.result()
+            per_row = [future.result() for future, _ in pending]
+        self._kernel_s_per_env += 0.1 * (sum(per_row) / len(per_row) - self._kernel_s_per_env)
 
     def _step_slice(self, s: slice, actions: np.ndarray, active: np.ndarray, report: np.ndarray) -> None:
         tr.step_batch(self._rows[s], actions[s], active[s], self._obs[s], self._rngs, s.start, self._cfg,
                       self._hull, report)
 
     def _submit_rows(self, actions: np.ndarray, active: np.ndarray, report: np.ndarray,
-                     slices: Sequence[slice]) -> list[tuple[Future[None], threading.Event]]:
+                     slices: Sequence[slice]) -> list[tuple[Future[float], threading.Event]]:
         """Step ``slices`` on the pool; each comes with an event set just before its compiled step."""
         pool = _thread_pool(self.threads)
         pending = []
@@ -364,22 +364,25 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         return np.ascontiguousarray(a)
 
     def _reset_envs(self, indices: Sequence[int] | np.ndarray, options: dict[str, Any], report: np.ndarray) -> None:
-        """Draw new episodes for ``indices`` (and write their columns of ``report``)."""
-        begin = self.single_env._begin_episode
+        """Draw new episodes for ``indices`` (and write their rows of ``report``)."""
+        draw = self.single_env._draw_episode
         rows, generators, vehicles, episodes = self._rows, self._generators, self.vehicles, self.episodes
         index = np.asarray(indices, dtype=np.intp)
+        values = []
         for i in index.tolist():
-            vehicles[i], episodes[i] = begin(rows[i], generators[i], options)  # type: ignore[arg-type]
+            vehicles[i], episodes[i], row = draw(generators[i], options)  # type: ignore[arg-type]
+            values.append(row)
+        rows[index] = values
         tr.observe_batch(rows, index, self._obs, self._rngs, self._cfg, report)
         self._started[index] = True
         if self.render_mode is not None and 0 in index:
             self._history = [(0.0, rows[0, tr.DEPTH], rows[0, tr.COMMAND])]
 
-    def _infos(self, report: np.ndarray, mask: np.ndarray | None) -> dict[str, Any]:
-        """Gymnasium's vector ``info`` from a step's report (whose rows it hands out);
+    def _infos(self, columns: np.ndarray, mask: np.ndarray | None) -> dict[str, Any]:
+        """Gymnasium's vector ``info`` from a step's report, transposed (whose rows it hands out);
         with ``mask``, only those sub-environments report, as in ``SyncVectorEnv``."""
-        values = list(report[: tr.R_REASON])
-        values.append(_REASONS.take(report[tr.R_REASON].astype(np.intp)))
+        values = list(columns[: tr.R_REASON])
+        values.append(_REASONS.take(columns[tr.R_REASON].astype(np.intp)))
         if mask is None:
             masks = np.ones((len(_INFO_KEYS), self.num_envs), dtype=bool)
         else:  # SyncVectorEnv leaves the others at zero (None for strings)
@@ -393,9 +396,12 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         return infos
 
 
-def _step_batch_after(started: threading.Event, args: tuple[Any, ...]) -> None:
+def _step_batch_after(started: threading.Event, args: tuple[Any, ...]) -> float:
+    """Step a slice (``tr.step_batch(*args)``) on a pool thread; the seconds per row it took."""
     started.set()
+    start = time.perf_counter()
     tr.step_batch(*args)
+    return (time.perf_counter() - start) / max(1, len(args[0]))
 
 
 def _available_cores() -> int:
