@@ -54,6 +54,15 @@ class DepthIntegrator:
             self.value = float(np.clip(self.value + error * self.dt_s, -self.limit, self.limit))
 
 
+def lqi_command(gain: np.ndarray, observation: np.ndarray, integrator: DepthIntegrator, limit_rad: float) -> float:
+    """The saturated plane command -K (theta, w, q, e, int e), advancing the integrator (anti-windup)."""
+    x = feedback_state(observation, DEPTH_ERROR_LIMIT_M)
+    raw = -float(gain[:4] @ x + gain[4] * integrator.value)
+    delta = float(np.clip(raw, -limit_rad, limit_rad))
+    integrator.update(float(x[3]), float(gain[4]), saturated=delta != raw)
+    return delta
+
+
 class ScheduledLQR:
     """LQR with integral action on the stern planes (dual control, alpha = 0), scheduled over speed.
 
@@ -86,9 +95,5 @@ class ScheduledLQR:
     def act(self, observation: np.ndarray) -> np.ndarray:
         if self.schedule is None:
             raise RuntimeError("call reset() first")
-        gain = self.schedule.at(float(observation[SPEED]))
-        x = feedback_state(observation, DEPTH_ERROR_LIMIT_M)
-        raw = -float(gain[:4] @ x + gain[4] * self.integrator.value)
-        delta = float(np.clip(raw, -self._limit, self._limit))
-        self.integrator.update(float(x[3]), float(gain[4]), saturated=delta != raw)
+        delta = lqi_command(self.schedule.at(float(observation[SPEED])), observation, self.integrator, self._limit)
         return np.array([delta / self._limit], dtype=np.float32)

@@ -8,8 +8,8 @@ from typing import Any, Final
 import numpy as np
 from scipy.optimize import brentq
 
-from baselines._common import SPEED, GainSchedule, feedback_state
-from baselines.lqr import ACCEPTABLE, DEFAULT_POINTS, DEPTH_ERROR_LIMIT_M, DepthIntegrator, lqi_gain
+from baselines._common import SPEED, GainSchedule
+from baselines.lqr import ACCEPTABLE, DEFAULT_POINTS, DepthIntegrator, lqi_command, lqi_gain
 from subenv.analysis import critical_speed
 from subenv.dynamics import CONTROL_PERIOD_S
 from subenv.vehicles import Vehicle
@@ -106,8 +106,5 @@ class ReversalAware:
             if gain[4] != 0:
                 self.integrator.value *= old / gain[4]  # bumpless: keep the integral's command
             self.allocation = allocation
-        x = feedback_state(observation, DEPTH_ERROR_LIMIT_M)
-        raw = -float(gain[:4] @ x + gain[4] * self.integrator.value)
-        delta = float(np.clip(raw, -self._limit, self._limit))
-        self.integrator.update(float(x[3]), float(gain[4]), saturated=delta != raw)
+        delta = lqi_command(gain, observation, self.integrator, self._limit)
         return np.array([delta, allocation * delta], dtype=np.float32) / np.float32(self._limit)
