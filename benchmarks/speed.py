@@ -16,13 +16,16 @@ numbers depend on the machine; the ratios are what to compare):
 5. numba compile time: the first calls in a fresh process with an empty cache, then with the
    cache written by that process.
 
-Every rate is the best of ``--repeats`` runs of ``--seconds`` each (machines share their cores);
-actions are uniform random, drawn before timing; resets are included in the time.
+Every rate is the best of ``--repeats`` runs of ``--seconds`` each, taken in turns across the
+environments of a table (machines share their cores; the two-thread probe printed before and
+after tells whether both cores were free); actions are uniform random, drawn before timing;
+resets are included in the time.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import os
 import platform
@@ -95,18 +98,30 @@ def vector_env_rate(env: gym.vector.VectorEnv, seconds: float, repeats: int) -> 
 
 
 # --- the sections ---------------------------------------------------------------------------
+def round_robin(cells: dict[str, Callable[[], float]], repeats: int) -> dict[str, float]:
+    """Best of ``repeats`` runs of every cell, the runs taken in turns across the cells, so that a
+    burst of load from another process costs one run of several cells, not every run of one."""
+    best = dict.fromkeys(cells, 0.0)
+    for _ in range(repeats):
+        for key, measure in cells.items():
+            best[key] = max(best[key], measure())
+    return best
+
+
 def single_env_table(seconds: float, repeats: int) -> list[str]:
-    rows = []
-    for env_id in ("Pendulum-v1", "CartPole-v1", *SUBENV_IDS):
-        made = gym.make(env_id)
-        raw = single_env_rate(made.unwrapped, seconds, repeats)
-        wrapped = single_env_rate(gym.make(env_id), seconds, repeats)
-        rows.append((env_id, raw, wrapped))
-    ref_raw, ref_made = rows[0][1], rows[0][2]
+    ids = ("Pendulum-v1", "CartPole-v1", *SUBENV_IDS)
+    cells: dict[str, Callable[[], float]] = {}
+    for env_id in ids:
+        for kind, env in (("raw", gym.make(env_id).unwrapped), ("make", gym.make(env_id))):
+            cells[f"{env_id} {kind}"] = functools.partial(single_env_rate, env, seconds, 1)
+    best = round_robin(cells, repeats)
+    ref_raw, ref_made = best["Pendulum-v1 raw"], best["Pendulum-v1 make"]
     lines = ["| environment | raw steps/s | x Pendulum-v1 raw | gym.make steps/s | x Pendulum-v1 gym.make |",
              "|---|---:|---:|---:|---:|"]
-    for env_id, raw, wrapped in rows:
-        lines.append(f"| {env_id} | {raw:,.0f} | {raw / ref_raw:.2f} | {wrapped:,.0f} | {wrapped / ref_made:.2f} |")
+    for env_id in ids:
+        raw_rate, made_rate = best[f"{env_id} raw"], best[f"{env_id} make"]
+        lines.append(f"| {env_id} | {raw_rate:,.0f} | {raw_rate / ref_raw:.2f} | {made_rate:,.0f} "
+                     f"| {made_rate / ref_made:.2f} |")
     return lines
 
 
@@ -115,13 +130,18 @@ def vector_env_table(seconds: float, repeats: int, sizes: tuple[int, ...]) -> li
               "| native / Sync | native / CartPoleVectorEnv |"),
              "|---|---:|---:|---:|---:|---:|---:|---:|"]
     for n in sizes:
-        cartpole = vector_env_rate(CartPoleVectorEnv(num_envs=n), seconds, repeats)
+        envs: dict[str, gym.vector.VectorEnv] = {"cartpole": CartPoleVectorEnv(num_envs=n)}  # type: ignore[type-arg]
         for env_id in SUBENV_IDS:
-            native = vector_env_rate(gym.make_vec(env_id, num_envs=n), seconds, repeats)
-            serial = vector_env_rate(gym.make_vec(env_id, num_envs=n, threads=1), seconds, repeats)
-            sync_env = gym.make_vec(env_id, num_envs=n, vectorization_mode="sync")
-            sync = vector_env_rate(sync_env, seconds, 1 if n >= 1024 else repeats)
-            sync_env.close()
+            envs[f"{env_id} native"] = gym.make_vec(env_id, num_envs=n)
+            envs[f"{env_id} serial"] = gym.make_vec(env_id, num_envs=n, threads=1)
+            envs[f"{env_id} sync"] = gym.make_vec(env_id, num_envs=n, vectorization_mode="sync")
+        best = round_robin({key: functools.partial(vector_env_rate, env, seconds, 1) for key, env in envs.items()},
+                           repeats)
+        for env in envs.values():
+            env.close()
+        cartpole = best["cartpole"]
+        for env_id in SUBENV_IDS:
+            native, serial, sync = (best[f"{env_id} {kind}"] for kind in ("native", "serial", "sync"))
             lines.append(f"| {env_id} | {n} | {native:,.0f} | {serial:,.0f} | {sync:,.0f} | {cartpole:,.0f} "
                          f"| {native / sync:.1f} | {native / cartpole:.2f} |")
     return lines
@@ -196,14 +216,17 @@ def integrator_table(seconds: float) -> list[str]:
 
 
 _MEMORY_PROBE = r"""
-import json, resource, sys, time, tracemalloc
+import json, os, resource, sys, time, tracemalloc
 import numpy as np, gymnasium as gym, subenv
 from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
-kind, n = sys.argv[1], int(sys.argv[2])
+kind, n, traced = sys.argv[1], int(sys.argv[2]), sys.argv[3] == "traced"
 warm = gym.make_vec("subenv/DivePlane-v0", num_envs=2)  # load the compiled kernels before measuring
 warm.reset(seed=0); warm.step(np.zeros((2, 1))); del warm
-base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-tracemalloc.start()
+def rss_kib():
+    return int(open("/proc/self/statm").read().split()[1]) * os.sysconf("SC_PAGE_SIZE") // 1024
+base = rss_kib()
+if traced:  # (tracing costs memory of its own: the resident size is measured in another run)
+    tracemalloc.start()
 if kind == "native":
     env = gym.make_vec("subenv/DivePlane-v0", num_envs=n)
 elif kind == "sync":
@@ -214,22 +237,25 @@ env.reset(seed=0)
 env.action_space.seed(0)
 for _ in range(50):
     env.step(env.action_space.sample())
-traced = tracemalloc.get_traced_memory()[1]
-peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-print(json.dumps({"traced_peak_bytes": traced, "rss_kib": peak, "rss_growth_kib": peak - base}))
+print(json.dumps({"traced_peak_bytes": tracemalloc.get_traced_memory()[1] if traced else None,
+                  "rss_growth_kib": rss_kib() - base,
+                  "peak_rss_kib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss}))
 """
 
 
 def memory_table(n: int) -> list[str]:
-    lines = [f"| at N = {n}, 50 steps | peak Python/NumPy allocations (tracemalloc) | peak RSS growth | peak RSS |",
-             "|---|---:|---:|---:|"]
+    lines = [(f"| at N = {n}: make, reset, 50 steps | peak allocations (tracemalloc) | resident memory added "
+              "| peak RSS of the process |"), "|---|---:|---:|---:|"]
     for kind, label in [("native", "subenv/DivePlane-v0, native"), ("sync", "subenv/DivePlane-v0, SyncVectorEnv"),
                         ("cartpole", "CartPoleVectorEnv")]:
-        out = subprocess.run([sys.executable, "-c", _MEMORY_PROBE, kind, str(n)], capture_output=True, text=True,
-                             check=True, cwd=ROOT)
-        m = json.loads(out.stdout.strip().splitlines()[-1])
-        lines.append(f"| {label} | {m['traced_peak_bytes'] / 2**20:.1f} MiB | {m['rss_growth_kib'] / 1024:.1f} MiB "
-                     f"| {m['rss_kib'] / 1024:.0f} MiB |")
+        m = {}
+        for mode in ("traced", "resident"):
+            out = subprocess.run([sys.executable, "-c", _MEMORY_PROBE, kind, str(n), mode], capture_output=True,
+                                 text=True, check=True, cwd=ROOT)
+            m[mode] = json.loads(out.stdout.strip().splitlines()[-1])
+        lines.append(f"| {label} | {m['traced']['traced_peak_bytes'] / 2**20:.1f} MiB "
+                     f"| {m['resident']['rss_growth_kib'] / 1024:.1f} MiB "
+                     f"| {m['resident']['peak_rss_kib'] / 1024:.0f} MiB |")
     return lines
 
 
