@@ -389,10 +389,8 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
             for value in values:
                 value[~mask] = None if value.dtype == object else 0.0
             masks = np.tile(mask, (len(_INFO_KEYS), 1))
-        infos: dict[str, Any] = {}
-        for key, mask_key, value, key_mask in zip(_INFO_KEYS, _MASK_KEYS, values, masks):
-            infos[key] = value
-            infos[mask_key] = key_mask
+        infos: dict[str, Any] = dict(zip(_INFO_KEYS, values))
+        infos.update(zip(_MASK_KEYS, masks))
         return infos
 
 
