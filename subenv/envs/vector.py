@@ -214,19 +214,18 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
                 )
             resetting = np.flatnonzero(self._done)  # NEXT_STEP: these reset instead of stepping
             active = ~self._done
-        bad = tr.first_non_finite(actions, active)
-        if bad >= 0:
-            raise ValueError(
-                f"actions[{bad}]={actions[bad].tolist()!r} is invalid: must be finite (no NaN or inf)"
-            )
         report = np.empty((self.num_envs, tr.N_REPORT))
-        if resetting is None:
-            self._step_rows(actions, active, report)
-        elif self.threads == 1:
-            self._step_rows(actions, active, report)
-            self._reset_envs(resetting, {}, report)  # reported as reward 0, not terminated, not truncated
+        if self.threads == 1:  # (step_batch checks the actions before it steps anything)
+            _check_finite(tr.step_batch(self._rows, actions, active, self._obs, self._rngs, 0, self._cfg, self._hull,
+                                        report), actions)
+            if resetting is not None:
+                self._reset_envs(resetting, {}, report)  # reported as reward 0, not terminated, not truncated
         else:
-            self._step_rows_while_resetting(actions, active, report, resetting)
+            _check_finite(tr.first_non_finite(actions, active), actions)
+            if resetting is None:
+                self._step_rows(actions, active, report)
+            else:
+                self._step_rows_while_resetting(actions, active, report, resetting)
         if self.render_mode is not None and active[0]:
             row = self._rows[0]
             self._history.append((row[tr.TIME], row[tr.DEPTH], row[tr.COMMAND]))
@@ -294,16 +293,13 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
 
     # --- helpers ----------------------------------------------------------------------------
     def _step_rows(self, actions: np.ndarray, active: np.ndarray, report: np.ndarray) -> None:
-        """Step the active rows, on :attr:`threads` threads (this one and the pool's)."""
+        """Step the active rows on :attr:`threads` threads (this one and the pool's)."""
         start = time.perf_counter()
-        if self.threads == 1:
-            tr.step_batch(self._rows, actions, active, self._obs, self._rngs, 0, self._cfg, self._hull, report)
-        else:
-            first, *others = self._slices
-            pending = self._submit_rows(actions, active, report, others)
-            self._step_slice(first, actions, active, report)
-            for future, _ in pending:
-                future.result()
+        first, *others = self._slices
+        pending = self._submit_rows(actions, active, report, others)
+        self._step_slice(first, actions, active, report)
+        for future, _ in pending:
+            future.result()
         self._kernel_s_per_env += 0.1 * ((time.perf_counter() - start) * self.threads / self.num_envs
                                          - self._kernel_s_per_env)
 
@@ -361,7 +357,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
                     f"actions has shape {np.shape(actions)}: must have shape {(n, *shape)} "
                     f"(num_envs={n}, control={self.single_env.control!r})"
                 )
-        return np.ascontiguousarray(a)
+        return a if a.flags.c_contiguous else np.ascontiguousarray(a)
 
     def _reset_envs(self, indices: Sequence[int] | np.ndarray, options: dict[str, Any], report: np.ndarray) -> None:
         """Draw new episodes for ``indices`` (and write their rows of ``report``)."""
@@ -374,7 +370,8 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
             values.append(row)
         rows[index] = values
         tr.observe_batch(rows, index, self._obs, self._rngs, self._cfg, report)
-        self._started[index] = True
+        if not self._ready:
+            self._started[index] = True
         if self.render_mode is not None and 0 in index:
             self._history = [(0.0, rows[0, tr.DEPTH], rows[0, tr.COMMAND])]
 
@@ -392,6 +389,11 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         infos: dict[str, Any] = dict(zip(_INFO_KEYS, values))
         infos.update(zip(_MASK_KEYS, masks))
         return infos
+
+
+def _check_finite(bad: int, actions: np.ndarray) -> None:
+    if bad >= 0:
+        raise ValueError(f"actions[{bad}]={actions[bad].tolist()!r} is invalid: must be finite (no NaN or inf)")
 
 
 def _step_batch_after(started: threading.Event, args: tuple[Any, ...]) -> float:
