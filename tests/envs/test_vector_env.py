@@ -76,6 +76,9 @@ def test_reproduces_sync_vector_env_through_time_limits_and_other_configurations
     assert run_both("subenv/DivePlane-v0", mode, steps=120, max_episode_steps=30) >= 4 * 3
     run_both("subenv/PeriscopeDepth-v0", mode, steps=150, control="independent", plane_rate_limit_radps=0.05)
     run_both("subenv/LowSpeed-v0", mode, steps=150, alpha=0.5, dt=0.25, substeps=1, max_pitch_rad=0.3)
+    # 10 s steps at 2-2.6 u_cr leave RK4's stability region: "diverged" ends, last valid observation kept.
+    assert run_both("subenv/SpeedTransient-v0", mode, steps=60, dt=10.0, substeps=1, max_pitch_rad=math.pi / 2,
+                    max_depth_error_m=1e6) > 10
 
 
 def test_a_single_env_matches_the_first_row_and_seeds_are_offset_per_env():
