@@ -112,18 +112,19 @@ def continue_equilibria(
     alpha = check_alpha(alpha)
     gain = thesis_gain(vehicle, alpha) if gain is None else np.asarray(gain, dtype=float)
     scale = 1.0 if parameter == "speed" else vehicle.z_GB_m  # parameter scale in the arclength
-    cache: dict[float, ModelParams] = {}
+    cache: dict[float, tuple[ModelParams, Vehicle]] = {}
+    base_params = model_params(vehicle)
 
     def setup(p: float) -> tuple[float, ModelParams, Vehicle]:
+        """Speed, model parameters and vehicle at parameter value ``p``."""
         if parameter == "speed":
             return p, base_params, vehicle
         if p not in cache:
             if len(cache) > 64:
                 cache.clear()
-            cache[p] = model_params(vehicle.variant(x_GB_m=p))
-        return float(speed_mps), cache[p], vehicle  # type: ignore[arg-type]
-
-    base_params = model_params(vehicle)
+            variant = vehicle.variant(x_GB_m=p)
+            cache[p] = (model_params(variant), variant)
+        return float(speed_mps), *cache[p]  # type: ignore[arg-type]
 
     def residual(z: FloatArray) -> FloatArray:
         p = z[3] * scale
@@ -166,8 +167,7 @@ def continue_equilibria(
                 return None
         return None
 
-    u0 = setup(start)[0]
-    start_vehicle = vehicle if parameter == "speed" else vehicle.variant(x_GB_m=start)
+    u0, _, start_vehicle = setup(start)
     # Start from the root of the exact steady-state equation (eq. 4.3) nearest the pitch guess.
     roots = _roots(lambda th: steady_state_residual(start_vehicle, u0, th, alpha), _PITCH_GRID)
     if not roots:
@@ -206,11 +206,11 @@ def continue_equilibria(
             h = min(h * 1.3, h_max)
     pts = np.array(points)
     values = pts[:, 3] * scale
-    eig = np.array([
-        np.linalg.eigvals(closed_loop_jacobian(setup(p)[2] if parameter == "speed" else vehicle.variant(x_GB_m=p),
-                                               setup(p)[0], np.array([th, w, 0.0, 0.0]), d, alpha, gain))
-        for (th, w, d), p in zip(pts[:, :3], values)
-    ])
+    rows = []
+    for (th, w, d), p in zip(pts[:, :3], values):
+        u, _, v = setup(float(p))
+        rows.append(np.linalg.eigvals(closed_loop_jacobian(v, u, np.array([th, w, 0.0, 0.0]), d, alpha, gain)))
+    eig = np.array(rows)
     direction = np.sign(np.diff(values))
     folds = np.flatnonzero(direction[1:] * direction[:-1] < 0) + 1
     residual_max = max(float(np.linalg.norm(residual(p))) for p in pts)

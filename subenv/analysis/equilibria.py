@@ -233,6 +233,7 @@ def equilibria(
     gain: FloatArray | None = None,
     drag_moment: DragMoment = "consistent",
     hull: HullIntegral = "full",
+    saturation: bool = True,
 ) -> list[Equilibrium]:
     """All steady states of the closed loop at one speed, with saturation (Riedel 1993 Ch. IV).
 
@@ -256,6 +257,9 @@ def equilibria(
         Stability always uses the package's (consistent) dynamics.
     hull : {"full", "thesis"}
         Hull planform area and centroid: the full SUBOFF offsets or the thesis's truncated values.
+    saturation : bool
+        With False, the planes are unlimited: every root of eq. 4.3 is returned, whatever its
+        plane angle, and no saturated state (Fig. 4-1).
 
     Returns
     -------
@@ -272,10 +276,11 @@ def equilibria(
     roots = _roots(lambda th: steady_state_residual(vehicle, speed_mps, th, alpha, drag_moment, hull), _PITCH_GRID)
     for theta in roots:
         eq = _unsaturated(vehicle, speed_mps, theta, alpha, gain, drag)
-        if abs(eq.plane_rad) <= limit:
+        if not saturation or abs(eq.plane_rad) <= limit:
             found.append(eq)
-    for sign in (1.0, -1.0):
-        found.extend(_saturated_branch(vehicle, speed_mps, sign, alpha, gain, drag, drag_moment_factor))
+    if saturation:
+        for sign in (1.0, -1.0):
+            found.extend(_saturated_branch(vehicle, speed_mps, sign, alpha, gain, drag, drag_moment_factor))
     return sorted(found, key=lambda e: e.pitch_rad)
 
 

@@ -248,10 +248,10 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
         for v, color, name in ((drag_free, "C0", "x_GB = 0"), (biased, "C1", "x_GB/L = -1e-4")):
             xs, ths, stab = [], [], []
             for fn in fns:
-                for theta, stable in _all_unsaturated_roots(v, fn * fn_scale):
+                for e in equilibria(v, fn * fn_scale, saturation=False):
                     xs.append(fn)
-                    ths.append(_deg(theta))
-                    stab.append(stable)
+                    ths.append(_deg(e.pitch_rad))
+                    stab.append(e.stable)
             xs_a, ths_a, stab_a = np.array(xs), np.array(ths), np.array(stab)
             ax.plot(xs_a[stab_a], ths_a[stab_a], ".", ms=3, color=color, label=f"{name} stable")
             ax.plot(xs_a[~stab_a], ths_a[~stab_a], "o", ms=2.5, mfc="none", color=color, alpha=0.6,
@@ -389,18 +389,6 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
         "fig3-14": fig_3_14, "fig4-1": fig_4_1, "fig4-2": fig_4_2, "fig4-6": fig_4_6, "fig4-11": fig_4_11,
         "fig4-13": fig_4_13, "fig5-2": fig_5_2, "fig5-3": fig_5_3, "fig5-4": fig_5_4, "fig5-7": fig_5_7,
     }
-
-
-def _all_unsaturated_roots(vehicle: Vehicle, u: float) -> list[tuple[float, bool]]:
-    """Every root of eq. 4.3 (planes unlimited) with its closed-loop stability."""
-    from subenv.analysis.equilibria import _PITCH_GRID, _roots, _unsaturated, steady_state_residual
-
-    gain = thesis_gain(vehicle)
-    out = []
-    for theta in _roots(lambda th: steady_state_residual(vehicle, u, th), _PITCH_GRID):
-        eq = _unsaturated(vehicle, u, theta, 0.0, gain, 0.0)
-        out.append((theta, eq.stable))
-    return out
 
 
 def _table(rows: list[ReportRow]) -> str:

@@ -234,3 +234,16 @@ def test_report_is_written_completely_and_not_over_an_existing_folder(tmp_path, 
     with pytest.raises(FileExistsError, match="exists; pass overwrite=True"):
         write_report(tmp_path / "report", suboff)
     assert [p.name for p in tmp_path.iterdir()] == ["report"]  # no temporary folder left behind
+
+
+def test_unlimited_planes_return_every_root_of_eq_4_3(thesis_boat):
+    """saturation=False: the unsaturated pitchfork of eq. 3.17 even where |delta| > limit."""
+    ucr = critical_speed(thesis_boat)
+    u = 0.9 * ucr
+    unlimited = equilibria(thesis_boat, u, saturation=False)
+    expected = math.acos(0.9**2)  # eq. 3.17
+    np.testing.assert_allclose([e.pitch_rad for e in unlimited], [-expected, 0.0, expected], atol=1e-9)
+    assert not any(e.saturated for e in unlimited)
+    assert abs(unlimited[0].plane_rad) > thesis_boat.planes.limit_rad  # beyond what the planes can do
+    limited = equilibria(thesis_boat, u)
+    assert [e.saturated for e in limited] == [True, False, True]
