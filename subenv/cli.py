@@ -182,6 +182,18 @@ def evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
+def train(argv: Sequence[str]) -> int:
+    """``subenv train ...`` is ``python -m agents.train ...``: the repository's agents package trains."""
+    try:
+        module = importlib.import_module("agents.train")
+    except ModuleNotFoundError as exc:
+        raise SystemExit(
+            f"subenv train: cannot import the repository's agents package ({exc}); run it from a clone of the "
+            "repository with the 'rl' extra installed: python -m subenv train ..."
+        ) from None
+    return int(module.main(list(argv)))
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="subenv", description=__doc__.split("\n\n")[0])
     sub = parser.add_subparsers(dest="command")
@@ -213,6 +225,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     p_eval.add_argument("--plugins", help=f"comma-separated packages that register controllers "
                                           f"(default: {','.join(DEFAULT_PLUGINS)})")
     p_eval.add_argument("--list", action="store_true", help="list the controllers and suites, and exit")
+    sub.add_parser("train", add_help=False,
+                   help="train a Stable-Baselines3 agent (python -m agents.train; 'subenv train --help')")
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv[:1] == ["train"]:
+        return train(argv[1:])
     args = parser.parse_args(argv)
     if args.command == "evaluate":
         return evaluate(args)

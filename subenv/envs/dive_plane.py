@@ -197,12 +197,8 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         termination_penalty: float = 100.0,
         render_mode: str | None = None,
     ) -> None:
-        if isinstance(scenario, Scenario):
-            self.scenario = scenario
-        elif isinstance(scenario, str):
-            self.scenario = get_scenario(scenario)
-        else:
-            raise ValueError(f"scenario={scenario!r} is invalid: must be a scenario name or a Scenario")
+        self.scenario: Scenario
+        self.set_scenario(scenario)
         self.base_vehicle = vehicle if isinstance(vehicle, Vehicle) else load_vehicle(vehicle)
         if control not in ("dual", "independent"):
             raise ValueError(f"control={control!r} is invalid: must be one of ['dual', 'independent']")
@@ -356,6 +352,21 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
     def critical_speed_mps(self) -> float:
         """Critical speed of the episode's loading [m/s] (nan: none, z_GB <= 0)."""
         return float(self._row[tr.CRITICAL_SPEED])
+
+    def set_scenario(self, scenario: str | Scenario) -> None:
+        """Draw the following episodes from ``scenario`` (a registered name or a Scenario).
+
+        The episode under way is not changed; the next ``reset`` draws from the new scenario. This
+        is how a training curriculum moves the distribution of speeds and loadings
+        (``agents.curriculum``); everything else of the environment (spaces, reward, limits)
+        stays as it was made.
+        """
+        if isinstance(scenario, Scenario):
+            self.scenario = scenario
+        elif isinstance(scenario, str):
+            self.scenario = get_scenario(scenario)
+        else:
+            raise ValueError(f"scenario={scenario!r} is invalid: must be a scenario name or a Scenario")
 
     def speed_at(self, t: float) -> float:
         """Forward speed [m/s] of the current episode at time ``t`` [s]."""

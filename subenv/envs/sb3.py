@@ -129,9 +129,23 @@ class SB3VecEnv(VecEnv):
 
     def env_method(self, method_name: str, *method_args: Any, indices: VecEnvIndices = None,
                    **method_kwargs: Any) -> list[Any]:
-        raise NotImplementedError(
-            f"env_method({method_name!r}): a native vector env has no per-sub-environment objects to call"
-        )
+        """Call a method of the vector env itself, once, for all sub-environments together.
+
+        The sub-environments of a native vector env are rows of one table, not objects, so only
+        methods of the vector env that act on all of them (for subenv: ``set_scenario``) can be
+        called, and only with every index.
+        """
+        chosen = list(self._get_indices(indices))
+        method = getattr(self.venv, method_name, None)
+        if method is None or not callable(method) or method_name.startswith("_"):
+            raise AttributeError(f"{type(self.venv).__name__} has no public method {method_name!r}")
+        if sorted(chosen) != list(range(self.num_envs)):
+            raise NotImplementedError(
+                f"env_method({method_name!r}, indices={indices!r}): the sub-environments of a native vector "
+                "env share one configuration; call it for all of them (indices=None)"
+            )
+        result = method(*method_args, **method_kwargs)
+        return [result for _ in chosen]
 
     def env_is_wrapped(self, wrapper_class: type[gym.Wrapper], indices: VecEnvIndices = None) -> list[bool]:
         return [False for _ in self._get_indices(indices)]

@@ -18,7 +18,7 @@ from numba import typed
 
 from subenv.envs import transition as tr
 from subenv.envs.dive_plane import OBSERVATION_NAMES, DivePlaneEnv
-from subenv.scenarios.scenario import EpisodeConfig
+from subenv.scenarios.scenario import EpisodeConfig, Scenario
 from subenv.vehicles.vehicle import Vehicle
 
 __all__ = ["DivePlaneVectorEnv"]
@@ -265,6 +265,17 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         from subenv.envs.rendering import render_rgb
 
         return (render_rgb(self.single_env._frame(self._rows[0], self._history)),)
+
+    def set_scenario(self, scenario: str | Scenario) -> None:
+        """Draw every sub-environment's following episodes from ``scenario``
+        (:meth:`DivePlaneEnv.set_scenario <subenv.envs.DivePlaneEnv.set_scenario>`); episodes under
+        way are not changed."""
+        self.single_env.set_scenario(scenario)
+
+    @property
+    def scenario(self) -> Scenario:
+        """The scenario the sub-environments draw their episodes from."""
+        return self.single_env.scenario
 
     @property  # type: ignore[misc]  # a tuple, as SyncVectorEnv.np_random
     def np_random(self) -> tuple[np.random.Generator | None, ...]:  # type: ignore[override]

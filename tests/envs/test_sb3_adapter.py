@@ -92,3 +92,34 @@ def test_sac_trains_through_the_adapter():
     assert ended.any()
     last = buffer.next_observations[: buffer.size()][ended]
     assert np.all((np.abs(last[:, 1]) > 0.6) | (last[:, 7] < 0.26))
+
+
+def test_set_scenario_moves_the_following_episodes_through_env_method():
+    """How a curriculum changes the training distribution: the vector env's set_scenario, once for all."""
+    venv = make_sb3_vec_env("subenv/Nominal-v0", n_envs=4, seed=0, info_keys=("speed_mps", "critical_speed_mps"))
+    venv.reset()
+    assert [info["speed_mps"] for info in venv.reset_infos] == pytest.approx([1.524] * 4)  # Nominal: 5 fps
+    assert venv.env_method("set_scenario", "LowSpeed") == [None] * 4
+    assert venv.get_attr("scenario")[0].name == "LowSpeed"
+    venv.reset()
+    ratios = [info["speed_mps"] / info["critical_speed_mps"] for info in venv.reset_infos]
+    assert all(0.3 <= r <= 0.8 for r in ratios), ratios  # LowSpeed's band, relative to u_cr
+    with pytest.raises(NotImplementedError, match="indices=None"):
+        venv.env_method("set_scenario", "Nominal", indices=[0])
+    with pytest.raises(AttributeError, match="no public method 'fly'"):
+        venv.env_method("fly")
+    with pytest.raises(ValueError, match="scenario='Nope' is unknown"):
+        venv.env_method("set_scenario", "Nope")
+
+
+def test_single_env_set_scenario_keeps_the_episode_under_way():
+    env = gym.make("subenv/Nominal-v0")
+    env.reset(seed=0)
+    speed = env.unwrapped.speed_at(0.0)
+    env.unwrapped.set_scenario("LowSpeed")
+    env.step(np.zeros(1, dtype=np.float32))
+    assert env.unwrapped.speed_at(1.0) == speed  # the episode under way is unchanged
+    _, info = env.reset(seed=0)
+    assert info["speed_mps"] < info["critical_speed_mps"]
+    with pytest.raises(ValueError, match="scenario=3 is invalid"):
+        env.unwrapped.set_scenario(3)

@@ -1,0 +1,168 @@
+"""Ship a trained run as a model in ``agents/models/<name>/``, with its model card and evaluation.
+
+::
+
+    python -m agents.card results/agents/ppo/subenv-DivePlane-v0_1 --name ppo
+
+Copies the run's ``model.zip``, ``vecnormalize.pkl``, ``config.yml`` and ``train.json``, evaluates
+the agent next to the ``reversal_aware`` baseline with the harness of ``subenv evaluate`` (the
+default suite, 100 episodes per scenario, seeds 10000 + i) and on the held-out scenarios of
+:mod:`agents.generalisation` (50 episodes each), and writes ``evaluation.json`` (the numbers) and
+``MODEL_CARD.md`` (how the model was trained, on what, and the tables). The folder appears
+complete or not at all. ``tests/agents/test_shipped.py`` re-runs the reversal suite and checks
+that it reproduces ``evaluation.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, Final
+
+import yaml
+
+from agents import MODELS_DIR
+from agents.controller import AgentController
+from agents.generalisation import HELD_OUT, evaluate_held_out
+from agents.policy import CONFIG_FILE, MODEL_FILE, VECNORMALIZE_FILE
+from subenv.evaluation.results import atomic_output_dir, atomic_write_bytes, atomic_write_text
+
+__all__ = ["BASELINE", "REVERSAL_SCENARIOS", "evaluation_record", "main", "ship"]
+
+BASELINE: Final = "reversal_aware"
+REVERSAL_SCENARIOS: Final = ("LowSpeed", "NearCritical", "SpeedTransient")
+"""Where the target is measured: at least the baseline's success rate with less plane effort."""
+_COPIED: Final = (MODEL_FILE, VECNORMALIZE_FILE, CONFIG_FILE, "train.json")
+
+
+def evaluation_record(results: Sequence[Any]) -> dict[str, dict[str, dict[str, float]]]:
+    """``{controller: {scenario: {success_rate, ci_low, ci_high, plane_rms_rad, episodes}}}``."""
+    from subenv.evaluation.results import summarize
+
+    out: dict[str, dict[str, dict[str, float]]] = {}
+    for row in summarize(results):
+        out.setdefault(row["controller"], {})[row["scenario"]] = {
+            "success_rate": row["success_rate"], "ci_low": row["success_ci_low"], "ci_high": row["success_ci_high"],
+            "plane_rms_rad": row["plane_rms_rad_mean"], "episodes": row["episodes"],
+        }
+    return out
+
+
+def _table(record: dict[str, dict[str, dict[str, float]]], scenarios: Sequence[str]) -> str:
+    lines = ["| scenario | " + " | ".join(f"{c} success | {c} plane RMS [rad]" for c in record) + " |",
+             "|---|" + "---:|---:|" * len(record)]
+    for s in scenarios:
+        cells = []
+        for rows in record.values():
+            r = rows[s]
+            cells.append(f"{100 * r['success_rate']:.0f}% [{100 * r['ci_low']:.0f}, {100 * r['ci_high']:.0f}] | "
+                         f"{r['plane_rms_rad']:.4f}")
+        lines.append(f"| {s} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def _target(record: dict[str, dict[str, dict[str, float]]], name: str) -> tuple[bool, str]:
+    ok, parts = True, []
+    for s in REVERSAL_SCENARIOS:
+        a, b = record[name][s], record[BASELINE][s]
+        meets = a["success_rate"] >= b["success_rate"] and a["plane_rms_rad"] < b["plane_rms_rad"]
+        ok &= meets
+        parts.append(f"{s}: {100 * a['success_rate']:.0f}% vs {100 * b['success_rate']:.0f}%, plane RMS "
+                     f"{a['plane_rms_rad']:.4f} vs {b['plane_rms_rad']:.4f} rad ({'met' if meets else 'not met'})")
+    return ok, "; ".join(parts)
+
+
+def ship(run_dir: Path, name: str, episodes: int = 100, held_out_episodes: int = 50, force: bool = False) -> Path:
+    """Copy, evaluate and document ``run_dir`` as ``agents/models/<name>``; returns the folder."""
+    import baselines  # noqa: F401  (registers the baseline compared against)
+    from subenv.evaluation import DEFAULT_SEED, evaluate, make_controller
+
+    target = MODELS_DIR / name
+    train_record = json.loads((run_dir / "train.json").read_text())
+    MODELS_DIR.mkdir(exist_ok=True)
+    with atomic_output_dir(target, overwrite=force) as tmp:
+        for file in _COPIED:
+            atomic_write_bytes(tmp / file, (run_dir / file).read_bytes())
+        agent = AgentController(tmp, name=name)
+        baseline = make_controller(BASELINE)
+        scenarios = ("Nominal", "LowSpeed", "NearCritical", "SpeedTransient", "PeriscopeDepth", "BallastOffset")
+        suite = evaluation_record(evaluate([agent, baseline], list(scenarios), episodes=episodes, progress=False))
+        held = evaluation_record(evaluate_held_out([agent, baseline], episodes=held_out_episodes))
+        met, detail = _target(suite, name)
+        record = {"suite": suite, "held_out": held, "episodes": episodes, "held_out_episodes": held_out_episodes,
+                  "seed": DEFAULT_SEED, "target_met": met}
+        atomic_write_text(tmp / "evaluation.json", json.dumps(record, indent=2) + "\n")
+        config = yaml.safe_load((tmp / CONFIG_FILE).read_text())["hyperparams"]
+        atomic_write_text(tmp / "MODEL_CARD.md", _card(name, train_record, config, suite, held, met, detail, episodes,
+                                                       held_out_episodes))
+    return target
+
+
+def _card(name: str, train: dict[str, Any], config: dict[str, Any], suite: dict[str, Any], held: dict[str, Any], met: bool, detail: str,
+          episodes: int, held_out_episodes: int) -> str:
+    minutes = train["wall_time_s"] / 60
+    return f"""# Model card: `{name}` ({train['algo'].upper()} on `{train['env_id']}`)
+
+A {train['algo'].upper()} agent (Stable-Baselines3 {train['versions']['stable_baselines3']}) for depth
+keeping, trained on `{train['env_id']}` with the environment arguments
+`{config['env_kwargs']}` (`control: independent`: stern and bow planes driven separately).
+Registered as the controller `{name}` of `subenv evaluate` (`import agents`); load it with
+`agents.load_agent("agents/models/{name}")` (the model and its VecNormalize statistics together).
+
+## Training
+
+- Command: `{train['command']}`
+- Seed: {train['seed']}; {train['timesteps']:,} environment steps on {train['n_envs']} sub-environments of the
+  native vector env; hyperparameters in `config.yml` (resolved from `agents/hyperparams/{train['algo']}.yml`).
+- Training time: {train['wall_time_s']:.0f} s ({minutes:.1f} min) of wall-clock time on {train['machine']}
+  ({train['torch_threads']} torch thread), the learning itself (model set-up and the final save not
+  counted); `train.json` has the record.
+- Versions: {', '.join(f'{k} {v}' for k, v in train['versions'].items())}.
+
+## Evaluation
+
+The harness of `subenv evaluate`, {episodes} episodes per scenario (seeds 10000 + i, never seen in
+training: training episodes use seeds 0 + i, its evaluation callback 1,000,000 + i), next to the
+`{BASELINE}` baseline on the same episodes. Success: not terminated and |depth error| <= 0.5 m over the
+final 60 s (95% Wilson intervals). Plane RMS: sqrt of the time mean of stern^2 + bow^2.
+
+{_table(suite, list(next(iter(suite.values()))))}
+
+**Target** (at least the baseline's success with less plane effort on LowSpeed, NearCritical and
+SpeedTransient): **{'met' if met else 'not met'}**. {detail}.
+
+## Generalisation (held out of training)
+
+{held_out_episodes} episodes per scenario, noise-free, on speeds and loadings outside the training
+ranges (`agents/generalisation.py`), next to the baseline:
+
+{chr(10).join(f'- `{s.name}`: {s.description}' for s in HELD_OUT)}
+
+{_table(held, [s.name for s in HELD_OUT])}
+
+Reproduce: `python -m agents.card <run folder> --name {name} --force` re-evaluates and rewrites this card;
+`python -m agents.evaluate agents/models/{name} --suite default` gives the full tables.
+"""
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m agents.card", description=__doc__.split("\n\n")[0])
+    parser.add_argument("run", type=Path, help="the run folder (python -m agents.train's)")
+    parser.add_argument("--name", required=True, help="the model's name: agents/models/<name>, the controller name")
+    parser.add_argument("--episodes", type=int, default=100)
+    parser.add_argument("--held-out-episodes", type=int, default=50)
+    parser.add_argument("--force", action="store_true", help="replace an existing model of that name")
+    args = parser.parse_args(argv)
+    try:
+        folder = ship(args.run, args.name, args.episodes, args.held_out_episodes, args.force)
+    except (FileExistsError, FileNotFoundError, ValueError) as exc:
+        raise SystemExit(f"agents.card: {exc}") from None
+    print((folder / "MODEL_CARD.md").read_text())
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

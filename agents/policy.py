@@ -1,0 +1,230 @@
+"""Trained agents: a model and its normalisation statistics loaded together, acting in NumPy.
+
+:func:`load_agent` takes a run folder (what ``python -m agents.train`` writes, or a shipped
+model in ``agents/models/``) or a model file, and returns a :class:`TrainedAgent` that holds the
+Stable-Baselines3 model, the ``VecNormalize`` statistics it was trained with and its config.
+``agent.predict(obs)`` normalises the raw observation and returns the deterministic action.
+
+The deterministic actor is evaluated with NumPy (:class:`NumpyActor`, its weights copied from
+the torch modules once): one episode step then costs a few microseconds instead of the ~100 us
+of ``model.predict``, which is what lets the evaluation harness run RL agents next to the
+classical controllers at the same speed. ``tests/agents`` checks it against ``model.predict``.
+"""
+
+from __future__ import annotations
+
+import pickle
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Final
+
+import numpy as np
+from gymnasium import spaces
+
+from agents.config import AgentConfig, load_config
+
+__all__ = ["CONFIG_FILE", "MODEL_FILE", "VECNORMALIZE_FILE", "NumpyActor", "TrainedAgent", "load_agent"]
+
+MODEL_FILE: Final = "model.zip"
+VECNORMALIZE_FILE: Final = "vecnormalize.pkl"
+CONFIG_FILE: Final = "config.yml"
+"""The resolved hyperparameters of the run (one entry, keyed by its env id), with ``algo``."""
+_CHECKPOINT = re.compile(r"^(?P<prefix>.+)_(?P<steps>\d+)_steps\.zip$")
+
+
+class NumpyActor:
+    """The deterministic action of an SB3 PPO, SAC or TD3 MLP policy, computed with NumPy.
+
+    The layers are read from the policy: PPO ``mlp_extractor.policy_net`` then ``action_net``
+    (the Gaussian mean, clipped to the action bounds as ``predict`` does); SAC ``latent_pi`` then
+    ``mu`` then tanh; TD3 ``actor.mu`` (which ends in tanh). Actions are then unscaled from
+    [-1, 1] to the action space for the squashing policies, as ``predict`` does.
+    """
+
+    def __init__(self, model: Any) -> None:
+        from torch import nn
+
+        policy = model.policy
+        extractors = [getattr(policy, n, None) for n in ("features_extractor", "pi_features_extractor")]
+        if hasattr(policy, "actor"):
+            extractors.append(policy.actor.features_extractor)
+        for extractor in extractors:
+            if extractor is not None and type(extractor).__name__ != "FlattenExtractor":
+                raise NotImplementedError(f"NumpyActor supports MLP policies only, not {type(extractor).__name__}")
+        if hasattr(policy, "mlp_extractor"):  # PPO (ActorCriticPolicy)
+            modules = [*policy.mlp_extractor.policy_net, policy.action_net]
+            self.squashed = False
+        elif hasattr(policy.actor, "latent_pi"):  # SAC
+            modules = [*policy.actor.latent_pi, policy.actor.mu, nn.Tanh()]
+            self.squashed = True
+        else:  # TD3
+            modules = [*policy.actor.mu]
+            self.squashed = True
+        self.layers: list[tuple[str, np.ndarray | None, np.ndarray | None]] = []
+        for module in modules:
+            if isinstance(module, nn.Linear):
+                self.layers.append(("linear", module.weight.detach().cpu().numpy().T.astype(np.float64),
+                                    module.bias.detach().cpu().numpy().astype(np.float64)))
+            elif isinstance(module, (nn.Tanh, nn.ReLU, nn.ELU, nn.LeakyReLU)):
+                slope = getattr(module, "negative_slope", getattr(module, "alpha", None))
+                self.layers.append((type(module).__name__.lower(), None if slope is None else np.float64(slope), None))
+            elif not isinstance(module, (nn.Identity, nn.Flatten)):
+                raise NotImplementedError(f"NumpyActor does not know the layer {module!r}")
+        space = model.action_space
+        self.low = space.low.astype(np.float64)
+        self.high = space.high.astype(np.float64)
+
+    def __call__(self, obs: np.ndarray) -> np.ndarray:
+        """Actions (float32) for a batch of normalised observations, shape (n, obs_dim)."""
+        x = np.asarray(obs, dtype=np.float64)
+        for kind, a, b in self.layers:
+            if kind == "linear":
+                x = x @ a + b  # type: ignore[operator]
+            elif kind == "tanh":
+                x = np.tanh(x)
+            elif kind == "relu":
+                x = np.maximum(x, 0.0)
+            elif kind == "elu":
+                x = np.where(x > 0, x, a * np.expm1(np.minimum(x, 0.0)))  # type: ignore[operator]
+            else:  # leakyrelu
+                x = np.where(x > 0, x, a * x)  # type: ignore[operator]
+        if self.squashed:
+            x = self.low + 0.5 * (x + 1.0) * (self.high - self.low)
+        return np.clip(x, self.low, self.high).astype(np.float32)
+
+
+@dataclass
+class TrainedAgent:
+    """A trained model with the normalisation statistics and config it was trained with.
+
+    Attributes
+    ----------
+    path : Path
+        The model file.
+    model : stable_baselines3.common.base_class.BaseAlgorithm
+    config : AgentConfig
+    obs_mean, obs_var : numpy.ndarray or None
+        ``VecNormalize``'s running statistics (None: trained without observation normalisation).
+    clip_obs, epsilon : float
+        ``VecNormalize``'s clipping and epsilon.
+    """
+
+    path: Path
+    model: Any
+    config: AgentConfig
+    obs_mean: np.ndarray | None
+    obs_var: np.ndarray | None
+    clip_obs: float
+    epsilon: float
+
+    def __post_init__(self) -> None:
+        self.actor = NumpyActor(self.model)
+
+    @property
+    def observation_space(self) -> spaces.Box:
+        return self.model.observation_space  # type: ignore[no-any-return]
+
+    @property
+    def action_space(self) -> spaces.Box:
+        return self.model.action_space  # type: ignore[no-any-return]
+
+    def normalize(self, obs: np.ndarray) -> np.ndarray:
+        """``VecNormalize.normalize_obs`` with the stored statistics."""
+        obs = np.asarray(obs, dtype=np.float64)
+        if self.obs_mean is None or self.obs_var is None:
+            return obs
+        return np.clip((obs - self.obs_mean) / np.sqrt(self.obs_var + self.epsilon), -self.clip_obs, self.clip_obs)
+
+    def predict(self, obs: np.ndarray) -> np.ndarray:
+        """The deterministic action for a raw observation (shape (obs_dim,)) or a batch (n, obs_dim)."""
+        obs = np.asarray(obs)
+        single = obs.ndim == 1
+        if obs.shape[-1:] != self.observation_space.shape:
+            raise ValueError(
+                f"observation has shape {obs.shape}: the agent {str(self.path)!r} was trained on observations of "
+                f"shape {self.observation_space.shape}"
+            )
+        action = self.actor(self.normalize(obs.reshape(1, -1) if single else obs))
+        return action[0] if single else action
+
+    def check_spaces(self, env: Any) -> None:
+        """Raise ValueError if ``env``'s observation or action space is not the one the agent was trained on."""
+        for what, ours, theirs in (("observation", self.observation_space, env.observation_space),
+                                   ("action", self.action_space, env.action_space)):
+            same = (isinstance(theirs, spaces.Box) and theirs.shape == ours.shape
+                    and np.allclose(theirs.low, ours.low) and np.allclose(theirs.high, ours.high))
+            if not same:
+                raise ValueError(
+                    f"the agent {str(self.path)!r} was trained on the {what} space {ours} "
+                    f"({self.config.env_id}, env_kwargs={self.config.env_kwargs}); this environment has {theirs}"
+                )
+
+
+def load_agent(path: str | Path, env: Any = None, device: str = "cpu") -> TrainedAgent:
+    """Load a trained agent with its normalisation statistics and config, in one call.
+
+    Parameters
+    ----------
+    path : path
+        A run folder or shipped model folder (with ``model.zip``, ``vecnormalize.pkl``,
+        ``config.yml``), or a model file in one: ``model.zip``, ``best_model.zip`` or a checkpoint
+        ``checkpoints/rl_model_<N>_steps.zip`` (whose statistics are
+        ``rl_model_vecnormalize_<N>_steps.pkl``).
+    env : gymnasium.Env, optional
+        Checked against the agent's spaces (ValueError naming both if they differ).
+    device : str
+        Torch device of the model.
+
+    Raises
+    ------
+    FileNotFoundError
+        No model, or no config, where ``path`` says.
+    ValueError
+        ``env`` has other spaces than the agent; the normalisation statistics do not fit the model.
+    """
+    from agents.config import algorithm_class
+
+    path = Path(path)
+    model_file = path / MODEL_FILE if path.is_dir() else path
+    if not model_file.is_file():
+        raise FileNotFoundError(f"no trained model at {str(path)!r} (expected a folder with {MODEL_FILE} or a .zip file)")
+    run_dir = model_file.parent
+    if not (run_dir / CONFIG_FILE).is_file() and (run_dir.parent / CONFIG_FILE).is_file():
+        run_dir = run_dir.parent  # a checkpoint in <run>/checkpoints/
+    config = read_config(run_dir / CONFIG_FILE)
+    model = algorithm_class(config.algo).load(model_file, device=device)
+    match = _CHECKPOINT.match(model_file.name)
+    stats_file = (model_file.parent / f"{match['prefix']}_vecnormalize_{match['steps']}_steps.pkl" if match
+                  else run_dir / VECNORMALIZE_FILE)
+    mean = var = None
+    clip_obs, epsilon = 10.0, 1e-8
+    if config.normalize is not None and config.normalize.norm_obs:
+        if not stats_file.is_file():
+            raise FileNotFoundError(f"{str(model_file)!r} was trained with normalised observations, but its "
+                                    f"statistics {str(stats_file)!r} are missing")
+        with stats_file.open("rb") as f:
+            stats = pickle.load(f)  # noqa: S301 - our own VecNormalize file, as SB3's VecNormalize.load does
+        mean, var = np.asarray(stats.obs_rms.mean, dtype=float), np.asarray(stats.obs_rms.var, dtype=float)
+        clip_obs, epsilon = float(stats.clip_obs), float(stats.epsilon)
+        if mean.shape != model.observation_space.shape:
+            raise ValueError(f"{str(stats_file)!r} has statistics of shape {mean.shape}; the model observes "
+                             f"{model.observation_space.shape}")
+    agent = TrainedAgent(model_file, model, config, mean, var, clip_obs, epsilon)
+    if env is not None:
+        agent.check_spaces(env)
+    return agent
+
+
+def read_config(path: Path) -> AgentConfig:
+    """The :class:`AgentConfig` a run wrote (``config.yml``: ``algo``, ``env_id`` and one entry)."""
+    import yaml
+
+    if not path.is_file():
+        raise FileNotFoundError(f"{str(path)!r} is missing: it says which algorithm and settings the model was trained with")
+    document = yaml.safe_load(path.read_text())
+    try:
+        algo, env_id = document["algo"], document["env_id"]
+    except (TypeError, KeyError):
+        raise ValueError(f"{str(path)!r} must have the keys 'algo', 'env_id' and 'hyperparams'") from None
+    return load_config(algo, env_id, path, overrides=None, entry_key="hyperparams")

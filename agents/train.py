@@ -1,0 +1,286 @@
+"""Train a Stable-Baselines3 agent on a subenv environment (rl-baselines3-zoo's ``train.py``, for subenv).
+
+::
+
+    python -m agents.train --algo ppo --env subenv/DivePlane-v0 --seed 0
+    subenv train --algo sac --env subenv/LowSpeed-v0 -n 200000          # the same command
+
+Hyperparameters come from ``agents/hyperparams/<algo>.yml`` (:mod:`agents.config`). Training runs
+on the native vector environment (:func:`subenv.envs.sb3.make_sb3_vec_env`) wrapped in
+``VecMonitor`` and ``VecNormalize``. A run folder ``<log-folder>/<algo>/<env>_<k>/`` receives::
+
+    model.zip, vecnormalize.pkl   the final model and its normalisation statistics (load both with
+                                  agents.load_agent(folder))
+    config.yml                    the resolved hyperparameters (algo, env_id, hyperparams)
+    train.json                    seed, steps, wall time, threads, versions, curriculum advances
+    progress.csv                  SB3's training log (and tensorboard/ if TensorBoard is installed)
+    best_model.zip, evaluations.npz   from the evaluation callback (a separately seeded env)
+    checkpoints/rl_model_<N>_steps.zip and rl_model_vecnormalize_<N>_steps.pkl
+    curriculum.json               the curriculum's stage (when it has one)
+
+``--trained-agent`` continues a run from its model or a checkpoint (statistics and curriculum
+stage included) into a new folder.
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import json
+import os
+import pickle
+import platform
+import sys
+import time
+from dataclasses import dataclass
+from importlib import metadata
+from importlib.util import find_spec
+from pathlib import Path
+from typing import Any, Final
+
+import yaml
+
+from agents.config import ALGORITHMS, AgentConfig, algorithm_class, load_config, model_kwargs, parse_overrides
+from agents.policy import CONFIG_FILE, MODEL_FILE, VECNORMALIZE_FILE, load_agent
+from subenv.evaluation.results import atomic_write_bytes, atomic_write_text
+
+__all__ = ["DEFAULT_ENV_ID", "EVAL_SEED_OFFSET", "TrainResult", "main", "make_vec_env", "train"]
+
+DEFAULT_ENV_ID: Final = "subenv/DivePlane-v0"
+DEFAULT_LOG_FOLDER: Final = "results/agents"
+EVAL_SEED_OFFSET: Final = 1_000_000
+"""The evaluation env of a run with seed s is seeded with s + this: never the training episodes,
+nor those of the evaluation suites (``subenv.evaluation.DEFAULT_SEED`` = 10000 + i)."""
+_INFO_KEYS_CURRICULUM: Final = ("time_s", "depth_error_m", "termination_reason")
+
+
+@dataclass(frozen=True)
+class TrainResult:
+    """What :func:`train` did: where it wrote, how many steps, how long."""
+
+    run_dir: Path
+    timesteps: int
+    wall_time_s: float
+    curriculum_advances: tuple[tuple[int, int], ...]
+    final_stage: int | None
+
+
+def make_vec_env(config: AgentConfig, n_envs: int, seed: int, curriculum: bool = False) -> Any:
+    """The native vector env of ``config`` for SB3, with ``VecMonitor`` and (if configured) ``VecNormalize``."""
+    from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
+
+    from subenv.envs.sb3 import make_sb3_vec_env
+
+    venv = make_sb3_vec_env(config.env_id, n_envs=n_envs, seed=seed,
+                            info_keys=_INFO_KEYS_CURRICULUM if curriculum else (), **config.env_kwargs)
+    venv = VecMonitor(venv)
+    if config.normalize is not None:
+        norm = config.normalize
+        venv = VecNormalize(venv, norm_obs=norm.norm_obs, norm_reward=norm.norm_reward, clip_obs=norm.clip_obs,
+                            clip_reward=norm.clip_reward, gamma=norm.gamma if norm.gamma is not None else config.gamma())
+    return venv
+
+
+def train(
+    config: AgentConfig,
+    seed: int = 0,
+    log_folder: str | Path = DEFAULT_LOG_FOLDER,
+    run_dir: str | Path | None = None,
+    trained_agent: str | Path | None = None,
+    eval_freq: int = 100_000,
+    eval_episodes: int = 10,
+    save_freq: int = 500_000,
+    progress: bool = False,
+    verbose: int = 1,
+    threads: int | None = 1,
+    command: str | None = None,
+) -> TrainResult:
+    """Train ``config`` with ``seed`` and write the run folder (see the module docstring).
+
+    Parameters
+    ----------
+    run_dir : path, optional
+        The run folder; must not exist. Default: ``<log_folder>/<algo>/<env>_<k>``, k the next free.
+    trained_agent : path, optional
+        Continue from this model (a run folder, ``model.zip`` or a checkpoint) for
+        ``config.n_timesteps`` more steps; its normalisation statistics and curriculum stage too.
+    eval_freq, save_freq : int
+        Environment steps between evaluations (``eval_episodes`` episodes) and between checkpoints;
+        0 disables either.
+    threads : int or None
+        ``torch.set_num_threads`` (None leaves torch's default). One thread is fastest for these
+        small networks and leaves the other core to a second run.
+    command : str, optional
+        The command line that started the run, recorded in ``train.json``.
+    """
+    import torch
+    from stable_baselines3.common.callbacks import CallbackList, CheckpointCallback, EvalCallback
+    from stable_baselines3.common.logger import configure
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    from agents.curriculum import CurriculumCallback, read_stage, stage_scenarios, write_state
+
+    for name, value in (("seed", seed), ("eval_freq", eval_freq), ("eval_episodes", eval_episodes),
+                        ("save_freq", save_freq)):
+        if not (isinstance(value, int) and not isinstance(value, bool) and value >= 0):
+            raise ValueError(f"{name}={value!r} is invalid: must be an integer >= 0")
+    if threads is not None:
+        torch.set_num_threads(threads)
+    run_dir = Path(run_dir) if run_dir is not None else _next_run_dir(Path(log_folder), config)
+    if run_dir.exists():
+        raise FileExistsError(f"run folder {str(run_dir)!r} exists: choose another (or delete it)")
+    run_dir.mkdir(parents=True)
+    atomic_write_text(run_dir / CONFIG_FILE, yaml.safe_dump(
+        {"algo": config.algo, "env_id": config.env_id, "hyperparams": config.to_yaml_dict()}, sort_keys=False))
+
+    curriculum = config.curriculum
+    venv = make_vec_env(config, config.n_envs, seed, curriculum=curriculum is not None)
+    eval_env = make_vec_env(config, min(eval_episodes, 10) or 1, seed + EVAL_SEED_OFFSET)
+    if isinstance(eval_env, VecNormalize):
+        eval_env.training = False
+        eval_env.norm_reward = False
+    algo_class = algorithm_class(config.algo)
+    stage = 0
+    if trained_agent is not None:
+        previous = load_agent(trained_agent)
+        previous.check_spaces(venv)
+        model = algo_class.load(previous.path, env=venv, device="cpu", seed=seed)
+        if isinstance(venv, VecNormalize) and previous.obs_mean is not None:
+            stats = _stats_file(previous.path)
+            venv = VecNormalize.load(str(stats), venv.venv)
+            model.set_env(venv)
+        stage = read_stage(_run_dir_of(previous.path))
+    else:
+        model = algo_class(config.policy, venv, seed=seed, verbose=0, device="cpu", **model_kwargs(config))
+    formats = ["csv"] + (["stdout"] if verbose else []) + (["tensorboard"] if find_spec("tensorboard") else [])
+    model.set_logger(configure(str(run_dir), formats))
+
+    n_envs = venv.num_envs
+    callbacks: list[Any] = []
+    curriculum_callback = None
+    if curriculum is not None:
+        vehicle = venv.get_attr("single_env")[0].base_vehicle
+        alpha = float(config.env_kwargs.get("alpha", 0.0))
+        scenarios = stage_scenarios(venv.get_attr("scenario")[0], curriculum, vehicle, alpha)
+        stage = min(stage, len(scenarios) - 1)
+        curriculum_callback = CurriculumCallback(scenarios, curriculum, run_dir, stage=stage, verbose=verbose)
+        write_state(run_dir, stage, [])
+        callbacks.append(curriculum_callback)
+    if eval_freq:
+        callbacks.append(EvalCallback(eval_env, n_eval_episodes=eval_episodes, eval_freq=max(eval_freq // n_envs, 1),
+                                      log_path=str(run_dir), best_model_save_path=str(run_dir), deterministic=True,
+                                      verbose=0))
+    if save_freq:
+        callbacks.append(CheckpointCallback(max(save_freq // n_envs, 1), str(run_dir / "checkpoints"),
+                                            save_vecnormalize=True))
+    start = time.perf_counter()
+    model.learn(config.n_timesteps, callback=CallbackList(callbacks), progress_bar=progress,
+                reset_num_timesteps=trained_agent is None)
+    wall = time.perf_counter() - start
+
+    _save_model(model, run_dir / MODEL_FILE)
+    if isinstance(venv, VecNormalize):
+        _save_statistics(venv, run_dir / VECNORMALIZE_FILE)
+    advances = tuple(curriculum_callback.advances) if curriculum_callback else ()
+    final_stage = curriculum_callback.schedule.stage if curriculum_callback else None
+    atomic_write_text(run_dir / "train.json", json.dumps({
+        "algo": config.algo, "env_id": config.env_id, "seed": seed, "timesteps": int(model.num_timesteps),
+        "wall_time_s": round(wall, 1), "torch_threads": torch.get_num_threads(), "n_envs": n_envs,
+        "trained_agent": str(trained_agent) if trained_agent else None,
+        "curriculum_advances": [list(a) for a in advances], "final_stage": final_stage,
+        "command": command, "machine": f"{platform.machine()}, {os.cpu_count()} cores",
+        "versions": {p: metadata.version(p) for p in ("stable_baselines3", "torch", "gymnasium", "numpy")},
+    }, indent=2) + "\n")
+    venv.close()
+    eval_env.close()
+    return TrainResult(run_dir, int(model.num_timesteps), wall, advances, final_stage)
+
+
+def _next_run_dir(log_folder: Path, config: AgentConfig) -> Path:
+    name = config.env_id.replace("/", "-")
+    folder = log_folder / config.algo
+    k = 1
+    while (folder / f"{name}_{k}").exists():
+        k += 1
+    return folder / f"{name}_{k}"
+
+
+def _run_dir_of(model_file: Path) -> Path:
+    return model_file.parent.parent if model_file.parent.name == "checkpoints" else model_file.parent
+
+
+def _stats_file(model_file: Path) -> Path:
+    from agents.policy import _CHECKPOINT
+
+    match = _CHECKPOINT.match(model_file.name)
+    if match:
+        return model_file.parent / f"{match['prefix']}_vecnormalize_{match['steps']}_steps.pkl"
+    return _run_dir_of(model_file) / VECNORMALIZE_FILE
+
+
+def _save_model(model: Any, path: Path) -> None:
+    """``model.save`` completely or not at all (SB3 saves into a buffer, written atomically)."""
+    buffer = io.BytesIO()
+    model.save(buffer)
+    atomic_write_bytes(path, buffer.getvalue())
+
+
+def _save_statistics(venv: Any, path: Path) -> None:
+    """``VecNormalize.save`` (a pickle without the wrapped env) completely or not at all."""
+    atomic_write_bytes(path, pickle.dumps(venv))
+
+
+def _quote(arg: str) -> str:
+    import shlex
+
+    return shlex.quote(arg)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m agents.train",
+        description="Train a Stable-Baselines3 agent (PPO, SAC, TD3) on a subenv environment.")
+    parser.add_argument("--algo", required=True, choices=ALGORITHMS, help="the algorithm")
+    parser.add_argument("--env", default=DEFAULT_ENV_ID, help="environment id (default: %(default)s)")
+    parser.add_argument("-n", "--n-timesteps", type=int, help="environment steps (default: the config's)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the model and the environments (default: 0)")
+    parser.add_argument("-f", "--log-folder", default=DEFAULT_LOG_FOLDER, help="default: %(default)s")
+    parser.add_argument("--run-dir", help="the run folder itself (default: <log-folder>/<algo>/<env>_<k>)")
+    parser.add_argument("-conf", "--conf-file", help="hyperparameter YAML (default: agents/hyperparams/<algo>.yml)")
+    parser.add_argument("-params", "--hyperparams", nargs="+", default=[], metavar="KEY:VALUE",
+                        help="override hyperparameters, e.g. learning_rate:1e-4 'policy_kwargs:{net_arch: [32, 32]}'")
+    parser.add_argument("--curriculum", action=argparse.BooleanOptionalAction, default=None,
+                        help="use (or not) the speed curriculum (default: the config's)")
+    parser.add_argument("-i", "--trained-agent", help="continue from this run folder, model or checkpoint")
+    parser.add_argument("--eval-freq", type=int, default=100_000, help="steps between evaluations, 0: none")
+    parser.add_argument("--eval-episodes", type=int, default=10, help="episodes per evaluation")
+    parser.add_argument("--save-freq", type=int, default=500_000, help="steps between checkpoints, 0: none")
+    parser.add_argument("--threads", type=int, default=1, help="torch threads (default: 1)")
+    parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                        help="progress bar (default: when stderr is a terminal)")
+    parser.add_argument("-q", "--quiet", action="store_true", help="no training log on stdout")
+    argv_list = list(sys.argv[1:] if argv is None else argv)
+    args = parser.parse_args(argv_list)
+    try:
+        overrides = parse_overrides(args.hyperparams)
+        if args.n_timesteps is not None:
+            overrides["n_timesteps"] = args.n_timesteps
+        if args.curriculum is not None:
+            overrides["curriculum"] = args.curriculum
+        config = load_config(args.algo, args.env, args.conf_file, overrides)
+        progress = args.progress if args.progress is not None else sys.stderr.isatty()
+        result = train(config, seed=args.seed, log_folder=args.log_folder, run_dir=args.run_dir,
+                       trained_agent=args.trained_agent, eval_freq=args.eval_freq, eval_episodes=args.eval_episodes,
+                       save_freq=args.save_freq, progress=progress, verbose=0 if args.quiet else 1,
+                       threads=args.threads, command=" ".join(["python -m agents.train", *map(_quote, argv_list)]))
+    except (ValueError, FileExistsError, FileNotFoundError) as exc:
+        raise SystemExit(f"agents.train: {exc}") from None
+    print(f"trained {config.algo} on {config.env_id} for {result.timesteps} steps in {result.wall_time_s:.0f} s "
+          f"(seed {args.seed}); run folder {result.run_dir}/")
+    if result.final_stage is not None:
+        print(f"curriculum: stage {result.final_stage}, advances (step, stage): {list(result.curriculum_advances)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,152 @@
+"""Training runs per algorithm: a few thousand steps that save, reload and evaluate, seeded."""
+
+from __future__ import annotations
+
+import json
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+pytest.importorskip("stable_baselines3")
+pytest.importorskip("yaml")
+
+from agents.config import ALGORITHMS, load_config
+from agents.controller import AgentController
+from agents.policy import load_agent
+from agents.train import main, train
+from subenv.evaluation import evaluate
+
+# Small enough for the default suite: a few thousand steps, small networks.
+_SMALL = {
+    "ppo": {"n_timesteps": 2048, "n_envs": 4, "n_steps": 256, "batch_size": 256, "n_epochs": 2},
+    "sac": {"n_timesteps": 1500, "n_envs": 2, "learning_starts": 500, "buffer_size": 5000, "gradient_steps": 1,
+            "train_freq": 1},
+    "td3": {"n_timesteps": 1500, "n_envs": 2, "learning_starts": 500, "buffer_size": 5000, "gradient_steps": 1,
+            "train_freq": 1},
+}
+_ENV_ID = "subenv/LowSpeed-v0"
+
+
+def _config(algo: str, **changes):  # type: ignore[no-untyped-def]
+    return load_config(algo, _ENV_ID, overrides={**_SMALL[algo], "policy_kwargs": {"net_arch": [16, 16]}, **changes})
+
+
+def _observations(n: int = 32) -> np.ndarray:
+    env = gym.make(_ENV_ID, control="independent")
+    return np.stack([env.reset(seed=1000 + i)[0] for i in range(n)])
+
+
+@pytest.fixture(scope="module", params=ALGORITHMS)
+def trained(request, tmp_path_factory):  # type: ignore[no-untyped-def]
+    """Two runs of the same algorithm and seed, and one with another seed."""
+    algo = request.param
+    root = tmp_path_factory.mktemp(algo)
+    runs = [train(_config(algo), seed=seed, run_dir=root / f"run{k}", eval_freq=1000, eval_episodes=2,
+                  save_freq=1000, verbose=0) for k, seed in enumerate((3, 3, 4))]
+    return algo, runs
+
+
+def test_run_folder_holds_model_statistics_config_and_logs(trained) -> None:  # type: ignore[no-untyped-def]
+    algo, runs = trained
+    run = runs[0]
+    names = {p.name for p in run.run_dir.iterdir()}
+    assert {"model.zip", "vecnormalize.pkl", "config.yml", "train.json", "progress.csv", "evaluations.npz",
+            "best_model.zip", "checkpoints"} <= names
+    assert any(p.name.startswith("rl_model_vecnormalize_") for p in (run.run_dir / "checkpoints").iterdir())
+    record = json.loads((run.run_dir / "train.json").read_text())
+    assert record["algo"] == algo and record["seed"] == 3 and record["timesteps"] == run.timesteps
+    assert run.timesteps >= _SMALL[algo]["n_timesteps"]
+    assert not [p for p in run.run_dir.iterdir() if p.name.startswith(".")]  # no temporary files left
+
+
+def test_reload_predicts_what_the_trained_model_predicts(trained) -> None:  # type: ignore[no-untyped-def]
+    _, runs = trained
+    agent = load_agent(runs[0].run_dir)
+    obs = _observations()
+    normalised = agent.normalize(obs).astype(np.float32)
+    expected, _ = agent.model.predict(normalised, deterministic=True)
+    actions = agent.predict(obs)  # the NumPy actor
+    assert actions.shape == (len(obs), 2) and actions.dtype == np.float32
+    np.testing.assert_allclose(actions, expected, atol=1e-5)
+    assert np.all(np.abs(actions) <= 1.0)
+
+
+def test_same_seed_same_model_other_seed_other_model(trained) -> None:  # type: ignore[no-untyped-def]
+    _, runs = trained
+    a, b, c = (load_agent(r.run_dir) for r in runs)
+    obs = _observations()
+    np.testing.assert_array_equal(a.predict(obs), b.predict(obs))
+    np.testing.assert_array_equal(a.obs_mean, b.obs_mean)
+    assert not np.array_equal(a.predict(obs), c.predict(obs))
+
+
+def test_trained_agent_runs_in_the_evaluation_harness_deterministically(trained) -> None:  # type: ignore[no-untyped-def]
+    _, runs = trained
+    controller = AgentController(runs[0].run_dir, name="agent")
+    assert controller.control == "independent"
+    first = evaluate([controller], "tiny", episodes=1, progress=False)
+    second = evaluate([AgentController(runs[1].run_dir, name="agent")], "tiny", episodes=1, progress=False)
+    assert [r.trajectory.steps for r in first] == [r.trajectory.steps for r in second]
+    for x, y in zip(first, second):
+        np.testing.assert_array_equal(x.trajectory.depth_m, y.trajectory.depth_m)
+
+
+def test_checkpoint_loads_with_its_own_statistics(trained) -> None:  # type: ignore[no-untyped-def]
+    _, runs = trained
+    checkpoints = sorted((runs[0].run_dir / "checkpoints").glob("rl_model_*_steps.zip"))
+    assert checkpoints
+    agent = load_agent(checkpoints[0])
+    steps = checkpoints[0].name.split("_")[-2]
+    import pickle
+
+    with (runs[0].run_dir / "checkpoints" / f"rl_model_vecnormalize_{steps}_steps.pkl").open("rb") as f:
+        stats = pickle.load(f)
+    np.testing.assert_array_equal(agent.obs_mean, stats.obs_rms.mean)
+
+
+def test_resume_continues_from_a_checkpoint(trained, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    algo, runs = trained
+    checkpoint = sorted((runs[0].run_dir / "checkpoints").glob("rl_model_*_steps.zip"))[0]
+    start = int(checkpoint.name.split("_")[-2])
+    config = _config(algo)
+    result = train(config, seed=3, run_dir=tmp_path / "resumed", trained_agent=checkpoint, eval_freq=0,
+                   save_freq=0, verbose=0)
+    assert result.timesteps >= start + config.n_timesteps  # the step count goes on
+    record = json.loads((result.run_dir / "train.json").read_text())
+    assert record["trained_agent"] == str(checkpoint)
+    assert load_agent(result.run_dir).predict(_observations()).shape == (32, 2)
+
+
+def test_model_for_another_observation_space_is_refused(trained) -> None:  # type: ignore[no-untyped-def]
+    _, runs = trained
+    other = gym.make(_ENV_ID, control="independent", max_depth_error_m=10.0)  # other observation bounds
+    with pytest.raises(ValueError, match="trained on the observation space"):
+        load_agent(runs[0].run_dir, env=other)
+    with pytest.raises(ValueError, match="trained on the action space"):
+        load_agent(runs[0].run_dir, env=gym.make(_ENV_ID))  # dual: one action
+    with pytest.raises(ValueError, match="shape"):
+        load_agent(runs[0].run_dir).predict(np.zeros(5))
+
+
+def test_command_line_trains_and_rejects_bad_input(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    args = ["--algo", "ppo", "--env", _ENV_ID, "-n", "512", "--seed", "1", "--run-dir", str(tmp_path / "cli"),
+            "--eval-freq", "0", "--save-freq", "0", "-q", "--no-progress",
+            "-params", "n_envs:2", "n_steps:256", "batch_size:128", "n_epochs:1"]
+    assert main(args) == 0
+    assert "trained ppo on subenv/LowSpeed-v0" in capsys.readouterr().out
+    assert load_agent(tmp_path / "cli").config.n_envs == 2
+    with pytest.raises(SystemExit, match="exists"):
+        main(args)  # the run folder exists: nothing is overwritten
+    with pytest.raises(SystemExit, match="unknown hyperparameter"):
+        main(["--algo", "ppo", "--env", _ENV_ID, "-params", "n_step:3", "--run-dir", str(tmp_path / "x")])
+    with pytest.raises(SystemExit, match="is not registered"):
+        main(["--algo", "ppo", "--env", "subenv/Nope-v0", "--run-dir", str(tmp_path / "y")])
+    with pytest.raises(SystemExit):
+        main(["--algo", "dqn"])  # argparse names the choices
+    assert not (tmp_path / "x").exists() and not (tmp_path / "y").exists()
+
+
+def test_missing_model_is_a_clear_error(tmp_path) -> None:
+    with pytest.raises(FileNotFoundError, match="no trained model"):
+        load_agent(tmp_path)
