@@ -12,6 +12,7 @@ slower for these small networks when the cores are shared.
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import subprocess
 import sys
@@ -20,7 +21,11 @@ from pathlib import Path
 import gymnasium as gym
 import pytest
 
-pytest.importorskip("rl_zoo3")
+# Only look rl_zoo3 up: importing it replaces gymnasium's TimeLimit for the whole process
+# (rl_zoo3/gym_patches.py adds info["TimeLimit.truncated"]), which would change what every later
+# test sees from gym.make. rl_zoo3 runs in subprocesses below.
+if importlib.util.find_spec("rl_zoo3") is None:
+    pytest.skip("rl_zoo3 is not installed (the zoo extra)", allow_module_level=True)
 pytest.importorskip("stable_baselines3")
 
 import yaml
