@@ -28,14 +28,15 @@ from agents import MODELS_DIR
 from agents.controller import AgentController
 from agents.generalisation import HELD_OUT, evaluate_held_out
 from agents.policy import CONFIG_FILE, MODEL_FILE, VECNORMALIZE_FILE
+from agents.selection import SELECTED_DIR, SELECTION_SCENARIOS
 from subenv.evaluation.results import atomic_output_dir, atomic_write_bytes, atomic_write_text
 
 __all__ = ["BASELINE", "REVERSAL_SCENARIOS", "evaluation_record", "main", "ship"]
 
 BASELINE: Final = "reversal_aware"
-REVERSAL_SCENARIOS: Final = ("LowSpeed", "NearCritical", "SpeedTransient")
+REVERSAL_SCENARIOS: Final = SELECTION_SCENARIOS
 """Where the target is measured: at least the baseline's success rate with less plane effort."""
-_COPIED: Final = (MODEL_FILE, VECNORMALIZE_FILE, CONFIG_FILE, "train.json")
+_MODEL_FILES: Final = (MODEL_FILE, VECNORMALIZE_FILE, CONFIG_FILE)
 
 
 def evaluation_record(results: Sequence[Any]) -> dict[str, dict[str, dict[str, float]]]:
@@ -75,8 +76,13 @@ def _target(record: dict[str, dict[str, dict[str, float]]], name: str) -> tuple[
     return ok, "; ".join(parts)
 
 
-def ship(run_dir: Path, name: str, episodes: int = 100, held_out_episodes: int = 50, force: bool = False) -> Path:
-    """Copy, evaluate and document ``run_dir`` as ``agents/models/<name>``; returns the folder."""
+def ship(run_dir: Path, name: str, episodes: int = 100, held_out_episodes: int = 50, force: bool = False,
+         selected: bool = True) -> Path:
+    """Copy, evaluate and document ``run_dir`` as ``agents/models/<name>``; returns the folder.
+
+    With ``selected`` (and a ``selected/`` folder in the run: ``--select-freq``) the policy that
+    did best on the validation episodes is shipped (:mod:`agents.selection`), else the final one.
+    """
     import baselines  # noqa: F401  (registers the baseline compared against)
     from subenv.evaluation import DEFAULT_SEED, evaluate, make_controller
 
@@ -84,8 +90,10 @@ def ship(run_dir: Path, name: str, episodes: int = 100, held_out_episodes: int =
     train_record = json.loads((run_dir / "train.json").read_text())
     MODELS_DIR.mkdir(exist_ok=True)
     with atomic_output_dir(target, overwrite=force) as tmp:
-        for file in _COPIED:
-            atomic_write_bytes(tmp / file, (run_dir / file).read_bytes())
+        source = run_dir / SELECTED_DIR if selected and (run_dir / SELECTED_DIR).is_dir() else run_dir
+        for file in _MODEL_FILES:
+            atomic_write_bytes(tmp / file, (source / file).read_bytes())
+        atomic_write_bytes(tmp / "train.json", (run_dir / "train.json").read_bytes())
         agent = AgentController(tmp, name=name)
         baseline = make_controller(BASELINE)
         scenarios = ("Nominal", "LowSpeed", "NearCritical", "SpeedTransient", "PeriscopeDepth", "BallastOffset")
@@ -96,19 +104,39 @@ def ship(run_dir: Path, name: str, episodes: int = 100, held_out_episodes: int =
                   "seed": DEFAULT_SEED, "target_met": met}
         atomic_write_text(tmp / "evaluation.json", json.dumps(record, indent=2) + "\n")
         config = yaml.safe_load((tmp / CONFIG_FILE).read_text())["hyperparams"]
+        chosen = train_record.get("selection") if source != run_dir else None
         atomic_write_text(tmp / "MODEL_CARD.md", _card(name, train_record, config, suite, held, met, detail, episodes,
-                                                       held_out_episodes))
+                                                       held_out_episodes, chosen))
     return target
 
 
-def _card(name: str, train: dict[str, Any], config: dict[str, Any], suite: dict[str, Any], held: dict[str, Any], met: bool, detail: str,
-          episodes: int, held_out_episodes: int) -> str:
+def _integral(config: dict[str, Any]) -> str:
+    integral = config.get("depth_integral")
+    if not integral:
+        return ""
+    return (f"; it also observes the leaky integral of the depth error (time constant "
+            f"{integral['time_constant_s']:g} s, `agents/features.py`), which `load_agent`/`AgentController` append")
+
+
+def _policy(train: dict[str, Any], selection: dict[str, Any] | None) -> str:
+    if selection is None:
+        return f"- Policy: the final one, after {train['timesteps']:,} steps."
+    best = selection["best"]
+    return (f"- Policy: the best of {selection['evaluations']} validations, one every {selection['freq']:,} steps "
+            f"and one at the end (`agents/selection.py`): at step {best['timestep']:,}, "
+            f"{100 * best['success_rate']:.1f}% success and {best['plane_rms_rad']:.4f} rad plane RMS on "
+            f"{selection['episodes']} episodes each of {', '.join(selection['scenarios'])} with the seeds "
+            f"{selection['validation_seed']} + i (not the evaluation's below); the validations are part of the training time.")
+
+
+def _card(name: str, train: dict[str, Any], config: dict[str, Any], suite: dict[str, Any], held: dict[str, Any], met: bool,
+          detail: str, episodes: int, held_out_episodes: int, selection: dict[str, Any] | None = None) -> str:
     minutes = train["wall_time_s"] / 60
     return f"""# Model card: `{name}` ({train['algo'].upper()} on `{train['env_id']}`)
 
 A {train['algo'].upper()} agent (Stable-Baselines3 {train['versions']['stable_baselines3']}) for depth
 keeping, trained on `{train['env_id']}` with the environment arguments
-`{config['env_kwargs']}` (`control: independent`: stern and bow planes driven separately).
+`{config['env_kwargs']}` (`control: independent`: stern and bow planes driven separately){_integral(config)}.
 Registered as the controller `{name}` of `subenv evaluate` (`import agents`); load it with
 `agents.load_agent("agents/models/{name}")` (the model and its VecNormalize statistics together).
 
@@ -120,6 +148,7 @@ Registered as the controller `{name}` of `subenv evaluate` (`import agents`); lo
 - Training time: {train['wall_time_s']:.0f} s ({minutes:.1f} min) of wall-clock time on {train['machine']}
   ({train['torch_threads']} torch thread), the learning itself (model set-up and the final save not
   counted); `train.json` has the record.
+{_policy(train, selection)}
 - Versions: {', '.join(f'{k} {v}' for k, v in train['versions'].items())}.
 
 ## Evaluation
@@ -155,9 +184,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--held-out-episodes", type=int, default=50)
     parser.add_argument("--force", action="store_true", help="replace an existing model of that name")
+    parser.add_argument("--final", action="store_true",
+                        help="ship the final policy even if the run selected one on validation episodes")
     args = parser.parse_args(argv)
     try:
-        folder = ship(args.run, args.name, args.episodes, args.held_out_episodes, args.force)
+        folder = ship(args.run, args.name, args.episodes, args.held_out_episodes, args.force, selected=not args.final)
     except (FileExistsError, FileNotFoundError, ValueError) as exc:
         raise SystemExit(f"agents.card: {exc}") from None
     print((folder / "MODEL_CARD.md").read_text())

@@ -10,6 +10,7 @@ any id that has none of its own (rl-zoo's layout, with that one addition)::
       normalize: {norm_obs: true, norm_reward: true, gamma: 0.995}   # or true / false
       env_kwargs: {control: independent}                           # DivePlaneEnv's arguments
       curriculum: {threshold: 0.8, window: 100}                    # or false (see agents.curriculum)
+      depth_integral: {time_constant_s: 100.0}                     # or false (see agents.features)
       policy_kwargs: {net_arch: [64, 64], activation_fn: tanh}
       learning_rate: lin_3.0e-4   # "lin_<x>": linear decay from x to 0, as in rl-zoo
       n_steps: 256                # ... any other argument of the algorithm's constructor
@@ -35,6 +36,7 @@ __all__ = [
     "HYPERPARAMS_DIR",
     "AgentConfig",
     "CurriculumConfig",
+    "DepthIntegralConfig",
     "NormalizeConfig",
     "algorithm_class",
     "load_config",
@@ -125,6 +127,20 @@ class CurriculumConfig:
 
 
 @dataclass(frozen=True)
+class DepthIntegralConfig:
+    """The depth-error integral observation (:mod:`agents.features`): leak time constant [s] and clipping [m s]."""
+
+    time_constant_s: float = 100.0
+    limit_ms: float = 200.0
+
+    def __post_init__(self) -> None:
+        for name in ("time_constant_s", "limit_ms"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise ValueError(f"depth_integral {name}={value!r} is invalid: must be a finite number > 0")
+
+
+@dataclass(frozen=True)
 class AgentConfig:
     """Everything that defines a training run but the seed, resolved from a hyperparameter file.
 
@@ -141,6 +157,7 @@ class AgentConfig:
     normalize: NormalizeConfig | None = field(default_factory=NormalizeConfig)
     env_kwargs: dict[str, Any] = field(default_factory=dict)
     curriculum: CurriculumConfig | None = None
+    depth_integral: DepthIntegralConfig | None = None
     policy_kwargs: dict[str, Any] = field(default_factory=dict)
     algo_kwargs: dict[str, Any] = field(default_factory=dict)
 
@@ -149,6 +166,7 @@ class AgentConfig:
         out: dict[str, Any] = {"n_timesteps": self.n_timesteps, "policy": self.policy, "n_envs": self.n_envs,
                                "normalize": asdict(self.normalize) if self.normalize else False,
                                "env_kwargs": dict(self.env_kwargs)}
+        out["depth_integral"] = asdict(self.depth_integral) if self.depth_integral else False
         if self.curriculum is None:
             out["curriculum"] = False
         else:
@@ -252,6 +270,7 @@ def _from_entry(algo: str, env_id: str, entry: dict[str, Any], where: str) -> Ag
     normalize = _normalize(where, entry.pop("normalize", True))
     env_kwargs = _env_kwargs(where, entry.pop("env_kwargs", {}) or {})
     curriculum = _curriculum(where, entry.pop("curriculum", False))
+    integral = _section(where, "depth_integral", entry.pop("depth_integral", False), DepthIntegralConfig)
     policy_kwargs = entry.pop("policy_kwargs", {}) or {}
     if not isinstance(policy_kwargs, dict):
         raise ValueError(f"{where}: policy_kwargs={policy_kwargs!r} is invalid: must be a mapping")
@@ -264,6 +283,7 @@ def _from_entry(algo: str, env_id: str, entry: dict[str, Any], where: str) -> Ag
         _linear_start(where, lr)
     return AgentConfig(algo=algo, env_id=env_id, n_timesteps=n_timesteps, policy=policy, n_envs=n_envs,
                        normalize=normalize, env_kwargs=env_kwargs, curriculum=curriculum,
+                       depth_integral=None if integral is None else DepthIntegralConfig(**integral),
                        policy_kwargs=policy_kwargs, algo_kwargs=entry)
 
 

@@ -8,7 +8,9 @@ from typing import Any
 
 import numpy as np
 
+from agents.features import DepthIntegral
 from agents.policy import TrainedAgent, load_agent
+from subenv.dynamics import CONTROL_PERIOD_S
 from subenv.vehicles import Vehicle
 
 __all__ = ["AgentController"]
@@ -21,7 +23,8 @@ _DYNAMICS_KWARGS = ("vehicle", "dt", "substeps", "plane_rate_limit_radps", "max_
 class AgentController:
     """A trained agent (:func:`agents.load_agent`) behind the :class:`~subenv.evaluation.Controller` protocol.
 
-    Acts deterministically on the raw observation (the agent's normalisation is applied inside).
+    Acts deterministically on the environment's observation: appends the depth-error integral
+    (:mod:`agents.features`) if the agent observes it, then normalises as in training.
     ``control`` and ``alpha`` are those the agent was trained with.
 
     Parameters
@@ -44,9 +47,22 @@ class AgentController:
         self.name = name or self.agent.path.parent.name
         self.control = env_kwargs.get("control", "dual")
         self.alpha = float(env_kwargs.get("alpha", 0.0))
+        integral = self.agent.config.depth_integral
+        self._integral = None if integral is None else DepthIntegral(1, CONTROL_PERIOD_S, integral)
+        self._first = True
 
     def reset(self, info: Mapping[str, Any], vehicle: Vehicle) -> None:
-        """Nothing to reset: the policy is a function of the observation."""
+        """Start an episode: the depth-error integral (if the agent observes it) restarts at 0."""
+        if self._integral is not None:
+            self._integral.reset()
+        self._first = True
 
     def act(self, observation: np.ndarray) -> np.ndarray:
-        return self.agent.predict(observation)
+        if self._integral is None:
+            return self.agent.predict(observation)
+        obs = np.asarray(observation, dtype=np.float32).reshape(1, -1)
+        if self._first:  # the reset's observation: I_0 = 0
+            self._first = False
+        else:
+            self._integral.update(obs)
+        return self.agent.predict(self._integral.append(obs, self._integral.value)[0])

@@ -137,7 +137,9 @@ class TrainedAgent:
         return np.clip((obs - self.obs_mean) / np.sqrt(self.obs_var + self.epsilon), -self.clip_obs, self.clip_obs)
 
     def predict(self, obs: np.ndarray) -> np.ndarray:
-        """The deterministic action for a raw observation (shape (obs_dim,)) or a batch (n, obs_dim)."""
+        """The deterministic action for an observation (shape (obs_dim,)) or a batch (n, obs_dim), as the
+        model observes it: the environment's, with the depth-error integral appended if the agent
+        has one (:class:`agents.controller.AgentController` appends it for you)."""
         obs = np.asarray(obs)
         single = obs.ndim == 1
         if obs.shape[-1:] != self.observation_space.shape:
@@ -148,9 +150,18 @@ class TrainedAgent:
         action = self.actor(self.normalize(obs.reshape(1, -1) if single else obs))
         return action[0] if single else action
 
+    @property
+    def env_observation_space(self) -> spaces.Box:
+        """The environment's observation space the agent was trained on (without the appended
+        depth-error integral, if it has one)."""
+        space = self.observation_space
+        if self.config.depth_integral is None:
+            return space
+        return spaces.Box(space.low[:-1], space.high[:-1], dtype=space.dtype)  # type: ignore[arg-type]
+
     def check_spaces(self, env: Any) -> None:
         """Raise ValueError if ``env``'s observation or action space is not the one the agent was trained on."""
-        for what, ours, theirs in (("observation", self.observation_space, env.observation_space),
+        for what, ours, theirs in (("observation", self.env_observation_space, env.observation_space),
                                    ("action", self.action_space, env.action_space)):
             same = (isinstance(theirs, spaces.Box) and theirs.shape == ours.shape
                     and np.allclose(theirs.low, ours.low) and np.allclose(theirs.high, ours.high))

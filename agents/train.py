@@ -17,6 +17,8 @@ on the native vector environment (:func:`subenv.envs.sb3.make_sb3_vec_env`) wrap
     best_model.zip, evaluations.npz   from the evaluation callback (a separately seeded env)
     checkpoints/rl_model_<N>_steps.zip and rl_model_vecnormalize_<N>_steps.pkl
     curriculum.json               the curriculum's stage (when it has one)
+    selected/, selection.json     with --select-freq: the policy that did best on validation episodes
+                                  (agents.selection), loadable on its own, and the record of every check
 
 ``--trained-agent`` continues a run from its model or a checkpoint (statistics and curriculum
 stage included) into a new folder.
@@ -66,13 +68,18 @@ class TrainResult:
 
 
 def make_vec_env(config: AgentConfig, n_envs: int, seed: int, curriculum: bool = False) -> Any:
-    """The native vector env of ``config`` for SB3, with ``VecMonitor`` and (if configured) ``VecNormalize``."""
+    """The native vector env of ``config`` for SB3, with (if configured) the depth-error integral
+    observation, ``VecMonitor`` and (if configured) ``VecNormalize``."""
     from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
 
     from subenv.envs.sb3 import make_sb3_vec_env
 
     venv = make_sb3_vec_env(config.env_id, n_envs=n_envs, seed=seed,
                             info_keys=_INFO_KEYS_CURRICULUM if curriculum else (), **config.env_kwargs)
+    if config.depth_integral is not None:
+        from agents.features import DepthIntegralVecEnv
+
+        venv = DepthIntegralVecEnv(venv, config.depth_integral, venv.get_attr("single_env")[0].dt)
     venv = VecMonitor(venv)
     if config.normalize is not None:
         norm = config.normalize
@@ -94,6 +101,8 @@ def train(
     verbose: int = 1,
     threads: int | None = 1,
     command: str | None = None,
+    select_freq: int = 0,
+    select_episodes: int = 30,
 ) -> TrainResult:
     """Train ``config`` with ``seed`` and write the run folder (see the module docstring).
 
@@ -112,6 +121,9 @@ def train(
         small networks and leaves the other core to a second run.
     command : str, optional
         The command line that started the run, recorded in ``train.json``.
+    select_freq, select_episodes : int
+        Environment steps between validations of the policy (:mod:`agents.selection`; 0: none),
+        and validation episodes per scenario; the best policy goes to ``<run>/selected/``.
     """
     import torch
     from stable_baselines3.common.callbacks import CallbackList, CheckpointCallback, EvalCallback
@@ -121,7 +133,7 @@ def train(
     from agents.curriculum import CurriculumCallback, read_stage, stage_scenarios, write_state
 
     for name, value in (("seed", seed), ("eval_freq", eval_freq), ("eval_episodes", eval_episodes),
-                        ("save_freq", save_freq)):
+                        ("save_freq", save_freq), ("select_freq", select_freq), ("select_episodes", select_episodes)):
         if not (isinstance(value, int) and not isinstance(value, bool) and value >= 0):
             raise ValueError(f"{name}={value!r} is invalid: must be an integer >= 0")
     if threads is not None:
@@ -170,6 +182,12 @@ def train(
         callbacks.append(EvalCallback(eval_env, n_eval_episodes=eval_episodes, eval_freq=max(eval_freq // n_envs, 1),
                                       log_path=str(run_dir), best_model_save_path=str(run_dir), deterministic=True,
                                       verbose=0))
+    selection = None
+    if select_freq:
+        from agents.selection import SelectionCallback
+
+        selection = SelectionCallback(config, run_dir, select_freq, select_episodes, verbose=verbose)
+        callbacks.append(selection)
     if save_freq:
         callbacks.append(CheckpointCallback(max(save_freq // n_envs, 1), str(run_dir / "checkpoints"),
                                             save_vecnormalize=True))
@@ -188,6 +206,7 @@ def train(
         "wall_time_s": round(wall, 1), "torch_threads": torch.get_num_threads(), "n_envs": n_envs,
         "trained_agent": str(trained_agent) if trained_agent else None,
         "curriculum_advances": [list(a) for a in advances], "final_stage": final_stage,
+        "selection": selection.record() if selection else None,
         "command": command, "machine": f"{platform.machine()}, {os.cpu_count()} cores",
         "versions": {p: metadata.version(p) for p in ("stable_baselines3", "torch", "gymnasium", "numpy")},
     }, indent=2) + "\n")
@@ -255,6 +274,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--eval-freq", type=int, default=100_000, help="steps between evaluations, 0: none")
     parser.add_argument("--eval-episodes", type=int, default=10, help="episodes per evaluation")
     parser.add_argument("--save-freq", type=int, default=500_000, help="steps between checkpoints, 0: none")
+    parser.add_argument("--select-freq", type=int, default=0,
+                        help="steps between validations that keep the best policy in <run>/selected/ (0: none)")
+    parser.add_argument("--select-episodes", type=int, default=30, help="validation episodes per scenario")
     parser.add_argument("--threads", type=int, default=1, help="torch threads (default: 1)")
     parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                         help="progress bar (default: when stderr is a terminal)")
@@ -272,7 +294,8 @@ def main(argv: list[str] | None = None) -> int:
         result = train(config, seed=args.seed, log_folder=args.log_folder, run_dir=args.run_dir,
                        trained_agent=args.trained_agent, eval_freq=args.eval_freq, eval_episodes=args.eval_episodes,
                        save_freq=args.save_freq, progress=progress, verbose=0 if args.quiet else 1,
-                       threads=args.threads, command=" ".join(["python -m agents.train", *map(_quote, argv_list)]))
+                       threads=args.threads, select_freq=args.select_freq, select_episodes=args.select_episodes,
+                       command=" ".join(["python -m agents.train", *map(_quote, argv_list)]))
     except (ValueError, FileExistsError, FileNotFoundError) as exc:
         raise SystemExit(f"agents.train: {exc}") from None
     print(f"trained {config.algo} on {config.env_id} for {result.timesteps} steps in {result.wall_time_s:.0f} s "

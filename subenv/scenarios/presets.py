@@ -104,5 +104,18 @@ RANDOMIZED = Scenario(
     disturbance_std_N=2.0,
 )
 
-for _scenario in (*BASE_SCENARIOS, RANDOMIZED):
+MIXED = Scenario(
+    name="Mixed",
+    description=(
+        "Mixed: one of the scenarios above, mildly randomized (z_GB scaled by 0.9-1.1, C_D in 0.2-0.4, "
+        "sensor noise, a 0.3 N heave-force disturbance): the evaluation suites' conditions, for training."
+    ),
+    components=tuple(s.name for s in BASE_SCENARIOS),
+    z_GB_scale=(0.9, 1.1),
+    crossflow_drag=(0.2, 0.4),
+    sensor_noise=True,
+    disturbance_std_N=0.3,
+)
+
+for _scenario in (*BASE_SCENARIOS, RANDOMIZED, MIXED):
     register_scenario(_scenario)

@@ -30,6 +30,8 @@ def test_shipped_file_loads_for_every_registered_id(algo: str) -> None:
         ({"env_kwargs": {"controll": "dual"}}, "controll"),            # an unknown environment argument
         ({"normalize": {"norm_obss": True}}, "norm_obss"),
         ({"curriculum": {"treshold": 0.5}}, "treshold"),
+        ({"depth_integral": {"time_constant": 5.0}}, "time_constant"),
+        ({"depth_integral": {"limit_ms": -1.0}}, "limit_ms"),
         ({"policy_kwargs": {"activation_fn": "nn.Tanh"}}, "activation_fn"),  # no eval of strings
         ({"learning_rate": "lin3e-4"}, "learning_rate"),
         ({"n_timesteps": -5}, "n_timesteps"),

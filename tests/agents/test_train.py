@@ -29,7 +29,9 @@ _ENV_ID = "subenv/LowSpeed-v0"
 
 
 def _config(algo: str, **changes):  # type: ignore[no-untyped-def]
-    return load_config(algo, _ENV_ID, overrides={**_SMALL[algo], "policy_kwargs": {"net_arch": [16, 16]}, **changes})
+    """The shipped hyperparameters made small; without the depth-integral observation unless asked."""
+    overrides = {**_SMALL[algo], "policy_kwargs": {"net_arch": [16, 16]}, "depth_integral": False, **changes}
+    return load_config(algo, _ENV_ID, overrides=overrides)
 
 
 def _observations(n: int = 32) -> np.ndarray:
@@ -150,3 +152,36 @@ def test_command_line_trains_and_rejects_bad_input(tmp_path, capsys) -> None:  #
 def test_missing_model_is_a_clear_error(tmp_path) -> None:
     with pytest.raises(FileNotFoundError, match="no trained model"):
         load_agent(tmp_path)
+
+
+def test_depth_integral_is_the_same_in_training_and_in_the_controller(tmp_path) -> None:
+    """The controller feeds the agent exactly the observations the training stack gave it."""
+    from dataclasses import replace
+
+    from agents.train import make_vec_env
+
+    config = _config("ppo", depth_integral={"time_constant_s": 50.0}, n_timesteps=1024)
+    run = train(config, seed=0, run_dir=tmp_path / "run", eval_freq=0, save_freq=0, verbose=0)
+    agent = load_agent(run.run_dir)
+    assert agent.observation_space.shape == (9,) and agent.env_observation_space.shape == (8,)
+    agent.check_spaces(gym.make(_ENV_ID, control="independent"))  # the environment's own 8 components
+
+    fed: list[np.ndarray] = []
+    predict = agent.predict
+    agent.predict = lambda obs: (fed.append(np.array(obs)), predict(obs))[1]  # type: ignore[method-assign]
+    controller = AgentController(agent)
+    stack = make_vec_env(replace(config, normalize=None), 1, seed=11)  # training's stack, raw observations
+    expected = [stack.reset()[0]]
+    env = gym.make(_ENV_ID, control="independent")
+    obs, info = env.reset(seed=11)
+    controller.reset(info, env.unwrapped.base_vehicle)
+    for _ in range(80):
+        action = controller.act(obs)
+        obs, *_ = env.step(action)
+        expected.append(stack.step(action[None])[0][0])
+    np.testing.assert_array_equal(np.array(fed), np.array(expected[:80]))
+    integral = np.array(fed)[:, -1]
+    assert integral[0] == 0.0  # I_0 = 0 at the reset
+    e = np.array(fed)[:, 0]
+    decay = np.exp(-0.5 / 50.0)
+    np.testing.assert_allclose(integral[1:], decay * integral[:-1] + 0.5 * e[1:], rtol=1e-6, atol=1e-6)

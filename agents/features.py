@@ -1,0 +1,93 @@
+"""An extra observation for the agents: the leaky integral of the depth error.
+
+A policy that maps the observation to the planes is a proportional-derivative controller at
+best: wherever a steady state off the ordered depth exists with the planes free (below the
+critical speed they do; :func:`subenv.analysis.equilibria`), it can settle there, 0.5-1 m off
+depth. The classical baselines remove that offset with integral action (``baselines.lqr``, LQR
+with the depth-error integral as a state). The agents get the same information as one more
+observation component::
+
+    I_0 = 0,    I_k = exp(-dt / T) I_(k-1) + dt e_k,    clipped to +-limit
+
+with e_k the observed depth error (component 0) after step k, dt the control period, T the leak
+time constant (the leak keeps I stationary under noise and disturbances). The training stack
+appends it with :class:`DepthIntegralVecEnv`; the evaluation controller
+(:class:`agents.controller.AgentController`) computes the same sequence with :class:`DepthIntegral`,
+so an agent sees the same numbers in training and in evaluation.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from stable_baselines3.common.vec_env import VecEnvWrapper
+
+from agents.config import DepthIntegralConfig
+
+__all__ = ["DepthIntegral", "DepthIntegralVecEnv", "augmented_space"]
+
+_DEPTH_ERROR = 0  # index of the depth error in subenv's observation (subenv.envs.OBSERVATION_NAMES)
+
+
+def augmented_space(space: spaces.Box, config: DepthIntegralConfig) -> spaces.Box:
+    """``space`` with the integral appended (bounds +-limit)."""
+    low = np.append(space.low, -config.limit_ms).astype(space.dtype)
+    high = np.append(space.high, config.limit_ms).astype(space.dtype)
+    return spaces.Box(low, high, dtype=space.dtype)  # type: ignore[arg-type]
+
+
+class DepthIntegral:
+    """The integral of ``n`` environments: :meth:`reset` some, :meth:`update` all after a step."""
+
+    def __init__(self, n: int, dt_s: float, config: DepthIntegralConfig) -> None:
+        self.value = np.zeros(n)
+        self.dt_s = float(dt_s)
+        self.decay = math.exp(-self.dt_s / config.time_constant_s)
+        self.limit = config.limit_ms
+
+    def reset(self, mask: np.ndarray | None = None) -> None:
+        if mask is None:
+            self.value[:] = 0.0
+        else:
+            self.value[mask] = 0.0
+
+    def update(self, obs: np.ndarray) -> np.ndarray:
+        """Advance with the observations after a step; returns the new values."""
+        self.value = np.clip(self.decay * self.value + self.dt_s * obs[:, _DEPTH_ERROR], -self.limit, self.limit)
+        return self.value
+
+    def peek(self, index: int, obs: np.ndarray) -> float:
+        """What :meth:`update` would make environment ``index``'s value for its observation ``obs``
+        (shape (obs_dim,)), without changing the state."""
+        return float(np.clip(self.decay * self.value[index] + self.dt_s * obs[_DEPTH_ERROR], -self.limit, self.limit))
+
+    def append(self, obs: np.ndarray, values: np.ndarray) -> np.ndarray:
+        return np.concatenate([obs, values[:, None].astype(obs.dtype)], axis=1)
+
+
+class DepthIntegralVecEnv(VecEnvWrapper):  # type: ignore[misc]
+    """An SB3 ``VecEnvWrapper`` that appends the depth-error integral to every observation of
+    ``venv`` (subenv observations), the terminal observations in ``infos`` included."""
+
+    def __init__(self, venv: Any, config: DepthIntegralConfig, dt_s: float) -> None:
+        super().__init__(venv, observation_space=augmented_space(venv.observation_space, config))
+        self.integral = DepthIntegral(venv.num_envs, dt_s, config)
+
+    def reset(self) -> np.ndarray:
+        obs = self.venv.reset()
+        self.integral.reset()
+        return self.integral.append(obs, self.integral.value)
+
+    def step_wait(self) -> Any:
+        obs, rewards, dones, infos = self.venv.step_wait()
+        for i in np.flatnonzero(dones):
+            terminal = infos[i].get("terminal_observation")
+            if terminal is not None:
+                value = self.integral.peek(i, terminal)
+                infos[i]["terminal_observation"] = np.append(terminal, np.asarray(value, dtype=terminal.dtype))
+        self.integral.update(obs)
+        self.integral.reset(dones)  # those observations start new episodes: I_0 = 0
+        return self.integral.append(obs, self.integral.value), rewards, dones, infos
