@@ -11,6 +11,7 @@ any id that has none of its own (rl-zoo's layout, with that one addition)::
       env_kwargs: {control: independent}                           # DivePlaneEnv's arguments
       curriculum: {threshold: 0.8, window: 100}                    # or false (see agents.curriculum)
       depth_integral: {time_constant_s: 100.0}                     # or false (see agents.features)
+      plane_effort_l1: 0.5                                         # training-only (see agents.shaping)
       policy_kwargs: {net_arch: [64, 64], activation_fn: tanh}
       learning_rate: lin_3.0e-4   # "lin_<x>": linear decay from x to 0, as in rl-zoo
       n_steps: 256                # ... any other argument of the algorithm's constructor
@@ -158,6 +159,8 @@ class AgentConfig:
     env_kwargs: dict[str, Any] = field(default_factory=dict)
     curriculum: CurriculumConfig | None = None
     depth_integral: DepthIntegralConfig | None = None
+    plane_effort_l1: float = 0.0
+    """Weight of the training-only L1 penalty on the plane commands (:mod:`agents.shaping`); 0: none."""
     policy_kwargs: dict[str, Any] = field(default_factory=dict)
     algo_kwargs: dict[str, Any] = field(default_factory=dict)
 
@@ -167,6 +170,7 @@ class AgentConfig:
                                "normalize": asdict(self.normalize) if self.normalize else False,
                                "env_kwargs": dict(self.env_kwargs)}
         out["depth_integral"] = asdict(self.depth_integral) if self.depth_integral else False
+        out["plane_effort_l1"] = self.plane_effort_l1
         if self.curriculum is None:
             out["curriculum"] = False
         else:
@@ -271,6 +275,9 @@ def _from_entry(algo: str, env_id: str, entry: dict[str, Any], where: str) -> Ag
     env_kwargs = _env_kwargs(where, entry.pop("env_kwargs", {}) or {})
     curriculum = _curriculum(where, entry.pop("curriculum", False))
     integral = _section(where, "depth_integral", entry.pop("depth_integral", False), DepthIntegralConfig)
+    l1 = entry.pop("plane_effort_l1", 0.0)
+    if not (isinstance(l1, (int, float)) and not isinstance(l1, bool) and math.isfinite(l1) and l1 >= 0):
+        raise ValueError(f"{where}: plane_effort_l1={l1!r} is invalid: must be a finite number >= 0")
     policy_kwargs = entry.pop("policy_kwargs", {}) or {}
     if not isinstance(policy_kwargs, dict):
         raise ValueError(f"{where}: policy_kwargs={policy_kwargs!r} is invalid: must be a mapping")
@@ -284,6 +291,7 @@ def _from_entry(algo: str, env_id: str, entry: dict[str, Any], where: str) -> Ag
     return AgentConfig(algo=algo, env_id=env_id, n_timesteps=n_timesteps, policy=policy, n_envs=n_envs,
                        normalize=normalize, env_kwargs=env_kwargs, curriculum=curriculum,
                        depth_integral=None if integral is None else DepthIntegralConfig(**integral),
+                       plane_effort_l1=float(l1),
                        policy_kwargs=policy_kwargs, algo_kwargs=entry)
 
 

@@ -107,10 +107,12 @@ RANDOMIZED = Scenario(
 MIXED = Scenario(
     name="Mixed",
     description=(
-        "Mixed: one of the scenarios above, mildly randomized (z_GB scaled by 0.9-1.1, C_D in 0.2-0.4, "
-        "sensor noise, a 0.3 N heave-force disturbance): the evaluation suites' conditions, for training."
+        "Mixed: one of the scenarios above, the low-speed, near-critical and speed-transient ones twice as "
+        "often as the others, mildly randomized (z_GB scaled by 0.9-1.1, C_D in 0.2-0.4, sensor noise, a 0.3 N "
+        "heave-force disturbance): for training agents where the planes reverse."
     ),
-    components=tuple(s.name for s in BASE_SCENARIOS),
+    components=("Nominal", "LowSpeed", "LowSpeed", "NearCritical", "NearCritical", "SpeedTransient",
+                "SpeedTransient", "PeriscopeDepth", "BallastOffset"),
     z_GB_scale=(0.9, 1.1),
     crossflow_drag=(0.2, 0.4),
     sensor_noise=True,

@@ -32,6 +32,8 @@ def test_shipped_file_loads_for_every_registered_id(algo: str) -> None:
         ({"curriculum": {"treshold": 0.5}}, "treshold"),
         ({"depth_integral": {"time_constant": 5.0}}, "time_constant"),
         ({"depth_integral": {"limit_ms": -1.0}}, "limit_ms"),
+        ({"plane_effort_l1": -0.5}, "plane_effort_l1"),
+        ({"plane_effort_l1": "0.5"}, "plane_effort_l1"),
         ({"policy_kwargs": {"activation_fn": "nn.Tanh"}}, "activation_fn"),  # no eval of strings
         ({"learning_rate": "lin3e-4"}, "learning_rate"),
         ({"n_timesteps": -5}, "n_timesteps"),

@@ -1,0 +1,41 @@
+"""Training-only reward shaping: an L1 penalty on the plane commands.
+
+The environment's effort term is quadratic (``-effort_weight * mean(a^2)``, :class:`subenv.envs.DivePlaneEnv`),
+which is nearly free for small commands: a policy that keeps its planes swinging by +-0.05 rad
+around zero, or holds them against each other, pays almost nothing for it, yet that is what the
+plane RMS of the evaluation counts. ``-weight * mean(|a|)`` costs small commands in proportion,
+and full ones no more than the quadratic term does. It is added to the training reward only;
+the environment's own reward and everything the evaluation measures are unchanged.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from stable_baselines3.common.vec_env import VecEnvWrapper
+
+__all__ = ["PlaneEffortL1VecEnv"]
+
+
+class PlaneEffortL1VecEnv(VecEnvWrapper):  # type: ignore[misc]
+    """Subtract ``weight * mean(|a|)`` (a: the commands in [-1, 1] that were stepped) from every reward of ``venv``."""
+
+    def __init__(self, venv: Any, weight: float) -> None:
+        if not (isinstance(weight, (int, float)) and np.isfinite(weight) and weight >= 0):
+            raise ValueError(f"plane_effort_l1={weight!r} is invalid: must be a finite number >= 0")
+        super().__init__(venv)
+        self.weight = float(weight)
+        self._penalty = np.zeros(venv.num_envs)
+
+    def step_async(self, actions: np.ndarray) -> None:
+        a = np.clip(np.asarray(actions, dtype=float).reshape(self.num_envs, -1), -1.0, 1.0)
+        self._penalty = self.weight * np.abs(a).mean(axis=1)
+        self.venv.step_async(actions)
+
+    def step_wait(self) -> Any:
+        obs, rewards, dones, infos = self.venv.step_wait()
+        return obs, (rewards - self._penalty).astype(rewards.dtype), dones, infos
+
+    def reset(self) -> np.ndarray:
+        return self.venv.reset()
