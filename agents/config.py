@@ -161,6 +161,8 @@ class AgentConfig:
     depth_integral: DepthIntegralConfig | None = None
     plane_effort_l1: float = 0.0
     """Weight of the training-only L1 penalty on the plane commands (:mod:`agents.shaping`); 0: none."""
+    plane_effort_reference_speed_mps: float | None = None
+    """With it, the L1 weight scales with the speed u of the step: weight * u / this (None: constant)."""
     policy_kwargs: dict[str, Any] = field(default_factory=dict)
     algo_kwargs: dict[str, Any] = field(default_factory=dict)
 
@@ -171,6 +173,7 @@ class AgentConfig:
                                "env_kwargs": dict(self.env_kwargs)}
         out["depth_integral"] = asdict(self.depth_integral) if self.depth_integral else False
         out["plane_effort_l1"] = self.plane_effort_l1
+        out["plane_effort_reference_speed_mps"] = self.plane_effort_reference_speed_mps
         if self.curriculum is None:
             out["curriculum"] = False
         else:
@@ -278,6 +281,11 @@ def _from_entry(algo: str, env_id: str, entry: dict[str, Any], where: str) -> Ag
     l1 = entry.pop("plane_effort_l1", 0.0)
     if not (isinstance(l1, (int, float)) and not isinstance(l1, bool) and math.isfinite(l1) and l1 >= 0):
         raise ValueError(f"{where}: plane_effort_l1={l1!r} is invalid: must be a finite number >= 0")
+    l1_speed = entry.pop("plane_effort_reference_speed_mps", None)
+    if l1_speed is not None and not (isinstance(l1_speed, (int, float)) and not isinstance(l1_speed, bool)
+                                     and math.isfinite(l1_speed) and l1_speed > 0):
+        raise ValueError(f"{where}: plane_effort_reference_speed_mps={l1_speed!r} is invalid: must be null or a "
+                         "finite number > 0")
     policy_kwargs = entry.pop("policy_kwargs", {}) or {}
     if not isinstance(policy_kwargs, dict):
         raise ValueError(f"{where}: policy_kwargs={policy_kwargs!r} is invalid: must be a mapping")
@@ -292,6 +300,7 @@ def _from_entry(algo: str, env_id: str, entry: dict[str, Any], where: str) -> Ag
                        normalize=normalize, env_kwargs=env_kwargs, curriculum=curriculum,
                        depth_integral=None if integral is None else DepthIntegralConfig(**integral),
                        plane_effort_l1=float(l1),
+                       plane_effort_reference_speed_mps=None if l1_speed is None else float(l1_speed),
                        policy_kwargs=policy_kwargs, algo_kwargs=entry)
 
 

@@ -4,8 +4,14 @@ The environment's effort term is quadratic (``-effort_weight * mean(a^2)``, :cla
 which is nearly free for small commands: a policy that keeps its planes swinging by +-0.05 rad
 around zero, or holds them against each other, pays almost nothing for it, yet that is what the
 plane RMS of the evaluation counts. ``-weight * mean(|a|)`` costs small commands in proportion,
-and full ones no more than the quadratic term does. It is added to the training reward only;
-the environment's own reward and everything the evaluation measures are unchanged.
+and full ones no more than the quadratic term does.
+
+With a reference speed u_ref the weight scales with the forward speed u of the step,
+``weight * u / u_ref``: the planes' force grows with u^2, so at speed a small angle does what
+only a large one does slowly, and a hurried policy spends plane angle where it is cheapest not to.
+
+The penalty is added to the training reward only; the environment's own reward and everything
+the evaluation measures are unchanged.
 """
 
 from __future__ import annotations
@@ -15,27 +21,43 @@ from typing import Any
 import numpy as np
 from stable_baselines3.common.vec_env import VecEnvWrapper
 
+from subenv.envs import OBSERVATION_NAMES
+
 __all__ = ["PlaneEffortL1VecEnv"]
+
+_SPEED = OBSERVATION_NAMES.index("speed_mps")
 
 
 class PlaneEffortL1VecEnv(VecEnvWrapper):  # type: ignore[misc]
-    """Subtract ``weight * mean(|a|)`` (a: the commands in [-1, 1] that were stepped) from every reward of ``venv``."""
+    """Subtract ``weight * mean(|a|)`` (a: the commands in [-1, 1] that were stepped) from every reward of
+    ``venv``, times ``u / reference_speed_mps`` (u: the speed observed before the step) if that is given."""
 
-    def __init__(self, venv: Any, weight: float) -> None:
+    def __init__(self, venv: Any, weight: float, reference_speed_mps: float | None = None) -> None:
         if not (isinstance(weight, (int, float)) and np.isfinite(weight) and weight >= 0):
             raise ValueError(f"plane_effort_l1={weight!r} is invalid: must be a finite number >= 0")
+        if reference_speed_mps is not None and not (isinstance(reference_speed_mps, (int, float))
+                                                    and np.isfinite(reference_speed_mps) and reference_speed_mps > 0):
+            raise ValueError(f"plane_effort_reference_speed_mps={reference_speed_mps!r} is invalid: must be None or "
+                             "a finite number > 0")
         super().__init__(venv)
         self.weight = float(weight)
+        self.reference_speed_mps = reference_speed_mps
+        self._speed = np.zeros(venv.num_envs)
         self._penalty = np.zeros(venv.num_envs)
 
     def step_async(self, actions: np.ndarray) -> None:
         a = np.clip(np.asarray(actions, dtype=float).reshape(self.num_envs, -1), -1.0, 1.0)
         self._penalty = self.weight * np.abs(a).mean(axis=1)
+        if self.reference_speed_mps is not None:
+            self._penalty *= self._speed / self.reference_speed_mps
         self.venv.step_async(actions)
 
     def step_wait(self) -> Any:
         obs, rewards, dones, infos = self.venv.step_wait()
+        self._speed = np.asarray(obs[:, _SPEED], dtype=float)  # (a new episode's first, where one ended)
         return obs, (rewards - self._penalty).astype(rewards.dtype), dones, infos
 
     def reset(self) -> np.ndarray:
-        return self.venv.reset()
+        obs = self.venv.reset()
+        self._speed = np.asarray(obs[:, _SPEED], dtype=float)
+        return obs

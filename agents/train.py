@@ -79,7 +79,7 @@ def make_vec_env(config: AgentConfig, n_envs: int, seed: int, curriculum: bool =
     if config.plane_effort_l1 > 0:
         from agents.shaping import PlaneEffortL1VecEnv
 
-        venv = PlaneEffortL1VecEnv(venv, config.plane_effort_l1)
+        venv = PlaneEffortL1VecEnv(venv, config.plane_effort_l1, config.plane_effort_reference_speed_mps)
     if config.depth_integral is not None:
         from agents.features import DepthIntegralVecEnv
 

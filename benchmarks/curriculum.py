@@ -1,6 +1,6 @@
 """Does the speed curriculum help? The same budget with and without it, several seeds.
 
-    .venv/bin/python benchmarks/curriculum.py                       # PPO, 2M steps, seeds 0 1 2
+    .venv/bin/python benchmarks/curriculum.py                       # PPO, 1.5M steps, seeds 0 1 2
     .venv/bin/python benchmarks/curriculum.py --algo ppo -n 3000000 --seeds 0 1 2 3
 
 Trains every (seed, curriculum on/off) pair with ``python -m agents.train`` (two runs at a time,
@@ -38,7 +38,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--algo", default="ppo")
     parser.add_argument("--env", default="subenv/Mixed-v0")
-    parser.add_argument("-n", "--n-timesteps", type=int, default=2_000_000)
+    parser.add_argument("-n", "--n-timesteps", type=int, default=1_500_000)
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     parser.add_argument("--episodes", type=int, default=50, help="evaluation episodes per scenario")
     parser.add_argument("--parallel", type=int, default=2, help="training runs at a time")

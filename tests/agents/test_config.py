@@ -34,6 +34,7 @@ def test_shipped_file_loads_for_every_registered_id(algo: str) -> None:
         ({"depth_integral": {"limit_ms": -1.0}}, "limit_ms"),
         ({"plane_effort_l1": -0.5}, "plane_effort_l1"),
         ({"plane_effort_l1": "0.5"}, "plane_effort_l1"),
+        ({"plane_effort_reference_speed_mps": 0.0}, "plane_effort_reference_speed_mps"),
         ({"policy_kwargs": {"activation_fn": "nn.Tanh"}}, "activation_fn"),  # no eval of strings
         ({"learning_rate": "lin3e-4"}, "learning_rate"),
         ({"n_timesteps": -5}, "n_timesteps"),
