@@ -31,7 +31,7 @@ from agents.policy import CONFIG_FILE, MODEL_FILE, VECNORMALIZE_FILE
 from agents.selection import SELECTED_DIR, SELECTION_SCENARIOS
 from subenv.evaluation.results import atomic_output_dir, atomic_write_bytes, atomic_write_text
 
-__all__ = ["BASELINE", "REVERSAL_SCENARIOS", "evaluation_record", "main", "ship"]
+__all__ = ["BASELINE", "REVERSAL_SCENARIOS", "evaluation_record", "lineage", "main", "ship", "total_training_time_s"]
 
 BASELINE: Final = "reversal_aware"
 REVERSAL_SCENARIOS: Final = SELECTION_SCENARIOS
@@ -76,6 +76,34 @@ def _target(record: dict[str, dict[str, dict[str, float]]], name: str) -> tuple[
     return ok, "; ".join(parts)
 
 
+def lineage(run_dir: Path) -> list[dict[str, Any]]:
+    """The ``train.json`` records of the runs ``run_dir`` continued from (``--trained-agent``), earliest first.
+
+    A run that continued another one took that one's training too: a model's training time is the
+    sum over its lineage. A parent is found from the path it was continued from (a run folder, its
+    ``selected/`` folder, its model or a checkpoint); a parent without a ``train.json`` is an error.
+    """
+    records: list[dict[str, Any]] = []
+    record = json.loads((run_dir / "train.json").read_text())
+    while record.get("trained_agent"):
+        parent = Path(record["trained_agent"])
+        if parent.suffix == ".zip":
+            parent = parent.parent
+        if parent.name in ("checkpoints", SELECTED_DIR):
+            parent = parent.parent
+        if not (parent / "train.json").is_file():
+            raise FileNotFoundError(f"{run_dir} continued from {record['trained_agent']!r}, whose run folder "
+                                    f"{str(parent)!r} has no train.json: its training time is unknown")
+        record = json.loads((parent / "train.json").read_text())
+        records.insert(0, record)
+    return records
+
+
+def total_training_time_s(train_record: dict[str, Any]) -> float:
+    """Wall time of a shipped ``train.json``: its own run and every run it continued (``continued_from``)."""
+    return float(train_record["wall_time_s"] + sum(r["wall_time_s"] for r in train_record.get("continued_from", [])))
+
+
 def ship(run_dir: Path, name: str, episodes: int = 100, held_out_episodes: int = 50, force: bool = False,
          selected: bool = True) -> Path:
     """Copy, evaluate and document ``run_dir`` as ``agents/models/<name>``; returns the folder.
@@ -93,7 +121,10 @@ def ship(run_dir: Path, name: str, episodes: int = 100, held_out_episodes: int =
         source = run_dir / SELECTED_DIR if selected and (run_dir / SELECTED_DIR).is_dir() else run_dir
         for file in _MODEL_FILES:
             atomic_write_bytes(tmp / file, (source / file).read_bytes())
-        atomic_write_bytes(tmp / "train.json", (run_dir / "train.json").read_bytes())
+        parents = lineage(run_dir)
+        if parents:
+            train_record["continued_from"] = parents
+        atomic_write_text(tmp / "train.json", json.dumps(train_record, indent=2) + "\n")
         agent = AgentController(tmp, name=name)
         baseline = make_controller(BASELINE)
         scenarios = ("Nominal", "LowSpeed", "NearCritical", "SpeedTransient", "PeriscopeDepth", "BallastOffset")
@@ -131,21 +162,30 @@ def _policy(train: dict[str, Any], selection: dict[str, Any] | None) -> str:
 
 def _card(name: str, train: dict[str, Any], config: dict[str, Any], suite: dict[str, Any], held: dict[str, Any], met: bool,
           detail: str, episodes: int, held_out_episodes: int, selection: dict[str, Any] | None = None) -> str:
-    minutes = train["wall_time_s"] / 60
-    return f"""# Model card: `{name}` ({train['algo'].upper()} on `{train['env_id']}`)
+    total_s = total_training_time_s(train)
+    parents = train.get("continued_from", [])
+    if parents:
+        earlier = "".join(f"\n  - before it, {r['timesteps']:,} steps in {r['wall_time_s']:.0f} s: `{r['command']}`"
+                          for r in parents)
+        command = (f"`{train['command']}`, continuing {len(parents)} earlier run{'s' if len(parents) > 1 else ''} "
+                   f"(all of whose time counts below):{earlier}")
+    else:
+        command = f"`{train['command']}`"
+    envs = ", then ".join(f"`{e}`" for e in dict.fromkeys([r["env_id"] for r in parents] + [train["env_id"]]))
+    return f"""# Model card: `{name}` ({train['algo'].upper()} on {envs})
 
 A {train['algo'].upper()} agent (Stable-Baselines3 {train['versions']['stable_baselines3']}) for depth
-keeping, trained on `{train['env_id']}` with the environment arguments
+keeping, trained on {envs} with the environment arguments
 `{config['env_kwargs']}` (`control: independent`: stern and bow planes driven separately){_integral(config)}.
 Registered as the controller `{name}` of `subenv evaluate` (`import agents`); load it with
 `agents.load_agent("agents/models/{name}")` (the model and its VecNormalize statistics together).
 
 ## Training
 
-- Command: `{train['command']}`
+- Command: {command}
 - Seed: {train['seed']}; {train['timesteps']:,} environment steps on {train['n_envs']} sub-environments of the
   native vector env; hyperparameters in `config.yml` (resolved from `agents/hyperparams/{train['algo']}.yml`).
-- Training time: {train['wall_time_s']:.0f} s ({minutes:.1f} min) of wall-clock time on {train['machine']}
+- Training time: {total_s:.0f} s ({total_s / 60:.1f} min) of wall-clock time on {train['machine']}
   ({train['torch_threads']} torch thread), the learning itself (model set-up and the final save not
   counted); `train.json` has the record.
 {_policy(train, selection)}

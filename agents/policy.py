@@ -159,9 +159,14 @@ class TrainedAgent:
             return space
         return spaces.Box(space.low[:-1], space.high[:-1], dtype=space.dtype)  # type: ignore[arg-type]
 
-    def check_spaces(self, env: Any) -> None:
-        """Raise ValueError if ``env``'s observation or action space is not the one the agent was trained on."""
-        for what, ours, theirs in (("observation", self.env_observation_space, env.observation_space),
+    def check_spaces(self, env: Any, with_features: bool = False) -> None:
+        """Raise ValueError if ``env``'s observation or action space is not the one the agent was trained on.
+
+        ``env`` is a plain environment, or with ``with_features`` one that appends the agent's
+        features (the depth-error integral) itself, as the training environments do.
+        """
+        expected = self.observation_space if with_features else self.env_observation_space
+        for what, ours, theirs in (("observation", expected, env.observation_space),
                                    ("action", self.action_space, env.action_space)):
             same = (isinstance(theirs, spaces.Box) and theirs.shape == ours.shape
                     and np.allclose(theirs.low, ours.low) and np.allclose(theirs.high, ours.high))

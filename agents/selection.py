@@ -88,6 +88,15 @@ class SelectionCallback(BaseCallback):
         self.best: dict[str, float] | None = None
         self._next = freq
 
+    def _on_training_start(self) -> None:
+        # A continued run (--trained-agent) starts at its model's step count: validate the policy it
+        # starts from (it is a candidate too), then every freq steps from there.
+        start = self.model.num_timesteps
+        self._next = start + self.freq
+        if start > 0:
+            self.num_timesteps = start
+            self._evaluate()
+
     def _on_step(self) -> bool:
         if self.num_timesteps >= self._next:
             self._next += self.freq

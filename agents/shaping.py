@@ -9,6 +9,9 @@ and full ones no more than the quadratic term does.
 With a reference speed u_ref the weight scales with the forward speed u of the step,
 ``weight * u / u_ref``: the planes' force grows with u^2, so at speed a small angle does what
 only a large one does slowly, and a hurried policy spends plane angle where it is cheapest not to.
+Measured, it did not pay: PPO on Mixed with weight 1.0 and u_ref = u_cr (0.58 m/s) selected a policy
+with 100% validation success at 0.096 rad plane RMS, the same run with the constant weight 1.0 one
+at 0.075 rad (30 validation episodes per scenario each). The shipped configs leave it off.
 
 The penalty is added to the training reward only; the environment's own reward and everything
 the evaluation measures are unchanged.

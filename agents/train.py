@@ -159,8 +159,17 @@ def train(
     stage = 0
     if trained_agent is not None:
         previous = load_agent(trained_agent)
-        previous.check_spaces(venv)
-        model = algo_class.load(previous.path, env=venv, device="cpu", seed=seed)
+        previous.check_spaces(venv, with_features=True)
+        # The config's hyperparameters (with any -params overrides) replace the stored ones before
+        # the model is set up, so a resumed run trains with what its config.yml says; a "lin_" rate
+        # goes on from where the step count stands (SB3: progress = 1 - steps / total steps).
+        kwargs = model_kwargs(config)
+        policy_kwargs = kwargs.pop("policy_kwargs", {})
+        model = algo_class.load(previous.path, env=venv, device="cpu", seed=seed, **kwargs)
+        changed = {k: v for k, v in policy_kwargs.items() if model.policy_kwargs.get(k) != v}
+        if changed:
+            raise ValueError(f"policy_kwargs {changed} differ from the trained agent's {model.policy_kwargs}: "
+                             "a run cannot change the network it continues")
         if isinstance(venv, VecNormalize) and previous.obs_mean is not None:
             stats = _stats_file(previous.path)
             venv = VecNormalize.load(str(stats), venv.venv)

@@ -23,6 +23,11 @@ from pathlib import Path
 
 import numpy as np
 
+# agents/ is a folder of the repository, not part of the installed wheel: run from any directory.
+REPO = Path(__file__).resolve().parents[1]
+if str(REPO) not in sys.path:
+    sys.path.insert(0, str(REPO))
+
 
 def _train(args: argparse.Namespace, root: Path, seed: int, curriculum: bool) -> Path:
     run = root / f"{'with' if curriculum else 'without'}_seed{seed}"
@@ -30,7 +35,7 @@ def _train(args: argparse.Namespace, root: Path, seed: int, curriculum: bool) ->
            "--seed", str(seed), "--run-dir", str(run), "--curriculum" if curriculum else "--no-curriculum",
            "--save-freq", "0", "--eval-freq", "0", "-q", "--no-progress"]
     with (root / f"{run.name}.log").open("w") as log:
-        subprocess.run(cmd, check=True, stdout=log, stderr=subprocess.STDOUT)
+        subprocess.run(cmd, check=True, stdout=log, stderr=subprocess.STDOUT, cwd=REPO)
     return run
 
 
@@ -49,7 +54,7 @@ def main() -> None:
     from subenv.evaluation import evaluate
     from subenv.evaluation.results import summarize
 
-    root = args.out or Path("results/benchmarks/curriculum") / time.strftime("%Y%m%d-%H%M%S")
+    root = (args.out or Path("results/benchmarks/curriculum") / time.strftime("%Y%m%d-%H%M%S")).resolve()
     root.mkdir(parents=True, exist_ok=False)
     jobs = [(seed, c) for seed in args.seeds for c in (False, True)]
     start = time.perf_counter()

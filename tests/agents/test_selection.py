@@ -15,15 +15,17 @@ from agents.train import train
 from subenv.evaluation import DEFAULT_SEED
 
 
+_SMALL = {"n_timesteps": 2048, "n_envs": 4, "n_steps": 128, "batch_size": 128, "n_epochs": 2,
+          "policy_kwargs": {"net_arch": [8]}, "depth_integral": {"time_constant_s": 50.0}}
+
+
 def test_validation_seeds_are_not_the_evaluation_seeds() -> None:
     # The default suites use DEFAULT_SEED + i for i < 100; shipped cards report on those.
     assert abs(VALIDATION_SEED - DEFAULT_SEED) >= 1000
 
 
 def test_selected_policy_is_the_best_validated_one_and_reloads_to_its_score(tmp_path) -> None:  # type: ignore[no-untyped-def]
-    config = load_config("ppo", "subenv/LowSpeed-v0", overrides={
-        "n_timesteps": 2048, "n_envs": 4, "n_steps": 128, "batch_size": 128, "n_epochs": 2,
-        "policy_kwargs": {"net_arch": [8]}, "depth_integral": {"time_constant_s": 50.0}})
+    config = load_config("ppo", "subenv/LowSpeed-v0", overrides=_SMALL)
     run = train(config, seed=5, run_dir=tmp_path / "run", eval_freq=0, save_freq=0, verbose=0,
                 select_freq=512, select_episodes=2)
     record = json.loads((run.run_dir / "selection.json").read_text())
@@ -40,6 +42,12 @@ def test_selected_policy_is_the_best_validated_one_and_reloads_to_its_score(tmp_
     again = validation_score(selected, SELECTION_SCENARIOS, 2)
     assert again["success_rate"] == best["success_rate"]
     assert again["plane_rms_rad"] == pytest.approx(best["plane_rms_rad"], rel=1e-12)
+
+    # A continued run validates the policy it starts from, then every 512 steps from there on.
+    more = train(load_config("ppo", "subenv/LowSpeed-v0", overrides={**_SMALL, "n_timesteps": 1024}), seed=6, run_dir=tmp_path / "more", trained_agent=run.run_dir, eval_freq=0, save_freq=0, verbose=0,
+                 select_freq=512, select_episodes=2)
+    steps = [h["timestep"] for h in json.loads((more.run_dir / "selection.json").read_text())["history"]]
+    assert steps == [2048, 2560, 3072]
 
 
 def test_bad_selection_arguments_are_refused(tmp_path) -> None:  # type: ignore[no-untyped-def]

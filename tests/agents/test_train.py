@@ -11,7 +11,8 @@ import pytest
 pytest.importorskip("stable_baselines3")
 pytest.importorskip("yaml")
 
-from agents.config import ALGORITHMS, load_config
+from agents.card import lineage, total_training_time_s
+from agents.config import ALGORITHMS, algorithm_class, load_config
 from agents.controller import AgentController
 from agents.policy import load_agent
 from agents.train import main, train
@@ -111,13 +112,35 @@ def test_resume_continues_from_a_checkpoint(trained, tmp_path) -> None:  # type:
     algo, runs = trained
     checkpoint = sorted((runs[0].run_dir / "checkpoints").glob("rl_model_*_steps.zip"))[0]
     start = int(checkpoint.name.split("_")[-2])
-    config = _config(algo)
+    config = _config(algo, learning_rate=1.25e-5)  # a new learning rate for the continuation
     result = train(config, seed=3, run_dir=tmp_path / "resumed", trained_agent=checkpoint, eval_freq=0,
                    save_freq=0, verbose=0)
     assert result.timesteps >= start + config.n_timesteps  # the step count goes on
+    resumed = algorithm_class(algo).load(result.run_dir / "model.zip", device="cpu")
+    assert resumed.learning_rate == 1.25e-5 and resumed.lr_schedule(0.5) == 1.25e-5
+    with pytest.raises(ValueError, match="cannot change the network"):
+        train(_config(algo, policy_kwargs={"net_arch": [8, 8]}), seed=3, run_dir=tmp_path / "other_net",
+              trained_agent=checkpoint, eval_freq=0, save_freq=0, verbose=0)
     record = json.loads((result.run_dir / "train.json").read_text())
     assert record["trained_agent"] == str(checkpoint)
+    # The run it continued is its lineage: a shipped model's training time counts both.
+    parent = json.loads((runs[0].run_dir / "train.json").read_text())
+    assert lineage(result.run_dir) == [parent]
+    assert total_training_time_s({**record, "continued_from": [parent]}) == record["wall_time_s"] + parent["wall_time_s"]
     assert load_agent(result.run_dir).predict(_observations()).shape == (32, 2)
+
+
+def test_resume_with_the_depth_integral_observation(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """The training env appends the integral; the continued run sees the space the model was trained on."""
+    config = _config("ppo", n_timesteps=512, depth_integral={"time_constant_s": 100.0})
+    first = train(config, seed=0, run_dir=tmp_path / "first", eval_freq=0, save_freq=0, verbose=0)
+    second = train(config, seed=1, run_dir=tmp_path / "second", trained_agent=first.run_dir, eval_freq=0,
+                   save_freq=0, verbose=0)
+    assert second.timesteps >= first.timesteps + 512
+    assert load_agent(second.run_dir).observation_space.shape == (9,)
+    with pytest.raises(ValueError, match="trained on the observation space"):  # an 8-dimensional run cannot
+        train(_config("ppo", n_timesteps=512), seed=1, run_dir=tmp_path / "third", trained_agent=first.run_dir,
+              eval_freq=0, save_freq=0, verbose=0)
 
 
 def test_model_for_another_observation_space_is_refused(trained) -> None:  # type: ignore[no-untyped-def]
