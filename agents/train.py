@@ -32,6 +32,7 @@ import json
 import os
 import pickle
 import platform
+import shutil
 import sys
 import time
 from dataclasses import dataclass
@@ -146,64 +147,69 @@ def train(
     if run_dir.exists():
         raise FileExistsError(f"run folder {str(run_dir)!r} exists: choose another (or delete it)")
     run_dir.mkdir(parents=True)
-    atomic_write_text(run_dir / CONFIG_FILE, yaml.safe_dump(
-        {"algo": config.algo, "env_id": config.env_id, "hyperparams": config.to_yaml_dict()}, sort_keys=False))
+    try:
+        atomic_write_text(run_dir / CONFIG_FILE, yaml.safe_dump(
+            {"algo": config.algo, "env_id": config.env_id, "hyperparams": config.to_yaml_dict()}, sort_keys=False))
 
-    curriculum = config.curriculum
-    venv = make_vec_env(config, config.n_envs, seed, curriculum=curriculum is not None)
-    eval_env = make_vec_env(config, min(eval_episodes, 10) or 1, seed + EVAL_SEED_OFFSET)
-    if isinstance(eval_env, VecNormalize):
-        eval_env.training = False
-        eval_env.norm_reward = False
-    algo_class = algorithm_class(config.algo)
-    stage = 0
-    if trained_agent is not None:
-        previous = load_agent(trained_agent)
-        previous.check_spaces(venv, with_features=True)
-        # The config's hyperparameters (with any -params overrides) replace the stored ones before
-        # the model is set up, so a resumed run trains with what its config.yml says; a "lin_" rate
-        # goes on from where the step count stands (SB3: progress = 1 - steps / total steps).
-        kwargs = model_kwargs(config)
-        policy_kwargs = kwargs.pop("policy_kwargs", {})
-        model = algo_class.load(previous.path, env=venv, device="cpu", seed=seed, **kwargs)
-        changed = {k: v for k, v in policy_kwargs.items() if model.policy_kwargs.get(k) != v}
-        if changed:
-            raise ValueError(f"policy_kwargs {changed} differ from the trained agent's {model.policy_kwargs}: "
-                             "a run cannot change the network it continues")
-        if isinstance(venv, VecNormalize) and previous.obs_mean is not None:
-            stats = _stats_file(previous.path)
-            venv = VecNormalize.load(str(stats), venv.venv)
-            model.set_env(venv)
-        stage = read_stage(_run_dir_of(previous.path))
-    else:
-        model = algo_class(config.policy, venv, seed=seed, verbose=0, device="cpu", **model_kwargs(config))
-    formats = ["csv"] + (["stdout"] if verbose else []) + (["tensorboard"] if find_spec("tensorboard") else [])
-    model.set_logger(configure(str(run_dir), formats))
+        curriculum = config.curriculum
+        venv = make_vec_env(config, config.n_envs, seed, curriculum=curriculum is not None)
+        eval_env = make_vec_env(config, min(eval_episodes, 10) or 1, seed + EVAL_SEED_OFFSET)
+        if isinstance(eval_env, VecNormalize):
+            eval_env.training = False
+            eval_env.norm_reward = False
+        algo_class = algorithm_class(config.algo)
+        stage = 0
+        if trained_agent is not None:
+            previous = load_agent(trained_agent)
+            previous.check_spaces(venv, with_features=True)
+            # The config's hyperparameters (with any -params overrides) replace the stored ones before
+            # the model is set up, so a resumed run trains with what its config.yml says; a "lin_" rate
+            # goes on from where the step count stands (SB3: progress = 1 - steps / total steps).
+            kwargs = model_kwargs(config)
+            policy_kwargs = kwargs.pop("policy_kwargs", {})
+            model = algo_class.load(previous.path, env=venv, device="cpu", seed=seed, **kwargs)
+            changed = {k: v for k, v in policy_kwargs.items() if model.policy_kwargs.get(k) != v}
+            if changed:
+                raise ValueError(f"policy_kwargs {changed} differ from the trained agent's {model.policy_kwargs}: "
+                                 "a run cannot change the network it continues")
+            if isinstance(venv, VecNormalize) and previous.obs_mean is not None:
+                stats = _stats_file(previous.path)
+                venv = VecNormalize.load(str(stats), venv.venv)
+                model.set_env(venv)
+            stage = read_stage(_run_dir_of(previous.path))
+        else:
+            model = algo_class(config.policy, venv, seed=seed, verbose=0, device="cpu", **model_kwargs(config))
+        formats = ["csv"] + (["stdout"] if verbose else []) + (["tensorboard"] if find_spec("tensorboard") else [])
+        model.set_logger(configure(str(run_dir), formats))
 
-    n_envs = venv.num_envs
-    callbacks: list[Any] = []
-    curriculum_callback = None
-    if curriculum is not None:
-        vehicle = venv.get_attr("single_env")[0].base_vehicle
-        alpha = float(config.env_kwargs.get("alpha", 0.0))
-        scenarios = stage_scenarios(venv.get_attr("scenario")[0], curriculum, vehicle, alpha)
-        stage = min(stage, len(scenarios) - 1)
-        curriculum_callback = CurriculumCallback(scenarios, curriculum, run_dir, stage=stage, verbose=verbose)
-        write_state(run_dir, stage, [])
-        callbacks.append(curriculum_callback)
-    if eval_freq:
-        callbacks.append(EvalCallback(eval_env, n_eval_episodes=eval_episodes, eval_freq=max(eval_freq // n_envs, 1),
-                                      log_path=str(run_dir), best_model_save_path=str(run_dir), deterministic=True,
-                                      verbose=0))
-    selection = None
-    if select_freq:
-        from agents.selection import SelectionCallback
+        n_envs = venv.num_envs
+        callbacks: list[Any] = []
+        curriculum_callback = None
+        if curriculum is not None:
+            vehicle = venv.get_attr("single_env")[0].base_vehicle
+            alpha = float(config.env_kwargs.get("alpha", 0.0))
+            scenarios = stage_scenarios(venv.get_attr("scenario")[0], curriculum, vehicle, alpha)
+            stage = min(stage, len(scenarios) - 1)
+            curriculum_callback = CurriculumCallback(scenarios, curriculum, run_dir, stage=stage, verbose=verbose)
+            write_state(run_dir, stage, [])
+            callbacks.append(curriculum_callback)
+        if eval_freq:
+            callbacks.append(EvalCallback(eval_env, n_eval_episodes=eval_episodes, eval_freq=max(eval_freq // n_envs, 1),
+                                          log_path=str(run_dir), best_model_save_path=str(run_dir), deterministic=True,
+                                          verbose=0))
+        selection = None
+        if select_freq:
+            from agents.selection import SelectionCallback
 
-        selection = SelectionCallback(config, run_dir, select_freq, select_episodes, verbose=verbose)
-        callbacks.append(selection)
-    if save_freq:
-        callbacks.append(CheckpointCallback(max(save_freq // n_envs, 1), str(run_dir / "checkpoints"),
-                                            save_vecnormalize=True))
+            selection = SelectionCallback(config, run_dir, select_freq, select_episodes, verbose=verbose)
+            callbacks.append(selection)
+        if save_freq:
+            callbacks.append(CheckpointCallback(max(save_freq // n_envs, 1), str(run_dir / "checkpoints"),
+                                                save_vecnormalize=True))
+    except BaseException:
+        # Nothing trained yet: leave no half-made run folder behind (it would block the same --run-dir).
+        shutil.rmtree(run_dir, ignore_errors=True)
+        raise
     start = time.perf_counter()
     model.learn(config.n_timesteps, callback=CallbackList(callbacks), progress_bar=progress,
                 reset_num_timesteps=trained_agent is None)

@@ -121,6 +121,7 @@ def test_resume_continues_from_a_checkpoint(trained, tmp_path) -> None:  # type:
     with pytest.raises(ValueError, match="cannot change the network"):
         train(_config(algo, policy_kwargs={"net_arch": [8, 8]}), seed=3, run_dir=tmp_path / "other_net",
               trained_agent=checkpoint, eval_freq=0, save_freq=0, verbose=0)
+    assert not (tmp_path / "other_net").exists()  # no half-made run folder left behind
     record = json.loads((result.run_dir / "train.json").read_text())
     assert record["trained_agent"] == str(checkpoint)
     # The run it continued is its lineage: a shipped model's training time counts both.
