@@ -54,15 +54,18 @@ class DepthIntegral:
         else:
             self.value[mask] = 0.0
 
+    def _next(self, value: Any, error: Any) -> Any:
+        return np.clip(self.decay * value + self.dt_s * error, -self.limit, self.limit)
+
     def update(self, obs: np.ndarray) -> np.ndarray:
         """Advance with the observations after a step; returns the new values."""
-        self.value = np.clip(self.decay * self.value + self.dt_s * obs[:, _DEPTH_ERROR], -self.limit, self.limit)
+        self.value = self._next(self.value, obs[:, _DEPTH_ERROR])
         return self.value
 
     def peek(self, index: int, obs: np.ndarray) -> float:
         """What :meth:`update` would make environment ``index``'s value for its observation ``obs``
         (shape (obs_dim,)), without changing the state."""
-        return float(np.clip(self.decay * self.value[index] + self.dt_s * obs[_DEPTH_ERROR], -self.limit, self.limit))
+        return float(self._next(self.value[index], obs[_DEPTH_ERROR]))
 
     def append(self, obs: np.ndarray, values: np.ndarray) -> np.ndarray:
         return np.concatenate([obs, values[:, None].astype(obs.dtype)], axis=1)

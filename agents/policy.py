@@ -13,6 +13,7 @@ classical controllers at the same speed. ``tests/agents`` checks it against ``mo
 
 from __future__ import annotations
 
+import io
 import pickle
 import re
 from dataclasses import dataclass
@@ -23,8 +24,10 @@ import numpy as np
 from gymnasium import spaces
 
 from agents.config import AgentConfig, load_config
+from subenv.evaluation.results import atomic_write_bytes
 
-__all__ = ["CONFIG_FILE", "MODEL_FILE", "VECNORMALIZE_FILE", "NumpyActor", "TrainedAgent", "load_agent"]
+__all__ = ["CONFIG_FILE", "MODEL_FILE", "VECNORMALIZE_FILE", "NumpyActor", "TrainedAgent", "load_agent",
+           "save_model", "save_statistics"]
 
 MODEL_FILE: Final = "model.zip"
 VECNORMALIZE_FILE: Final = "vecnormalize.pkl"
@@ -121,6 +124,15 @@ class TrainedAgent:
     def __post_init__(self) -> None:
         self.actor = NumpyActor(self.model)
 
+    @classmethod
+    def from_model(cls, path: Path, model: Any, config: AgentConfig, stats: Any = None) -> TrainedAgent:
+        """The agent of ``model`` with the observation statistics of ``stats`` (a ``VecNormalize``; None:
+        trained without observation normalisation)."""
+        if stats is None:
+            return cls(path, model, config, None, None, 10.0, 1e-8)
+        return cls(path, model, config, np.asarray(stats.obs_rms.mean, dtype=float),
+                   np.asarray(stats.obs_rms.var, dtype=float), float(stats.clip_obs), float(stats.epsilon))
+
     @property
     def observation_space(self) -> spaces.Box:
         return self.model.observation_space  # type: ignore[no-any-return]
@@ -213,23 +225,33 @@ def load_agent(path: str | Path, env: Any = None, device: str = "cpu") -> Traine
     match = _CHECKPOINT.match(model_file.name)
     stats_file = (model_file.parent / f"{match['prefix']}_vecnormalize_{match['steps']}_steps.pkl" if match
                   else run_dir / VECNORMALIZE_FILE)
-    mean = var = None
-    clip_obs, epsilon = 10.0, 1e-8
+    stats = None
     if config.normalize is not None and config.normalize.norm_obs:
         if not stats_file.is_file():
             raise FileNotFoundError(f"{str(model_file)!r} was trained with normalised observations, but its "
                                     f"statistics {str(stats_file)!r} are missing")
         with stats_file.open("rb") as f:
             stats = pickle.load(f)  # noqa: S301 - our own VecNormalize file, as SB3's VecNormalize.load does
-        mean, var = np.asarray(stats.obs_rms.mean, dtype=float), np.asarray(stats.obs_rms.var, dtype=float)
-        clip_obs, epsilon = float(stats.clip_obs), float(stats.epsilon)
-        if mean.shape != model.observation_space.shape:
-            raise ValueError(f"{str(stats_file)!r} has statistics of shape {mean.shape}; the model observes "
+        shape = np.shape(stats.obs_rms.mean)
+        if shape != model.observation_space.shape:
+            raise ValueError(f"{str(stats_file)!r} has statistics of shape {shape}; the model observes "
                              f"{model.observation_space.shape}")
-    agent = TrainedAgent(model_file, model, config, mean, var, clip_obs, epsilon)
+    agent = TrainedAgent.from_model(model_file, model, config, stats)
     if env is not None:
         agent.check_spaces(env)
     return agent
+
+
+def save_model(model: Any, path: Path) -> None:
+    """``model.save`` completely or not at all (SB3 saves into a buffer, written atomically)."""
+    buffer = io.BytesIO()
+    model.save(buffer)
+    atomic_write_bytes(path, buffer.getvalue())
+
+
+def save_statistics(venv: Any, path: Path) -> None:
+    """``VecNormalize.save`` (a pickle without the wrapped env) completely or not at all."""
+    atomic_write_bytes(path, pickle.dumps(venv))
 
 
 def read_config(path: Path) -> AgentConfig:

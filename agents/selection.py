@@ -18,9 +18,7 @@ The selection's cost is part of the training run's wall time.
 
 from __future__ import annotations
 
-import io
 import json
-import pickle
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, Final
@@ -29,7 +27,7 @@ import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
 from agents.config import AgentConfig
-from agents.policy import CONFIG_FILE, MODEL_FILE, VECNORMALIZE_FILE, TrainedAgent
+from agents.policy import CONFIG_FILE, MODEL_FILE, VECNORMALIZE_FILE, TrainedAgent, save_model, save_statistics
 from subenv.evaluation.results import atomic_output_dir, atomic_write_bytes, atomic_write_text
 
 __all__ = ["SELECTED_DIR", "SELECTION_SCENARIOS", "VALIDATION_SEED", "SelectionCallback", "validation_score"]
@@ -109,13 +107,8 @@ class SelectionCallback(BaseCallback):
 
     def _evaluate(self) -> None:
         venv = self.model.get_vec_normalize_env()
-        mean = var = None
-        clip_obs, epsilon = 10.0, 1e-8
-        if venv is not None and venv.norm_obs:
-            mean, var = np.array(venv.obs_rms.mean, dtype=float), np.array(venv.obs_rms.var, dtype=float)
-            clip_obs, epsilon = float(venv.clip_obs), float(venv.epsilon)
-        agent = TrainedAgent(self.run_dir / SELECTED_DIR / MODEL_FILE, self.model, self.config, mean, var,
-                             clip_obs, epsilon)
+        agent = TrainedAgent.from_model(self.run_dir / SELECTED_DIR / MODEL_FILE, self.model, self.config,
+                                        venv if venv is not None and venv.norm_obs else None)
         score = {"timestep": self.num_timesteps, **validation_score(agent, self.scenarios, self.episodes)}
         self.history.append(score)
         self.logger.record("selection/success_rate", score["success_rate"])
@@ -131,12 +124,10 @@ class SelectionCallback(BaseCallback):
         self._write_record()
 
     def _save(self, venv: Any) -> None:
-        buffer = io.BytesIO()
-        self.model.save(buffer)
         with atomic_output_dir(self.run_dir / SELECTED_DIR, overwrite=True) as tmp:
-            atomic_write_bytes(tmp / MODEL_FILE, buffer.getvalue())
+            save_model(self.model, tmp / MODEL_FILE)
             if venv is not None:
-                atomic_write_bytes(tmp / VECNORMALIZE_FILE, pickle.dumps(venv))
+                save_statistics(venv, tmp / VECNORMALIZE_FILE)
             atomic_write_bytes(tmp / CONFIG_FILE, (self.run_dir / CONFIG_FILE).read_bytes())
 
     def _write_record(self) -> None:

@@ -27,10 +27,8 @@ stage included) into a new folder.
 from __future__ import annotations
 
 import argparse
-import io
 import json
 import os
-import pickle
 import platform
 import shutil
 import sys
@@ -44,8 +42,8 @@ from typing import Any, Final
 import yaml
 
 from agents.config import ALGORITHMS, AgentConfig, algorithm_class, load_config, model_kwargs, parse_overrides
-from agents.policy import CONFIG_FILE, MODEL_FILE, VECNORMALIZE_FILE, load_agent
-from subenv.evaluation.results import atomic_write_bytes, atomic_write_text
+from agents.policy import CONFIG_FILE, MODEL_FILE, VECNORMALIZE_FILE, load_agent, save_model, save_statistics
+from subenv.evaluation.results import atomic_write_text
 
 __all__ = ["DEFAULT_ENV_ID", "EVAL_SEED_OFFSET", "TrainResult", "main", "make_vec_env", "train"]
 
@@ -215,9 +213,9 @@ def train(
                 reset_num_timesteps=trained_agent is None)
     wall = time.perf_counter() - start
 
-    _save_model(model, run_dir / MODEL_FILE)
+    save_model(model, run_dir / MODEL_FILE)
     if isinstance(venv, VecNormalize):
-        _save_statistics(venv, run_dir / VECNORMALIZE_FILE)
+        save_statistics(venv, run_dir / VECNORMALIZE_FILE)
     advances = tuple(curriculum_callback.advances) if curriculum_callback else ()
     final_stage = curriculum_callback.schedule.stage if curriculum_callback else None
     atomic_write_text(run_dir / "train.json", json.dumps({
@@ -254,18 +252,6 @@ def _stats_file(model_file: Path) -> Path:
     if match:
         return model_file.parent / f"{match['prefix']}_vecnormalize_{match['steps']}_steps.pkl"
     return _run_dir_of(model_file) / VECNORMALIZE_FILE
-
-
-def _save_model(model: Any, path: Path) -> None:
-    """``model.save`` completely or not at all (SB3 saves into a buffer, written atomically)."""
-    buffer = io.BytesIO()
-    model.save(buffer)
-    atomic_write_bytes(path, buffer.getvalue())
-
-
-def _save_statistics(venv: Any, path: Path) -> None:
-    """``VecNormalize.save`` (a pickle without the wrapped env) completely or not at all."""
-    atomic_write_bytes(path, pickle.dumps(venv))
 
 
 def _quote(arg: str) -> str:
