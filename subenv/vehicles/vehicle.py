@@ -291,7 +291,12 @@ class Vehicle:
         if not changes and name is None:
             return self
         changes["name"] = name if name is not None else f"{self.name}[{','.join(labels)}]"
-        return dataclasses.replace(self, **changes)
+        vehicle = dataclasses.replace(self, **changes)
+        if "coefficients" in self.__dict__:
+            # The loading (G, B, C_D) does not enter the dimensional derivatives: share them (an
+            # environment makes a variant at every reset of a scenario with a random loading).
+            vehicle.__dict__["coefficients"] = self.__dict__["coefficients"]
+        return vehicle
 
     def to_dict(self) -> Mapping[str, Any]:
         """The vehicle's stored fields (SI), e.g. for logging."""

@@ -118,3 +118,49 @@ def test_a_custom_scenario_object_runs_without_registration():
     env = subenv.DivePlaneEnv(scenario=custom)
     _, info = env.reset(seed=0)
     assert info["speed_mps"] == pytest.approx(0.2 * info["critical_speed_mps"])
+
+
+def test_one_call_draws_are_numpys_uniform_draws() -> None:
+    # Scenario.sample takes its uniform numbers with one rng.random(k) call instead of k calls of
+    # rng.uniform(low, high); that is only the same episode if NumPy's uniform is
+    # low + (high - low) * next_double, value for value.
+    from subenv.scenarios.scenario import _Uniforms
+
+    intervals = [(-2.0, 2.0), (0.0, 1e-9), (8, 15), (1.524, 1.524), (0.3, 1.15), (-1e3, 1e5), (0.0, 0.6)]
+    for seed in range(50):
+        ours, numpys = np.random.default_rng(seed), np.random.default_rng(seed)
+        uniforms = _Uniforms(ours, sum(1 for low, high in intervals if low != high))
+        for low, high in intervals:
+            expected = float(low) if low == high else float(numpys.uniform(low, high))
+            assert uniforms.draw((low, high)) == expected
+        uniforms.finish()
+        assert ours.random() == numpys.random()  # both generators are left in the same state
+
+
+def test_sample_draws_one_number_per_random_quantity() -> None:
+    # Every quantity random: speed, the ramp's start, length and final speed, command, offset,
+    # pitch, heave, pitch rate, z_GB, x_GB and its sign, z_GB scale, excess buoyancy, C_D: 15 numbers.
+    scenario = Scenario(
+        name="AllRandom", description="every quantity drawn", speed_mps=(0.5, 1.0),
+        speed_ramp=SpeedRamp(final_speed_mps=(0.2, 0.4), start_s=(10.0, 20.0), duration_s=(30.0, 60.0)),
+        depth_command_m=(8.0, 15.0), initial_depth_offset_m=(-2.0, 2.0), initial_pitch_rad=(-0.05, 0.05),
+        initial_heave_mps=(-0.01, 0.01), initial_pitch_rate_radps=(-0.001, 0.001), z_GB_m=(0.01, 0.02),
+        z_GB_scale=(0.9, 1.1), x_GB_m=(0.001, 0.003), x_GB_sign_random=True, excess_buoyancy_fraction=(0.0, 0.01),
+        crossflow_drag=(0.0, 0.6),
+    )
+    for name, expected in ((scenario, 15), (get_scenario("Nominal"), 3)):
+        rng, twin = np.random.default_rng(5), np.random.default_rng(5)
+        for _ in range(20):
+            name.sample(rng, 1000.0)
+            twin.random(expected)
+            assert rng.bit_generator.state == twin.bit_generator.state
+
+
+@pytest.mark.parametrize("name", ["Nominal", "SpeedTransient", "BallastOffset", "Randomized", "Mixed"])
+def test_sample_takes_the_draws_it_counted(name: str) -> None:
+    # finish() raises if a sample used fewer or more numbers than it drew: a miscount would shift
+    # every later draw of the generator (sensor noise, the next episodes).
+    scenario = get_scenario(name)
+    rng = np.random.default_rng(0)
+    configs = [scenario.sample(rng, 1000.0) for _ in range(200)]
+    assert len({c.depth_command_m for c in configs}) > 1  # (it draws: not the same episode every time)
