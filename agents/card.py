@@ -160,6 +160,23 @@ def _policy(train: dict[str, Any], selection: dict[str, Any] | None) -> str:
             f"{selection['validation_seed']} + i (not the evaluation's below); the validations are part of the training time.")
 
 
+def _shaping(config: dict[str, Any], continued: bool) -> str:
+    """The card's line on the training-only reward terms (:mod:`agents.shaping`), if the config has any."""
+    terms = []
+    if config.get("plane_effort_l1"):
+        speed = config.get("plane_effort_reference_speed_mps")
+        terms.append(f"an L1 plane penalty of weight {config['plane_effort_l1']:g}"
+                     + (f" x u / {speed:g} m/s" if speed else ""))
+    band = config.get("depth_band_bonus")
+    if band:
+        terms.append(f"a bonus of {band['bonus']:g} per step that ends within {band['half_width_m']:g} m of the "
+                     "ordered depth")
+    if not terms:
+        return ""
+    where = " of the last run (`config.yml`)" if continued else ""
+    return f"- Reward shaping, training only (`agents/shaping.py`){where}: {' and '.join(terms)}.\n"
+
+
 def _card(name: str, train: dict[str, Any], config: dict[str, Any], suite: dict[str, Any], held: dict[str, Any], met: bool,
           detail: str, episodes: int, held_out_episodes: int, selection: dict[str, Any] | None = None) -> str:
     total_s = total_training_time_s(train)
@@ -188,7 +205,7 @@ Registered as the controller `{name}` of `subenv evaluate` (`import agents`); lo
 - Training time: {total_s:.0f} s ({total_s / 60:.1f} min) of wall-clock time on {train['machine']}
   ({train['torch_threads']} torch thread), the learning itself (model set-up and the final save not
   counted); `train.json` has the record.
-{_policy(train, selection)}
+{_shaping(config, bool(parents))}{_policy(train, selection)}
 - Versions: {', '.join(f'{k} {v}' for k, v in train['versions'].items())}.
 
 ## Evaluation

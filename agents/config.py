@@ -12,6 +12,7 @@ any id that has none of its own (rl-zoo's layout, with that one addition)::
       curriculum: {threshold: 0.8, window: 100}                    # or false (see agents.curriculum)
       depth_integral: {time_constant_s: 100.0}                     # or false (see agents.features)
       plane_effort_l1: 0.5                                         # training-only (see agents.shaping)
+      depth_band_bonus: {half_width_m: 0.3, bonus: 0.5}            # or false; training-only (agents.shaping)
       policy_kwargs: {net_arch: [64, 64], activation_fn: tanh}
       learning_rate: lin_3.0e-4   # "lin_<x>": linear decay from x to 0, as in rl-zoo
       n_steps: 256                # ... any other argument of the algorithm's constructor
@@ -37,6 +38,7 @@ __all__ = [
     "HYPERPARAMS_DIR",
     "AgentConfig",
     "CurriculumConfig",
+    "DepthBandBonusConfig",
     "DepthIntegralConfig",
     "NormalizeConfig",
     "algorithm_class",
@@ -142,6 +144,22 @@ class DepthIntegralConfig:
 
 
 @dataclass(frozen=True)
+class DepthBandBonusConfig:
+    """The training-only depth-band bonus (:mod:`agents.shaping`): ``bonus`` for every step that ends
+    within ``half_width_m`` [m] of the ordered depth."""
+
+    half_width_m: float = 0.3
+    bonus: float = 0.5
+
+    def __post_init__(self) -> None:
+        for name in ("half_width_m", "bonus"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+                    and value > 0):
+                raise ValueError(f"depth_band_bonus {name}={value!r} is invalid: must be a finite number > 0")
+
+
+@dataclass(frozen=True)
 class AgentConfig:
     """Everything that defines a training run but the seed, resolved from a hyperparameter file.
 
@@ -163,6 +181,8 @@ class AgentConfig:
     """Weight of the training-only L1 penalty on the plane commands (:mod:`agents.shaping`); 0: none."""
     plane_effort_reference_speed_mps: float | None = None
     """With it, the L1 weight scales with the speed u of the step: weight * u / this (None: constant)."""
+    depth_band_bonus: DepthBandBonusConfig | None = None
+    """The training-only bonus for steps that end near the ordered depth (:mod:`agents.shaping`); None: none."""
     policy_kwargs: dict[str, Any] = field(default_factory=dict)
     algo_kwargs: dict[str, Any] = field(default_factory=dict)
 
@@ -174,6 +194,7 @@ class AgentConfig:
         out["depth_integral"] = asdict(self.depth_integral) if self.depth_integral else False
         out["plane_effort_l1"] = self.plane_effort_l1
         out["plane_effort_reference_speed_mps"] = self.plane_effort_reference_speed_mps
+        out["depth_band_bonus"] = asdict(self.depth_band_bonus) if self.depth_band_bonus else False
         if self.curriculum is None:
             out["curriculum"] = False
         else:
@@ -286,6 +307,7 @@ def _from_entry(algo: str, env_id: str, entry: dict[str, Any], where: str) -> Ag
                                      and math.isfinite(l1_speed) and l1_speed > 0):
         raise ValueError(f"{where}: plane_effort_reference_speed_mps={l1_speed!r} is invalid: must be null or a "
                          "finite number > 0")
+    band = _section(where, "depth_band_bonus", entry.pop("depth_band_bonus", False), DepthBandBonusConfig)
     policy_kwargs = entry.pop("policy_kwargs", {}) or {}
     if not isinstance(policy_kwargs, dict):
         raise ValueError(f"{where}: policy_kwargs={policy_kwargs!r} is invalid: must be a mapping")
@@ -301,6 +323,7 @@ def _from_entry(algo: str, env_id: str, entry: dict[str, Any], where: str) -> Ag
                        depth_integral=None if integral is None else DepthIntegralConfig(**integral),
                        plane_effort_l1=float(l1),
                        plane_effort_reference_speed_mps=None if l1_speed is None else float(l1_speed),
+                       depth_band_bonus=None if band is None else DepthBandBonusConfig(**band),
                        policy_kwargs=policy_kwargs, algo_kwargs=entry)
 
 

@@ -67,17 +67,20 @@ class TrainResult:
 
 
 def make_vec_env(config: AgentConfig, n_envs: int, seed: int, curriculum: bool = False) -> Any:
-    """The native vector env of ``config`` for SB3, with (if configured) the L1 plane-effort penalty and the
-    depth-error integral observation, ``VecMonitor`` and (if configured) ``VecNormalize``."""
+    """The native vector env of ``config`` for SB3, with (if configured) the depth-band bonus, the L1
+    plane-effort penalty and the depth-error integral observation, ``VecMonitor`` and (if configured) ``VecNormalize``."""
     from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
 
+    from agents.shaping import DEPTH_ERROR_KEY, DepthBandBonusVecEnv, PlaneEffortL1VecEnv
     from subenv.envs.sb3 import make_sb3_vec_env
 
-    venv = make_sb3_vec_env(config.env_id, n_envs=n_envs, seed=seed,
-                            info_keys=_INFO_KEYS_CURRICULUM if curriculum else (), **config.env_kwargs)
+    info_keys: tuple[str, ...] = _INFO_KEYS_CURRICULUM if curriculum else ()
+    if config.depth_band_bonus is not None and DEPTH_ERROR_KEY not in info_keys:
+        info_keys += (DEPTH_ERROR_KEY,)
+    venv = make_sb3_vec_env(config.env_id, n_envs=n_envs, seed=seed, info_keys=info_keys, **config.env_kwargs)
+    if config.depth_band_bonus is not None:
+        venv = DepthBandBonusVecEnv(venv, config.depth_band_bonus.half_width_m, config.depth_band_bonus.bonus)
     if config.plane_effort_l1 > 0:
-        from agents.shaping import PlaneEffortL1VecEnv
-
         venv = PlaneEffortL1VecEnv(venv, config.plane_effort_l1, config.plane_effort_reference_speed_mps)
     if config.depth_integral is not None:
         from agents.features import DepthIntegralVecEnv

@@ -35,6 +35,10 @@ def test_shipped_file_loads_for_every_registered_id(algo: str) -> None:
         ({"plane_effort_l1": -0.5}, "plane_effort_l1"),
         ({"plane_effort_l1": "0.5"}, "plane_effort_l1"),
         ({"plane_effort_reference_speed_mps": 0.0}, "plane_effort_reference_speed_mps"),
+        ({"depth_band_bonus": {"width_m": 0.3}}, "width_m"),
+        ({"depth_band_bonus": {"half_width_m": 0.0}}, "half_width_m"),
+        ({"depth_band_bonus": {"bonus": float("nan")}}, "bonus"),
+        ({"depth_band_bonus": 0.5}, "depth_band_bonus"),
         ({"policy_kwargs": {"activation_fn": "nn.Tanh"}}, "activation_fn"),  # no eval of strings
         ({"learning_rate": "lin3e-4"}, "learning_rate"),
         ({"n_timesteps": -5}, "n_timesteps"),
@@ -100,3 +104,14 @@ def test_overrides_are_parsed_as_yaml() -> None:
         "learning_rate": 1e-4, "policy_kwargs": {"net_arch": [32, 32]}, "curriculum": False}
     with pytest.raises(ValueError, match="key:value"):
         parse_overrides(["learning_rate"])
+
+
+def test_depth_band_bonus_round_trips_through_yaml() -> None:
+    config = load_config("ppo", "subenv/LowSpeed-v0", overrides={"depth_band_bonus": {"half_width_m": 0.25}})
+    assert config.depth_band_bonus is not None
+    assert (config.depth_band_bonus.half_width_m, config.depth_band_bonus.bonus) == (0.25, 0.5)
+    entry = config.to_yaml_dict()
+    assert entry["depth_band_bonus"] == {"half_width_m": 0.25, "bonus": 0.5}
+    assert load_config("ppo", "subenv/LowSpeed-v0", overrides=entry) == config
+    off = load_config("ppo", "subenv/LowSpeed-v0", overrides={"depth_band_bonus": False})
+    assert off.depth_band_bonus is None and off.to_yaml_dict()["depth_band_bonus"] is False
