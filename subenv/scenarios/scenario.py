@@ -38,45 +38,22 @@ def _check_interval(name: str, value: Interval, low: float = -math.inf, high: fl
         )
 
 
-def _draws(intervals: Sequence[Interval | None]) -> int:
-    """How many uniform numbers drawing ``intervals`` takes (None and fixed values take none)."""
-    return sum(1 for i in intervals if i is not None and i[0] != i[1])
+_UNIT: Interval = (0.0, 1.0)
+"""The interval whose draw is the uniform number itself (0 + 1 u == u): for a coin flip among the draws."""
 
 
-class _Uniforms:
-    """The uniform draws of one :meth:`Scenario.sample`, taken from the generator in one call.
+def _draw_intervals(rng: np.random.Generator, intervals: Sequence[Interval]) -> list[float]:
+    """One number per interval, uniform in it (its value if fixed, drawing nothing), in order.
 
-    ``rng.random(k)`` yields, in order, the doubles that ``k`` calls of ``rng.uniform(low, high)``
-    would use, and NumPy's uniform is ``low + (high - low) * next_double``
-    (``numpy/random/src/distributions/distributions.c``, ``random_uniform``). So one call per
-    sample draws the same episode, value for value, and leaves the generator in the same state,
-    at a fraction of the cost of a NumPy call per number (resets are where a vector env spends its
-    Python time).
+    The uniform numbers come from one ``rng.random(k)`` call. It yields, in order, the doubles
+    that ``k`` calls of ``rng.uniform(low, high)`` would use, and NumPy's uniform is
+    ``low + (high - low) * next_double`` (``numpy/random/src/distributions/distributions.c``,
+    ``random_uniform``): the same numbers, and the generator left in the same state, at a fraction
+    of the cost of a NumPy call per number (resets are where a vector env spends its Python time).
     """
-
-    __slots__ = ("_next", "_values")
-
-    def __init__(self, rng: np.random.Generator, count: int) -> None:
-        self._values: list[float] = rng.random(count).tolist() if count else []
-        self._next = 0
-
-    def unit(self) -> float:
-        """The next number, uniform in [0, 1)."""
-        value = self._values[self._next]
-        self._next += 1
-        return value
-
-    def draw(self, interval: Interval) -> float:
-        """A number uniform in the closed ``interval`` (its value if fixed, drawing nothing)."""
-        low, high = interval
-        if low == high:
-            return float(low)
-        return float(low + (high - low) * self.unit())
-
-    def finish(self) -> None:
-        """Check that the count the draws were taken for was exact (a miscount would shift every later draw)."""
-        if self._next != len(self._values):
-            raise RuntimeError(f"Scenario.sample used {self._next} uniform numbers of the {len(self._values)} drawn")
+    count = sum(1 for low, high in intervals if low != high)
+    units = iter(rng.random(count).tolist() if count else ())
+    return [float(low) if low == high else float(low + (high - low) * next(units)) for low, high in intervals]
 
 
 @dataclass(frozen=True)
@@ -247,65 +224,55 @@ class Scenario:
             pick = names[int(rng.integers(len(names)))]
             base = registry[pick] if registry is not None else get_scenario(pick)
             config = base.sample(rng, weight_N, registry)
-            uniforms = _Uniforms(rng, _draws((self.z_GB_scale, self.crossflow_drag)))
-            config = dataclasses.replace(
+            drawn = iter(_draw_intervals(rng, (self.z_GB_scale,) if self.crossflow_drag is None
+                                         else (self.z_GB_scale, self.crossflow_drag)))
+            return dataclasses.replace(
                 config,
-                z_GB_scale=config.z_GB_scale * uniforms.draw(self.z_GB_scale),
-                crossflow_drag=(
-                    uniforms.draw(self.crossflow_drag) if self.crossflow_drag is not None else config.crossflow_drag
-                ),
+                z_GB_scale=config.z_GB_scale * next(drawn),
+                crossflow_drag=next(drawn) if self.crossflow_drag is not None else config.crossflow_drag,
                 sensor_noise=self.sensor_noise or config.sensor_noise,
                 disturbance_std_N=max(self.disturbance_std_N, config.disturbance_std_N),
             )
-            uniforms.finish()
-            return config
-        uniforms = _Uniforms(rng, self._uniform_count)
-        _draw = uniforms.draw
-        speed0 = _draw(self.speed_mps)
+        drawn = iter(_draw_intervals(rng, self._draw_order))
+        speed0 = next(drawn)
         knots: tuple[tuple[float, float], ...] = ((0.0, speed0),)
         if self.speed_ramp is not None:
-            start = _draw(self.speed_ramp.start_s)
-            length = _draw(self.speed_ramp.duration_s)
-            final = _draw(self.speed_ramp.final_speed_mps)
+            start, length, final = next(drawn), next(drawn), next(drawn)
             knots = ((0.0, speed0), (start, speed0), (start + length, final))
-        command = _draw(self.depth_command_m)
-        depth = command + _draw(self.initial_depth_offset_m)
-        state = (
-            _draw(self.initial_pitch_rad),
-            _draw(self.initial_heave_mps),
-            _draw(self.initial_pitch_rate_radps),
-            depth,
-        )
-        z_GB = _draw(self.z_GB_m) if self.z_GB_m is not None else None
-        x_GB = _draw(self.x_GB_m)
-        if self.x_GB_sign_random and uniforms.unit() < 0.5:
+        command = next(drawn)
+        depth = command + next(drawn)
+        state = (next(drawn), next(drawn), next(drawn), depth)
+        z_GB = next(drawn) if self.z_GB_m is not None else None
+        x_GB = next(drawn)
+        if self.x_GB_sign_random and next(drawn) < 0.5:
             x_GB = -x_GB
-        config = EpisodeConfig(
+        return EpisodeConfig(
             speed_knots=knots,
             speed_relative=self.speed_relative,
             depth_command_m=command,
             initial_state=state,
             z_GB_m=z_GB,
-            z_GB_scale=_draw(self.z_GB_scale),
+            z_GB_scale=next(drawn),
             x_GB_m=x_GB,
-            excess_buoyancy_N=_draw(self.excess_buoyancy_fraction) * weight_N,
-            crossflow_drag=_draw(self.crossflow_drag) if self.crossflow_drag is not None else None,
+            excess_buoyancy_N=next(drawn) * weight_N,
+            crossflow_drag=next(drawn) if self.crossflow_drag is not None else None,
             sensor_noise=self.sensor_noise,
             disturbance_std_N=self.disturbance_std_N,
             duration_s=self.duration_s,
         )
-        uniforms.finish()
-        return config
 
     @cached_property
-    def _uniform_count(self) -> int:
-        """How many uniform numbers a plain (component-free) :meth:`sample` draws: one per interval
-        that is not a fixed value, in the order it draws them, and one for the sign of x_GB."""
+    def _draw_order(self) -> tuple[Interval, ...]:
+        """The intervals a plain (component-free) :meth:`sample` draws, in the order it uses them."""
         ramp = self.speed_ramp
-        return _draws((
+        return (
             self.speed_mps,
             *((ramp.start_s, ramp.duration_s, ramp.final_speed_mps) if ramp is not None else ()),
-            self.depth_command_m, self.initial_depth_offset_m, self.initial_pitch_rad, self.initial_heave_mps,
-            self.initial_pitch_rate_radps, self.z_GB_m, self.x_GB_m, self.z_GB_scale, self.excess_buoyancy_fraction,
-            self.crossflow_drag,
-        )) + (1 if self.x_GB_sign_random else 0)
+            self.depth_command_m, self.initial_depth_offset_m,
+            self.initial_pitch_rad, self.initial_heave_mps, self.initial_pitch_rate_radps,
+            *((self.z_GB_m,) if self.z_GB_m is not None else ()),
+            self.x_GB_m,
+            *((_UNIT,) if self.x_GB_sign_random else ()),
+            self.z_GB_scale, self.excess_buoyancy_fraction,
+            *((self.crossflow_drag,) if self.crossflow_drag is not None else ()),
+        )

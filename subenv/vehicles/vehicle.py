@@ -7,9 +7,10 @@ disagree with itself.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
@@ -152,6 +153,10 @@ class DimensionalCoefficients:
     M_delta_b: float
 
 
+_POSITIVE_FIELDS = ("length_m", "weight_N", "buoyancy_N", "inertia_y_kg_m2", "water_density_kg_m3", "gravity_m_s2")
+_CHECKED_FIELDS = (*_POSITIVE_FIELDS, "x_G_m", "z_G_m", "x_B_m", "z_B_m", "crossflow_drag")
+
+
 @dataclass(frozen=True)
 class Vehicle:
     """A submarine's vertical-plane model data, in SI units (m, kg, N, s, rad).
@@ -181,17 +186,18 @@ class Vehicle:
     source: str = ""
 
     def __post_init__(self) -> None:
-        for name in ("length_m", "weight_N", "buoyancy_N", "inertia_y_kg_m2",
-                     "water_density_kg_m3", "gravity_m_s2"):
-            _require_positive(name, getattr(self, name))
-        for name in ("x_G_m", "z_G_m", "x_B_m", "z_B_m"):
-            _require_finite(name, getattr(self, name))
-        _require(
-            "crossflow_drag",
-            self.crossflow_drag,
-            isinstance(self.crossflow_drag, (int, float)) and self.crossflow_drag >= 0,
-            "a finite number >= 0",
-        )
+        self._check(_CHECKED_FIELDS)
+
+    def _check(self, names: Iterable[str]) -> None:
+        """Validate the fields ``names`` (of :data:`_CHECKED_FIELDS`)."""
+        for name in names:
+            value = getattr(self, name)
+            if name in _POSITIVE_FIELDS:
+                _require_positive(name, value)
+            elif name == "crossflow_drag":
+                _require(name, value, isinstance(value, (int, float)) and value >= 0, "a finite number >= 0")
+            elif name != "name":
+                _require_finite(name, value)
 
     # --- derived quantities -------------------------------------------------------------
     @property
@@ -291,11 +297,14 @@ class Vehicle:
         if not changes and name is None:
             return self
         changes["name"] = name if name is not None else f"{self.name}[{','.join(labels)}]"
-        vehicle = dataclasses.replace(self, **changes)
-        if "coefficients" in self.__dict__:
-            # The loading (G, B, C_D) does not enter the dimensional derivatives: share them (an
-            # environment makes a variant at every reset of a scenario with a random loading).
-            vehicle.__dict__["coefficients"] = self.__dict__["coefficients"]
+        # A copy with the changed fields set and checked: the others were checked when this vehicle
+        # was made, and the cached dimensional derivatives stay valid, as the loading (G, B, C_D)
+        # does not enter them. (An environment makes a variant at every reset of a scenario with a
+        # random loading; dataclasses.replace would check and derive everything again.)
+        vehicle = copy.copy(self)
+        for field_name, value in changes.items():
+            object.__setattr__(vehicle, field_name, value)
+        vehicle._check(changes)
         return vehicle
 
     def to_dict(self) -> Mapping[str, Any]:

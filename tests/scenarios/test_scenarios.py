@@ -124,43 +124,49 @@ def test_one_call_draws_are_numpys_uniform_draws() -> None:
     # Scenario.sample takes its uniform numbers with one rng.random(k) call instead of k calls of
     # rng.uniform(low, high); that is only the same episode if NumPy's uniform is
     # low + (high - low) * next_double, value for value.
-    from subenv.scenarios.scenario import _Uniforms
+    from subenv.scenarios.scenario import _draw_intervals
 
     intervals = [(-2.0, 2.0), (0.0, 1e-9), (8, 15), (1.524, 1.524), (0.3, 1.15), (-1e3, 1e5), (0.0, 0.6)]
     for seed in range(50):
         ours, numpys = np.random.default_rng(seed), np.random.default_rng(seed)
-        uniforms = _Uniforms(ours, sum(1 for low, high in intervals if low != high))
-        for low, high in intervals:
-            expected = float(low) if low == high else float(numpys.uniform(low, high))
-            assert uniforms.draw((low, high)) == expected
-        uniforms.finish()
+        expected = [float(low) if low == high else float(numpys.uniform(low, high)) for low, high in intervals]
+        assert _draw_intervals(ours, intervals) == expected
         assert ours.random() == numpys.random()  # both generators are left in the same state
 
 
+_ALL_RANDOM = Scenario(
+    # Every quantity drawn, from pairwise disjoint intervals: a value landing in another's field shows.
+    name="AllRandom", description="every quantity drawn", speed_mps=(1.2, 1.4),
+    speed_ramp=SpeedRamp(final_speed_mps=(0.2, 0.4), start_s=(10.0, 20.0), duration_s=(30.0, 60.0)),
+    depth_command_m=(8.0, 9.5), initial_depth_offset_m=(-2.0, -1.0), initial_pitch_rad=(0.02, 0.05),
+    initial_heave_mps=(0.1, 0.15), initial_pitch_rate_radps=(0.001, 0.002), z_GB_m=(0.006, 0.009),
+    z_GB_scale=(0.9, 1.1), x_GB_m=(0.003, 0.004), x_GB_sign_random=True, excess_buoyancy_fraction=(0.011, 0.013),
+    crossflow_drag=(0.45, 0.6),
+)
+
+
+def test_sample_puts_every_draw_in_its_place() -> None:
+    rng = np.random.default_rng(2)
+    signs = set()
+    for _ in range(50):
+        c = _ALL_RANDOM.sample(rng, 1000.0)
+        (t0, u0), (t1, u1), (t2, u2) = c.speed_knots
+        assert t0 == 0.0 and u0 == u1 and 1.2 <= u0 <= 1.4
+        assert 10.0 <= t1 <= 20.0 and 30.0 <= t2 - t1 <= 60.0 and 0.2 <= u2 <= 0.4
+        assert 8.0 <= c.depth_command_m <= 9.5 and -2.0 <= c.initial_state[3] - c.depth_command_m <= -1.0
+        pitch, heave, rate, _ = c.initial_state
+        assert 0.02 <= pitch <= 0.05 and 0.1 <= heave <= 0.15 and 0.001 <= rate <= 0.002
+        assert 0.006 <= c.z_GB_m <= 0.009 and 0.9 <= c.z_GB_scale <= 1.1 and 0.003 <= abs(c.x_GB_m) <= 0.004
+        assert 11.0 <= c.excess_buoyancy_N <= 13.0 and 0.45 <= c.crossflow_drag <= 0.6
+        signs.add(c.x_GB_m > 0)
+    assert signs == {True, False}
+
+
 def test_sample_draws_one_number_per_random_quantity() -> None:
-    # Every quantity random: speed, the ramp's start, length and final speed, command, offset,
-    # pitch, heave, pitch rate, z_GB, x_GB and its sign, z_GB scale, excess buoyancy, C_D: 15 numbers.
-    scenario = Scenario(
-        name="AllRandom", description="every quantity drawn", speed_mps=(0.5, 1.0),
-        speed_ramp=SpeedRamp(final_speed_mps=(0.2, 0.4), start_s=(10.0, 20.0), duration_s=(30.0, 60.0)),
-        depth_command_m=(8.0, 15.0), initial_depth_offset_m=(-2.0, 2.0), initial_pitch_rad=(-0.05, 0.05),
-        initial_heave_mps=(-0.01, 0.01), initial_pitch_rate_radps=(-0.001, 0.001), z_GB_m=(0.01, 0.02),
-        z_GB_scale=(0.9, 1.1), x_GB_m=(0.001, 0.003), x_GB_sign_random=True, excess_buoyancy_fraction=(0.0, 0.01),
-        crossflow_drag=(0.0, 0.6),
-    )
-    for name, expected in ((scenario, 15), (get_scenario("Nominal"), 3)):
+    # The 15 random quantities of AllRandom (the sign of x_GB is one), and Nominal's 3 (command, offset, pitch).
+    for scenario, expected in ((_ALL_RANDOM, 15), (get_scenario("Nominal"), 3)):
         rng, twin = np.random.default_rng(5), np.random.default_rng(5)
         for _ in range(20):
-            name.sample(rng, 1000.0)
+            scenario.sample(rng, 1000.0)
             twin.random(expected)
             assert rng.bit_generator.state == twin.bit_generator.state
-
-
-@pytest.mark.parametrize("name", ["Nominal", "SpeedTransient", "BallastOffset", "Randomized", "Mixed"])
-def test_sample_takes_the_draws_it_counted(name: str) -> None:
-    # finish() raises if a sample used fewer or more numbers than it drew: a miscount would shift
-    # every later draw of the generator (sensor noise, the next episodes).
-    scenario = get_scenario(name)
-    rng = np.random.default_rng(0)
-    configs = [scenario.sample(rng, 1000.0) for _ in range(200)]
-    assert len({c.depth_command_m for c in configs}) > 1  # (it draws: not the same episode every time)

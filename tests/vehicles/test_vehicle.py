@@ -18,7 +18,7 @@ else:  # pragma: no cover
 
 from subenv import load_vehicle
 from subenv.units import FOOT_M, POUND_FORCE_N, SLUG_KG
-from subenv.vehicles import available_vehicles, vehicle_from_dict
+from subenv.vehicles import Vehicle, available_vehicles, vehicle_from_dict
 
 
 def _suboff_file() -> dict:
@@ -165,3 +165,21 @@ def test_direct_construction_validates(suboff):
         dataclasses.replace(suboff, inertia_y_kg_m2=-5.0)
     with pytest.raises(ValueError, match=r"z_GB_m=nan is invalid"):
         suboff.variant(z_GB_m=math.nan)
+
+
+def test_variant_is_the_vehicle_built_from_scratch(suboff):
+    # variant() copies and checks only the changed fields; the result must be the vehicle that
+    # construction (which checks everything and derives from nothing cached) gives.
+    _ = suboff.coefficients  # cached on the original, carried over by the copy
+    v = suboff.variant(z_GB_m=0.02, x_GB_m=0.003, excess_buoyancy_N=-1.5, crossflow_drag=0.45)
+    fresh = Vehicle(**{f.name: getattr(v, f.name) for f in dataclasses.fields(v)})
+    assert v == fresh
+    assert v.coefficients == fresh.coefficients
+    assert (v.z_G_m, v.x_G_m, v.buoyancy_N) == (suboff.z_B_m + 0.02, suboff.x_B_m + 0.003, suboff.weight_N - 1.5)
+
+
+def test_variant_checks_what_it_changes(suboff):
+    with pytest.raises(ValueError, match=r"buoyancy_N=.* is invalid: must be a finite number > 0"):
+        suboff.variant(excess_buoyancy_N=-2 * suboff.weight_N)
+    with pytest.raises(ValueError, match=r"crossflow_drag=-0\.1 is invalid: must be a finite number >= 0"):
+        suboff.variant(crossflow_drag=-0.1)
