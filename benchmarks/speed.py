@@ -12,6 +12,9 @@ numbers depend on the machine; the ratios are what to compare):
    ``SyncVectorEnv`` over the single environment and Gymnasium's ``CartPoleVectorEnv``;
 3. integrator cost: simulated seconds per wall second, the envs' compiled RK4 against
    ``rk4`` over ``derivatives`` and ``scipy.integrate.solve_ivp``;
+   and where an env-step's time goes: the compiled step without resets and its parts (control
+   period, right-hand side, its sine and cosine, the hull integral), the Python resets, and the
+   ceiling the compiled step puts on two cores next to ``CartPoleVectorEnv``;
 4. peak memory at N = 4096 (a fresh process per environment);
 5. numba compile time: the first calls in a fresh process with an empty cache, then with the
    cache written by that process.
@@ -215,6 +218,120 @@ def integrator_table(seconds: float) -> list[str]:
     return lines
 
 
+def cost_table(seconds: float) -> list[str]:
+    """Where an env-step's time goes, on one thread: the compiled step without resets and its parts,
+    then the resets, and the ceiling they put on two cores next to CartPoleVectorEnv."""
+    import math
+
+    import numba
+
+    from subenv.dynamics import CONTROL_PERIOD_S, SUBSTEPS, control_period_point, model_params, pack_params, rhs_point
+    from subenv.dynamics.hull import crossflow_point
+    from subenv.envs import transition as tr
+
+    n = 4096
+    params = model_params(subenv.load_vehicle("suboff"))
+    prm, hull = pack_params(params), params.hull.packed
+    rng = np.random.default_rng(0)
+    states = np.column_stack([rng.uniform(-0.05, 0.05, n), rng.uniform(-0.05, 0.05, n), rng.uniform(-0.01, 0.01, n),
+                              rng.uniform(8.0, 15.0, n)])
+    out = np.zeros((n, 4))
+
+    @numba.njit
+    def periods(x: np.ndarray, out: np.ndarray) -> None:
+        for i in range(x.shape[0]):
+            out[i, 0], out[i, 1], out[i, 2], out[i, 3] = control_period_point(
+                x[i, 0], x[i, 1], x[i, 2], x[i, 3], 0.0, CONTROL_PERIOD_S, SUBSTEPS, 1.0, 0.0, 0.05, 0.0, 0.0,
+                prm, hull)
+
+    @numba.njit
+    def rhs(x: np.ndarray, out: np.ndarray) -> None:
+        for i in range(x.shape[0]):
+            out[i, 0], out[i, 1], out[i, 2], out[i, 3] = rhs_point(x[i, 0], x[i, 1], x[i, 2], 1.0, 0.05, 0.0, 0.0, 0.0,
+                                                                   prm, hull)
+
+    @numba.njit
+    def trig(x: np.ndarray, out: np.ndarray) -> None:
+        for i in range(x.shape[0]):
+            out[i, 0], out[i, 1] = math.cos(x[i, 0]), math.sin(x[i, 0])
+
+    @numba.njit
+    def drag(x: np.ndarray, out: np.ndarray) -> None:
+        for i in range(x.shape[0]):
+            out[i, 0], out[i, 1] = crossflow_point(x[i, 1], x[i, 2], hull)
+
+    def ns_per_item(run: Callable[[], None], items: int) -> float:
+        run()
+        best = math.inf
+        deadline = time.perf_counter() + seconds
+        while True:
+            start = time.perf_counter()
+            for _ in range(10):
+                run()
+            best = min(best, (time.perf_counter() - start) / 10 / items * 1e9)
+            if time.perf_counter() >= deadline:
+                return best
+
+    lines = ["| on one thread, N = 4096 | ns |", "|---|---:|"]
+    kernel: dict[str, float] = {}
+    resets: dict[str, tuple[float, float]] = {}
+    for env_id in SUBENV_IDS:
+        env = gym.make_vec(env_id, num_envs=n, threads=1)
+        env.action_space.seed(0)
+        actions = [env.action_space.sample() for _ in range(16)]
+        env.reset(seed=0)
+        ends = 0
+        for k in range(200):  # random actions, as in the vector table: how often does an episode end?
+            _, _, terminated, truncated, _ = env.step(actions[k % 16])
+            ends += int((terminated | truncated).sum())
+        vec = env.unwrapped
+        a = np.asarray(actions[0], dtype=float).reshape(n, -1)
+        report = np.empty((n, tr.N_REPORT))
+        active = np.ones(n, dtype=bool)
+        rows = vec._rows.copy()
+
+        def step() -> None:
+            rows[:] = vec._rows  # the same states every time (no episode ends inside the timing)
+            tr.step_batch(rows, a, active, vec._obs, vec._rngs, 0, vec._cfg, vec._hull, report)
+
+        copy_ns = ns_per_item(lambda: rows.__setitem__(slice(None), vec._rows), n)
+        kernel[env_id] = ns_per_item(step, n) - copy_ns
+        index = np.arange(64)
+        reset_ns = ns_per_item(lambda: vec._reset_envs(index, {}, report), 64)
+        resets[env_id] = (ends / (200 * n), reset_ns)
+        env.close()
+    for env_id in SUBENV_IDS:
+        lines.append(f"| {env_id}: compiled step of one sub-environment (`step_batch`, no reset) "
+                     f"| {kernel[env_id]:.0f} |")
+    parts = (("of which: one control period, 2 RK4 steps = 8 right-hand sides", periods, ".0f"),
+             ("one right-hand side (`rhs_point`)", rhs, ".1f"),
+             ("of which: its cosine and sine of the pitch", trig, ".1f"),
+             ("of which: the exact hull drag integral (`crossflow_point`)", drag, ".1f"))
+    for label, fn, fmt in parts:
+        lines.append(f"| {label} | {ns_per_item(lambda: fn(states, out), n):{fmt}} |")
+    for env_id in SUBENV_IDS:
+        rate, reset_ns = resets[env_id]
+        lines.append(f"| {env_id}: one reset, in Python (draw, loading, row, observation) | {reset_ns:,.0f} |")
+        lines.append(f"| {env_id}: resets per env-step with random actions: {rate:.4f}, so per env-step | "
+                     f"{rate * reset_ns:.0f} |")
+    cartpole = CartPoleVectorEnv(num_envs=n)
+    cartpole_rate = vector_env_rate(cartpole, seconds, 3)
+    cartpole.close()
+    lines.append("")
+    # Two cores share the compiled steps; the resets run in Python on the calling thread (they hold the GIL).
+    lines.append("| ceiling on 2 cores | resets free: env-steps/s | x CartPoleVectorEnv | with the resets: env-steps/s "
+                 "| x CartPoleVectorEnv |")
+    lines.append("|---|---:|---:|---:|---:|")
+    for env_id in SUBENV_IDS:
+        k_s = kernel[env_id] * 1e-9
+        r_s = resets[env_id][0] * resets[env_id][1] * 1e-9
+        free, with_resets = 2 / k_s, 1 / max(r_s, (k_s + r_s) / 2)
+        lines.append(f"| {env_id} | {free:,.0f} | {free / cartpole_rate:.2f} | {with_resets:,.0f} "
+                     f"| {with_resets / cartpole_rate:.2f} |")
+    lines.append(f"| CartPoleVectorEnv at N = 4096 (measured) | {cartpole_rate:,.0f} | 1 | | |")
+    return lines
+
+
 _MEMORY_PROBE = r"""
 import json, os, sys, time, tracemalloc
 import numpy as np, gymnasium as gym, subenv
@@ -353,7 +470,8 @@ def main() -> None:
     print(f"Before: {free_cores_probe()}\n")
     sections = [("Single environment", lambda: single_env_table(seconds, repeats)),
                 ("Vector environment (random actions, autoreset)", lambda: vector_env_table(seconds, repeats, sizes)),
-                ("Integrator cost", lambda: integrator_table(max(seconds, 1.0)))]
+                ("Integrator cost", lambda: integrator_table(max(seconds, 1.0))),
+                ("Where an env-step's time goes", lambda: cost_table(max(seconds, 1.0)))]
     if not args.quick:
         sections += [("Peak memory", lambda: memory_table(4096)), ("numba compile time", compile_table)]
     for title, table in sections:
