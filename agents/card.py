@@ -160,6 +160,14 @@ def _policy(train: dict[str, Any], selection: dict[str, Any] | None) -> str:
             f"{selection['validation_seed']} + i (not the evaluation's below); the validations are part of the training time.")
 
 
+def _steps(train: dict[str, Any], parents: list[dict[str, Any]]) -> str:
+    """The card's count of environment steps (for a continued run, where the model's counter ended)."""
+    if not parents:
+        return f"{train['timesteps']:,} environment steps"
+    return (f"the run ended at step {train['timesteps']:,} of the model's step counter (it goes on from the "
+            "policy each run started from)")
+
+
 def _shaping(config: dict[str, Any], continued: bool) -> str:
     """The card's line on the training-only reward terms (:mod:`agents.shaping`), if the config has any."""
     terms = []
@@ -182,7 +190,8 @@ def _card(name: str, train: dict[str, Any], config: dict[str, Any], suite: dict[
     total_s = total_training_time_s(train)
     parents = train.get("continued_from", [])
     if parents:
-        earlier = "".join(f"\n  - before it, {r['timesteps']:,} steps in {r['wall_time_s']:.0f} s: `{r['command']}`"
+        # A continued run's step counter goes on from the policy it started from (the model's own counter).
+        earlier = "".join(f"\n  - before it, to step {r['timesteps']:,}, in {r['wall_time_s']:.0f} s: `{r['command']}`"
                           for r in parents)
         command = (f"`{train['command']}`, continuing {len(parents)} earlier run{'s' if len(parents) > 1 else ''} "
                    f"(all of whose time counts below):{earlier}")
@@ -200,8 +209,7 @@ Registered as the controller `{name}` of `subenv evaluate` (`import agents`); lo
 ## Training
 
 - Command: {command}
-- Seed: {train['seed']}; {train['timesteps']:,} environment steps on {train['n_envs']} sub-environments of the
-  native vector env; hyperparameters in `config.yml` (resolved from `agents/hyperparams/{train['algo']}.yml`).
+- Seed: {train['seed']}; {train['n_envs']} sub-environments of the native vector env; {_steps(train, parents)}; hyperparameters in `config.yml` (resolved from `agents/hyperparams/{train['algo']}.yml`).
 - Training time: {total_s:.0f} s ({total_s / 60:.1f} min) of wall-clock time on {train['machine']}
   ({train['torch_threads']} torch thread), the learning itself (model set-up and the final save not
   counted); `train.json` has the record.
