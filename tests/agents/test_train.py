@@ -209,3 +209,27 @@ def test_depth_integral_is_the_same_in_training_and_in_the_controller(tmp_path) 
     e = np.array(fed)[:, 0]
     decay = np.exp(-0.5 / 50.0)
     np.testing.assert_allclose(integral[1:], decay * integral[:-1] + 0.5 * e[1:], rtol=1e-6, atol=1e-6)
+
+
+def test_training_stack_adds_the_band_bonus_on_the_true_depth_error() -> None:
+    """``depth_band_bonus`` in a config reaches the rewards: the stack asks the environment for the
+    depth error and adds the bonus exactly where it is inside the band."""
+    from dataclasses import replace
+
+    from agents.train import make_vec_env
+
+    config = replace(_config("ppo", n_timesteps=1024), normalize=None)
+    banded_config = replace(_config("ppo", n_timesteps=1024, depth_band_bonus={"half_width_m": 1.0, "bonus": 0.25}),
+                            normalize=None)
+    plain, banded = make_vec_env(config, 2, seed=4), make_vec_env(banded_config, 2, seed=4)
+    np.testing.assert_array_equal(plain.reset(), banded.reset())
+    rng = np.random.default_rng(0)
+    errors = []
+    for _ in range(60):
+        actions = rng.uniform(-1, 1, size=(2,) + plain.action_space.shape).astype(np.float32)
+        _, rewards, _, _ = plain.step(actions)
+        _, rewards_banded, _, infos = banded.step(actions)
+        error = np.array([info["depth_error_m"] for info in infos])
+        np.testing.assert_allclose(rewards_banded - rewards, 0.25 * (np.abs(error) <= 1.0), atol=1e-6)
+        errors.extend(error.tolist())
+    assert min(map(abs, errors)) <= 1.0 < max(map(abs, errors))  # both sides of the band were seen
