@@ -231,10 +231,9 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
             self._history.append((row[tr.TIME], row[tr.DEPTH], row[tr.COMMAND]))
         columns = report.T.copy()  # one array per key
         rewards = columns[tr.R_REWARD]
-        terminated = columns[tr.R_TERMINATED] > 0.0
-        truncated = columns[tr.R_TRUNCATED] > 0.0
+        terminated, truncated = columns[tr.R_TERMINATED:tr.R_TRUNCATED + 1] > 0.0
         done = terminated | truncated
-        self._any_done = bool(done.any())
+        self._any_done = np.count_nonzero(done) > 0
         self._done = done
         if mode is not AutoresetMode.SAME_STEP or not self._any_done:
             return self._obs.copy(), rewards, terminated, truncated, self._infos(columns, None)
@@ -375,11 +374,8 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         draw = self.single_env._draw_episode
         rows, generators, vehicles, episodes = self._rows, self._generators, self.vehicles, self.episodes
         index = np.asarray(indices, dtype=np.intp)
-        values = []
         for i in index.tolist():
-            vehicles[i], episodes[i], row = draw(generators[i], options)  # type: ignore[arg-type]
-            values.append(row)
-        rows[index] = values
+            vehicles[i], episodes[i], rows[i] = draw(generators[i], options)  # type: ignore[arg-type]
         tr.observe_batch(rows, index, self._obs, self._rngs, self._cfg, report)
         if not self._ready:
             self._started[index] = True
