@@ -10,6 +10,11 @@ functions that the environments call.
   sub-environments on Python threads (no OpenMP runtime, which does not survive ``fork``).
 - ``cache=True``: compiled code is stored next to the sources (or in ``NUMBA_CACHE_DIR``), so
   only the first process on a machine pays the compile time (``benchmarks/speed.py`` reports it).
+  numba checks a cached kernel against its own source file only, not against the files of the
+  functions it inlines: after an edit of ``hull.py`` the environments' kernel in
+  ``transition.py`` would load the old physics from the cache. So every cache directory of these
+  kernels carries a stamp of all their source files (:data:`KERNEL_SOURCES`), and a changed
+  stamp drops the directory's cached kernels before any is loaded.
 - ``error_model="numpy"``: division by zero gives inf/nan as in NumPy instead of raising, and
   saves the checks.
 - No ``fastmath``: results stay IEEE, so the compiled integrator reproduces
@@ -18,29 +23,82 @@ functions that the environments call.
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Callable
+from functools import cache
+from pathlib import Path
 from typing import Any, Final, TypeVar, cast
 
 import numba
 
-__all__ = ["KERNEL_OPTIONS", "gufunc", "inline_kernel", "kernel"]
+__all__ = ["KERNEL_OPTIONS", "KERNEL_SOURCES", "gufunc", "inline_kernel", "kernel"]
 
 KERNEL_OPTIONS: Final[dict[str, Any]] = {"cache": True, "nogil": True, "error_model": "numpy"}
+
+_PACKAGE = Path(__file__).resolve().parents[1]
+KERNEL_SOURCES: Final = ("dynamics/_jit.py", "dynamics/hull.py", "dynamics/model.py", "dynamics/integrate.py",
+                         "envs/transition.py")
+"""The files the compiled kernels are written in (relative to the package): any edit recompiles them all."""
+_STAMP_PREFIX: Final = "subenv-kernels."
 
 FunctionT = TypeVar("FunctionT", bound=Callable[..., Any])
 
 
 def kernel(fn: FunctionT) -> FunctionT:
     """``numba.njit`` with the package's options, compiled lazily on the first call."""
+    _drop_stale_cache(fn)
     return cast(FunctionT, numba.njit(**KERNEL_OPTIONS)(fn))
 
 
 def inline_kernel(fn: FunctionT) -> FunctionT:
     """As :func:`kernel`, and inlined into the compiled callers (no call overhead, no reference counting
     of the array arguments): for the small functions called per state."""
+    _drop_stale_cache(fn)
     return cast(FunctionT, numba.njit(inline="always", **KERNEL_OPTIONS)(fn))
 
 
 def gufunc(fn: Any, signature: str, layout: str) -> Any:
     """Compile ``fn`` as a generalized ufunc (NumPy broadcasting over the loop dimensions)."""
+    _drop_stale_cache(fn)
     return numba.guvectorize([signature], layout, cache=True)(fn)
+
+
+@cache
+def sources_stamp() -> str:
+    """A digest of :data:`KERNEL_SOURCES` (read once per process)."""
+    digest = hashlib.sha256()
+    for name in KERNEL_SOURCES:
+        digest.update(name.encode())
+        digest.update((_PACKAGE / name).read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def _drop_stale_cache(fn: Callable[..., Any]) -> None:
+    """Before ``fn``'s kernel can load from numba's cache: if its cache directory's stamp is not that
+    of the current sources, delete the directory's cached kernels of these sources and stamp it."""
+    from numba.core.caching import FunctionCache
+
+    try:
+        directory = Path(FunctionCache(fn)._cache_path)
+    except (AttributeError, RuntimeError, OSError):  # no cache location (numba then compiles every time)
+        return
+    _check_directory(directory)
+
+
+@cache
+def _check_directory(directory: Path) -> None:
+    """Once per process and directory (:func:`_drop_stale_cache`)."""
+    stamp = directory / f"{_STAMP_PREFIX}{sources_stamp()}"
+    if stamp.exists():
+        return
+    stems = tuple(Path(name).stem for name in KERNEL_SOURCES)
+    try:
+        for path in directory.iterdir():
+            # numba names its files <module>.<function>-<line>.<python>.nbi/.nbc ("guf-" first for gufuncs).
+            module = path.name.removeprefix("guf-").split(".", 1)[0]
+            stale_stamp = path.name.startswith(_STAMP_PREFIX)
+            if stale_stamp or (path.suffix in (".nbi", ".nbc") and module in stems):
+                path.unlink(missing_ok=True)
+        stamp.touch()
+    except OSError:  # a read-only or vanished cache directory: numba copes (it compiles)
+        return

@@ -84,17 +84,22 @@ def cumulative_moments_point(s: float, hull: FloatArray) -> tuple[float, float, 
     """C_0..C_3 at one position ``s`` [m] (clipped to the hull); ``hull`` is :attr:`HullTable.packed`."""
     n_seg = hull.shape[1] - 1
     lo, hi = hull[0, 0], hull[0, n_seg]
-    s = min(max(s, lo), hi)
     # Segment i with x[i] <= s < x[i+1] (the last segment for s at the nose), as
-    # clip(searchsorted(x, s, side="right") - 1, 0, n_seg - 1).
-    a, b = 1, n_seg
-    while a < b:
-        mid = (a + b) >> 1
-        if hull[0, mid] <= s:
-            a = mid + 1
-        else:
-            b = mid
-    i = a - 1
+    # clip(searchsorted(x, s, side="right") - 1, 0, n_seg - 1). Most roots of w - x q lie off the
+    # hull (|w / q| beyond its ends), where the segment is an end one: no search.
+    if s <= lo:
+        s, i = lo, 0
+    elif s >= hi:
+        s, i = hi, n_seg - 1
+    else:
+        a, b = 1, n_seg
+        while a < b:
+            mid = (a + b) >> 1
+            if hull[0, mid] <= s:
+                a = mid + 1
+            else:
+                b = mid
+        i = a - 1
     c0, c1 = hull[1, i], hull[2, i]
     s2 = s * s
     s3 = s2 * s
