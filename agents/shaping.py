@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 from stable_baselines3.common.vec_env import VecEnvWrapper
 
+from agents.config import DepthBandBonusConfig
 from subenv.envs import OBSERVATION_NAMES
 
 __all__ = ["DEPTH_ERROR_KEY", "DepthBandBonusVecEnv", "PlaneEffortL1VecEnv"]
@@ -85,13 +86,10 @@ class DepthBandBonusVecEnv(VecEnvWrapper):  # type: ignore[misc]
     """
 
     def __init__(self, venv: Any, half_width_m: float, bonus: float) -> None:
-        for name, value in (("half_width_m", half_width_m), ("bonus", bonus)):
-            if not (isinstance(value, (int, float)) and not isinstance(value, bool) and np.isfinite(value)
-                    and value > 0):
-                raise ValueError(f"depth_band_bonus {name}={value!r} is invalid: must be a finite number > 0")
+        band = DepthBandBonusConfig(half_width_m, bonus)  # checks both (ValueError naming the bad one)
         super().__init__(venv)
-        self.half_width_m = float(half_width_m)
-        self.bonus = float(bonus)
+        self.half_width_m = float(band.half_width_m)
+        self.bonus = float(band.bonus)
 
     def step_wait(self) -> Any:
         obs, rewards, dones, infos = self.venv.step_wait()
