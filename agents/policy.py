@@ -27,7 +27,7 @@ from agents.config import AgentConfig, load_config
 from subenv.evaluation.results import atomic_write_bytes
 
 __all__ = ["CONFIG_FILE", "MODEL_FILE", "VECNORMALIZE_FILE", "NumpyActor", "TrainedAgent", "load_agent",
-           "save_model", "save_statistics"]
+           "save_model", "save_statistics", "statistics_file"]
 
 MODEL_FILE: Final = "model.zip"
 VECNORMALIZE_FILE: Final = "vecnormalize.pkl"
@@ -222,9 +222,7 @@ def load_agent(path: str | Path, env: Any = None, device: str = "cpu") -> Traine
         run_dir = run_dir.parent  # a checkpoint in <run>/checkpoints/
     config = read_config(run_dir / CONFIG_FILE)
     model = algorithm_class(config.algo).load(model_file, device=device)
-    match = _CHECKPOINT.match(model_file.name)
-    stats_file = (model_file.parent / f"{match['prefix']}_vecnormalize_{match['steps']}_steps.pkl" if match
-                  else run_dir / VECNORMALIZE_FILE)
+    stats_file = statistics_file(model_file, run_dir)
     stats = None
     if config.normalize is not None and config.normalize.norm_obs:
         if not stats_file.is_file():
@@ -240,6 +238,15 @@ def load_agent(path: str | Path, env: Any = None, device: str = "cpu") -> Traine
     if env is not None:
         agent.check_spaces(env)
     return agent
+
+
+def statistics_file(model_file: Path, run_dir: Path) -> Path:
+    """Where the VecNormalize statistics of ``model_file`` are: beside a checkpoint
+    ``rl_model_<N>_steps.zip``, its ``rl_model_vecnormalize_<N>_steps.pkl``; else ``run_dir``'s."""
+    match = _CHECKPOINT.match(model_file.name)
+    if match:
+        return model_file.parent / f"{match['prefix']}_vecnormalize_{match['steps']}_steps.pkl"
+    return run_dir / VECNORMALIZE_FILE
 
 
 def save_model(model: Any, path: Path) -> None:

@@ -42,7 +42,8 @@ from typing import Any, Final
 import yaml
 
 from agents.config import ALGORITHMS, AgentConfig, algorithm_class, load_config, model_kwargs, parse_overrides
-from agents.policy import CONFIG_FILE, MODEL_FILE, VECNORMALIZE_FILE, load_agent, save_model, save_statistics
+from agents.policy import (CONFIG_FILE, MODEL_FILE, VECNORMALIZE_FILE, load_agent, save_model, save_statistics,
+                           statistics_file)
 from subenv.evaluation.results import atomic_write_text
 
 __all__ = ["DEFAULT_ENV_ID", "EVAL_SEED_OFFSET", "TrainResult", "main", "make_vec_env", "train"]
@@ -174,7 +175,7 @@ def train(
                 raise ValueError(f"policy_kwargs {changed} differ from the trained agent's {model.policy_kwargs}: "
                                  "a run cannot change the network it continues")
             if isinstance(venv, VecNormalize) and previous.obs_mean is not None:
-                stats = _stats_file(previous.path)
+                stats = statistics_file(previous.path, _run_dir_of(previous.path))
                 venv = VecNormalize.load(str(stats), venv.venv)
                 model.set_env(venv)
             stage = read_stage(_run_dir_of(previous.path))
@@ -246,15 +247,6 @@ def _next_run_dir(log_folder: Path, config: AgentConfig) -> Path:
 
 def _run_dir_of(model_file: Path) -> Path:
     return model_file.parent.parent if model_file.parent.name == "checkpoints" else model_file.parent
-
-
-def _stats_file(model_file: Path) -> Path:
-    from agents.policy import _CHECKPOINT
-
-    match = _CHECKPOINT.match(model_file.name)
-    if match:
-        return model_file.parent / f"{match['prefix']}_vecnormalize_{match['steps']}_steps.pkl"
-    return _run_dir_of(model_file) / VECNORMALIZE_FILE
 
 
 def _quote(arg: str) -> str:
