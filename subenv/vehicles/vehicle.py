@@ -196,7 +196,7 @@ class Vehicle:
                 _require_positive(name, value)
             elif name == "crossflow_drag":
                 _require(name, value, isinstance(value, (int, float)) and value >= 0, "a finite number >= 0")
-            elif name != "name":
+            else:
                 _require_finite(name, value)
 
     # --- derived quantities -------------------------------------------------------------
@@ -304,7 +304,7 @@ class Vehicle:
         vehicle = copy.copy(self)
         for field_name, value in changes.items():
             object.__setattr__(vehicle, field_name, value)
-        vehicle._check(changes)
+        vehicle._check(field for field in changes if field in _CHECKED_FIELDS)  # (not "name")
         return vehicle
 
     def to_dict(self) -> Mapping[str, Any]:
