@@ -384,7 +384,7 @@ from subenv.dynamics import derivatives, model_params
 t1 = time.perf_counter()
 env = gym.make("subenv/DivePlane-v0"); env.reset(seed=0); env.step(np.zeros(1, dtype=np.float32))
 t2 = time.perf_counter()
-venv = gym.make_vec("subenv/DivePlane-v0", num_envs=8); venv.reset(seed=0); venv.step(np.zeros((8, 1)))
+venv = gym.make_vec("subenv/Nominal-v0", num_envs=8); venv.reset(seed=0); venv.step(np.zeros((8, 1)))
 t3 = time.perf_counter()
 derivatives(np.zeros(4), 1.0, 0.0, 0.0, model_params(subenv.load_vehicle("suboff")))
 t4 = time.perf_counter()

@@ -445,6 +445,21 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
                     f"reset options {sorted(unknown)} are unknown: allowed options are {list(_OPTIONS)}"
                 )
         config = self.scenario.sample(rng, self.base_vehicle.weight_N)
+        std = config.disturbance_std_N
+        disturbance = float(rng.normal(0.0, std)) if std > 0 else 0.0
+        vehicle, values = self._episode_row(config, options, disturbance)
+        return vehicle, config, values
+
+    def _episode_row(
+        self, config: EpisodeConfig, options: dict[str, Any], disturbance: Any
+    ) -> tuple[Vehicle, list[Any]]:
+        """The episode's vehicle and transition row (``subenv.envs.transition`` columns) from its draw, the
+        ``options`` (checked) and the initial heave force [N].
+
+        Also for a batch of episodes with one loading (:meth:`Scenario._sample_batch
+        <subenv.scenarios.Scenario._sample_batch>`, no options): a column's value is then an array
+        over the episodes where the draw has one.
+        """
         vehicle, params, ucr, froude_scale = self._loading(config)
         if config.speed_relative and not math.isfinite(ucr):
             raise ValueError(
@@ -476,9 +491,6 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
             state = self._initial_state_option(options["initial_state"], state, command)
         if len(knots) > tr.MAX_KNOTS:
             raise ValueError(f"the speed profile has {len(knots)} knots; the environment takes at most {tr.MAX_KNOTS}")
-        disturbance = (
-            float(rng.normal(0.0, config.disturbance_std_N)) if config.disturbance_std_N > 0 else 0.0
-        )
 
         values = [0.0] * tr.N_COLUMNS
         values[tr.PITCH:tr.DEPTH + 1] = state
@@ -494,7 +506,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         values[tr.DURATION] = config.duration_s
         values[tr.CRITICAL_SPEED] = ucr
         values[tr.SQRT_G_ZGB] = froude_scale
-        return vehicle, config, values
+        return vehicle, values
 
     def _frame(self, row: np.ndarray, history: Sequence[tuple[float, float, float]]) -> Any:
         """The rendering :class:`~subenv.envs.rendering.Frame` of a transition row."""

@@ -9,7 +9,8 @@ the reward terms and the observation (with sensor noise drawn from the sub-envir
 ``numpy.random.Generator``, in the order the single environment always drew it).
 
 Each sub-environment is one row of a float64 array (columns below); the environment's constants
-are one float64 array (``C_*`` indices). Resets stay in Python (they draw a scenario).
+are one float64 array (``C_*`` indices). Resets stay in Python (they draw a scenario); the vector
+environment draws their random numbers here (:func:`draw_reset_numbers`).
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ __all__ = [
     "N_REPORT",
     "REASONS",
     "REPORT_KEYS",
+    "draw_reset_numbers",
     "first_non_finite",
     "observe_batch",
     "observe_env",
@@ -301,6 +303,24 @@ def step_batch(rows: FloatArray, actions: FloatArray, active: np.ndarray, obs: n
             step_env(rows[i], actions[i], obs[i], rngs, first + i, cfg, hull)
             report_env(rows[i], report, first + i)
     return -1
+
+
+@kernel
+def draw_reset_numbers(rngs: numba.typed.List, indices: np.ndarray, units: FloatArray, disturbance_std: float,
+                       disturbances: FloatArray) -> None:
+    """The random numbers a reset takes from each sub-environment's generator, for those in ``indices``.
+
+    In the single environment's order: ``units.shape[1]`` uniform numbers in [0, 1) (as
+    ``rng.random(k)``, the scenario's draw) into row ``j`` of ``units``, then, with
+    ``disturbance_std`` > 0, the initial heave force (as ``rng.normal(0, disturbance_std)``) into
+    ``disturbances[j]`` (else 0). numba's generator methods are NumPy's algorithms over the same
+    bit generator: the same numbers (``tests/envs/test_vector_env.py``).
+    """
+    for j in range(indices.shape[0]):
+        rng = rngs[indices[j]]
+        for k in range(units.shape[1]):
+            units[j, k] = rng.random()
+        disturbances[j] = rng.normal(0.0, disturbance_std) if disturbance_std > 0.0 else 0.0
 
 
 @kernel

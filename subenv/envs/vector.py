@@ -28,6 +28,8 @@ _INFO_KEYS: Final = (*tr.REPORT_KEYS[: tr.R_REASON], "termination_reason")
 """The single environment's info keys (subenv.envs.dive_plane._info), as the report's columns."""
 _MASK_KEYS: Final = tuple("_" + key for key in _INFO_KEYS)
 _AUTORESET_MODES: Final = (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP, AutoresetMode.DISABLED)
+_BATCH_RESETS: Final = 4
+"""Draw this many resets or more as arrays (``_draw_batch``): about where it costs less than one at a time."""
 ENVS_PER_THREAD: Final = 512
 """``threads=None`` uses one thread per this many sub-environments, up to the available cores."""
 
@@ -150,8 +152,9 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         self._everyone = np.ones(n, dtype=bool)
         self.vehicles: list[Vehicle] = [self.single_env.base_vehicle] * n
         """Each sub-environment's vehicle (its episode's loading)."""
-        self.episodes: list[EpisodeConfig | None] = [None] * n
-        """Each sub-environment's episode draw."""
+        self._episodes: list[EpisodeConfig | None] = [None] * n
+        # Episodes drawn in a batch, as (scenario, uniform numbers), until someone asks for them.
+        self._unbuilt: dict[int, tuple[Scenario, np.ndarray]] = {}
         self._history: list[tuple[float, float, float]] = []  # of the first sub-environment, for render()
 
     # --- Gymnasium API ----------------------------------------------------------------------
@@ -287,6 +290,16 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         return tuple(self._seeds)
 
     @property
+    def episodes(self) -> list[EpisodeConfig | None]:
+        """Each sub-environment's episode draw (None before its first reset)."""
+        if self._unbuilt:  # built on demand: a batch of resets draws numbers, not EpisodeConfigs
+            weight_N = self.single_env.base_vehicle.weight_N
+            for i, (scenario, units) in self._unbuilt.items():
+                self._episodes[i] = scenario._episode_from_units(units, weight_N)
+            self._unbuilt.clear()
+        return list(self._episodes)
+
+    @property
     def state(self) -> np.ndarray:
         """(pitch [rad], heave [m/s], pitch rate [rad/s], depth [m]) of every sub-environment, a copy."""
         return self._rows[:, tr.PITCH:tr.DEPTH + 1].copy()
@@ -371,16 +384,48 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
 
     def _reset_envs(self, indices: Sequence[int] | np.ndarray, options: dict[str, Any], report: np.ndarray) -> None:
         """Draw new episodes for ``indices`` (and write their rows of ``report``)."""
-        draw = self.single_env._draw_episode
-        rows, generators, vehicles, episodes = self._rows, self._generators, self.vehicles, self.episodes
-        index = np.asarray(indices, dtype=np.intp)
-        for i in index.tolist():
-            vehicles[i], episodes[i], rows[i] = draw(generators[i], options)  # type: ignore[arg-type]
+        rows, vehicles, index = self._rows, self.vehicles, np.asarray(indices, dtype=np.intp)
+        if len(index) >= _BATCH_RESETS and not options and self.single_env.scenario._batch_ready:
+            self._draw_batch(index)
+        else:
+            draw, generators, episodes = self.single_env._draw_episode, self._generators, self._episodes
+            for i in index.tolist():
+                vehicles[i], episodes[i], rows[i] = draw(generators[i], options)  # type: ignore[arg-type]
+                self._unbuilt.pop(i, None)
         tr.observe_batch(rows, index, self._obs, self._rngs, self._cfg, report)
         if not self._ready:
             self._started[index] = True
         if self.render_mode is not None and 0 in index:
             self._history = [(0.0, rows[0, tr.DEPTH], rows[0, tr.COMMAND])]
+
+    def _draw_batch(self, index: np.ndarray) -> None:
+        """Draw the episodes of ``index`` as arrays (a scenario with one loading, no options).
+
+        Each sub-environment's generator gives the numbers its single environment's reset would
+        (:func:`~subenv.envs.transition.draw_reset_numbers`), and the same code turns them into the
+        draw and the row, over arrays (:meth:`DivePlaneEnv._episode_row
+        <subenv.envs.DivePlaneEnv._episode_row>`): the rows are those of one reset at a time, value
+        for value, without a Python episode per reset (resets hold the GIL).
+        """
+        single = self.single_env
+        scenario = single.scenario
+        units = np.empty((len(index), scenario._units_per_draw))
+        disturbances = np.empty(len(index))
+        tr.draw_reset_numbers(self._rngs, index, units, scenario.disturbance_std_N, disturbances)
+        vehicle, values = single._episode_row(scenario._sample_batch(units, single.base_vehicle.weight_N), {},
+                                              disturbances)
+        block = np.empty((len(index), tr.N_COLUMNS))
+        drawn = [(column, value) for column, value in enumerate(values) if isinstance(value, np.ndarray)]
+        for column, _ in drawn:
+            values[column] = 0.0
+        block[:] = values  # the columns every episode shares
+        for column, value in drawn:
+            block[:, column] = value
+        self._rows[index] = block
+        vehicles, unbuilt = self.vehicles, self._unbuilt
+        for j, i in enumerate(index.tolist()):
+            vehicles[i] = vehicle
+            unbuilt[i] = (scenario, units[j])
 
     def _infos(self, columns: np.ndarray, mask: np.ndarray | None) -> dict[str, Any]:
         """Gymnasium's vector ``info`` from a step's report, transposed (whose rows it hands out);

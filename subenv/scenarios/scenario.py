@@ -12,6 +12,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 
@@ -42,18 +43,41 @@ _UNIT: Interval = (0.0, 1.0)
 """The interval whose draw is the uniform number itself (0 + 1 u == u): for a coin flip among the draws."""
 
 
-def _draw_intervals(rng: np.random.Generator, intervals: Sequence[Interval]) -> list[float]:
-    """One number per interval, uniform in it (its value if fixed, drawing nothing), in order.
+@dataclass(frozen=True)
+class _Draws:
+    """How to draw one number uniform in each of some intervals, with one ``rng.random(k)`` call.
 
-    The uniform numbers come from one ``rng.random(k)`` call. It yields, in order, the doubles
-    that ``k`` calls of ``rng.uniform(low, high)`` would use, and NumPy's uniform is
-    ``low + (high - low) * next_double`` (``numpy/random/src/distributions/distributions.c``,
-    ``random_uniform``): the same numbers, and the generator left in the same state, at a fraction
-    of the cost of a NumPy call per number (resets are where a vector env spends its Python time).
+    ``rng.random(k)`` yields, in order, the doubles that ``k`` calls of ``rng.uniform(low, high)``
+    would use, and NumPy's uniform is ``low + (high - low) * next_double``
+    (``numpy/random/src/distributions/distributions.c``, ``random_uniform``): the same numbers, and
+    the generator left in the same state, at a fraction of the cost of a NumPy call per number
+    (resets are where a vector env spends its Python time). Fixed intervals draw nothing.
     """
-    count = sum(1 for low, high in intervals if low != high)
-    units = iter(rng.random(count).tolist() if count else ())
-    return [float(low) if low == high else float(low + (high - low) * next(units)) for low, high in intervals]
+
+    fixed: tuple[float, ...]  # every interval's value, the low end for those drawn
+    drawn: tuple[tuple[int, float, float], ...]  # (position, low, high - low) of each interval drawn
+
+    @classmethod
+    def of(cls, intervals: Sequence[Interval]) -> _Draws:
+        fixed = tuple(float(low) for low, _ in intervals)
+        drawn = tuple((j, float(low), float(high - low))
+                      for j, (low, high) in enumerate(intervals) if low != high)
+        return cls(fixed, drawn)
+
+    def draw(self, rng: np.random.Generator) -> list[float]:
+        """One number per interval, in order."""
+        return self.values(rng.random(len(self.drawn)).tolist()) if self.drawn else list(self.fixed)
+
+    def values(self, units: Sequence[Any]) -> list[Any]:
+        """The numbers for the uniform ``units`` in [0, 1), one per interval drawn, in order.
+
+        A unit may be an array (one number per episode of a batch): its interval's value is then an
+        array too, computed element for element as for one episode.
+        """
+        values: list[Any] = list(self.fixed)
+        for (j, low, span), unit in zip(self.drawn, units, strict=True):
+            values[j] = low + span * unit
+        return values
 
 
 @dataclass(frozen=True)
@@ -224,8 +248,7 @@ class Scenario:
             pick = names[int(rng.integers(len(names)))]
             base = registry[pick] if registry is not None else get_scenario(pick)
             config = base.sample(rng, weight_N, registry)
-            drawn = iter(_draw_intervals(rng, (self.z_GB_scale,) if self.crossflow_drag is None
-                                         else (self.z_GB_scale, self.crossflow_drag)))
+            drawn = iter(self._draws.draw(rng))
             return dataclasses.replace(
                 config,
                 z_GB_scale=config.z_GB_scale * next(drawn),
@@ -233,7 +256,53 @@ class Scenario:
                 sensor_noise=self.sensor_noise or config.sensor_noise,
                 disturbance_std_N=max(self.disturbance_std_N, config.disturbance_std_N),
             )
-        drawn = iter(_draw_intervals(rng, self._draw_order))
+        return self._episode(self._draws.draw(rng), weight_N)
+
+    def _sample_batch(self, units: np.ndarray, weight_N: float) -> EpisodeConfig:
+        """Many episodes at once, from their uniform numbers: for a vector environment's resets.
+
+        Only for a scenario whose every episode has the same loading (:attr:`_batch_ready`).
+
+        Parameters
+        ----------
+        units : ndarray, shape (n, k)
+            Row ``i`` holds the ``k`` uniform numbers in [0, 1) that :meth:`sample` would take from
+            episode ``i``'s generator (``rng.random(k)``, ``k`` = :attr:`_units_per_draw`).
+        weight_N : float
+            As for :meth:`sample`.
+
+        Returns
+        -------
+        EpisodeConfig
+            Its drawn fields are arrays of ``n`` (row ``i`` is what :meth:`sample` gives for row ``i``'s
+            numbers, value for value); the others, the loading among them, are the scenario's values.
+        """
+        if not self._batch_ready:
+            raise ValueError(f"scenario {self.name!r} cannot draw in batches: its loading changes from "
+                             "episode to episode (or it is a mixture)")
+        if units.ndim != 2 or units.shape[1] != self._units_per_draw:
+            raise ValueError(f"units has shape {units.shape}: must be (n, {self._units_per_draw})")
+        return self._episode(self._draws.values(list(units.T)), weight_N)
+
+    def _episode_from_units(self, units: Sequence[float], weight_N: float) -> EpisodeConfig:
+        """The episode :meth:`sample` gives for these uniform numbers (a row of :meth:`_sample_batch`'s)."""
+        return self._episode(self._draws.values([float(u) for u in units]), weight_N)
+
+    @property
+    def _units_per_draw(self) -> int:
+        """How many uniform numbers a plain scenario's :meth:`sample` takes from the generator."""
+        return len(self._draws.drawn)
+
+    @cached_property
+    def _batch_ready(self) -> bool:
+        """Every episode has the same loading (and no mixture is drawn): :meth:`_sample_batch` applies."""
+        loading = (self.z_GB_m or (0.0, 0.0), self.z_GB_scale, self.x_GB_m, self.excess_buoyancy_fraction,
+                   self.crossflow_drag or (0.0, 0.0))
+        return not self.components and not self.x_GB_sign_random and all(low == high for low, high in loading)
+
+    def _episode(self, values: Sequence[Any], weight_N: float) -> EpisodeConfig:
+        """The episode of a plain scenario from its drawn numbers (:attr:`_draws`), floats or arrays."""
+        drawn = iter(values)
         speed0 = next(drawn)
         knots: tuple[tuple[float, float], ...] = ((0.0, speed0),)
         if self.speed_ramp is not None:
@@ -262,10 +331,13 @@ class Scenario:
         )
 
     @cached_property
-    def _draw_order(self) -> tuple[Interval, ...]:
-        """The intervals a plain (component-free) :meth:`sample` draws, in the order it uses them."""
+    def _draws(self) -> _Draws:
+        """The intervals :meth:`sample` draws, in the order it uses them."""
+        if self.components:  # then this scenario's own randomisation, on top of the component's draw
+            return _Draws.of((self.z_GB_scale,) if self.crossflow_drag is None
+                             else (self.z_GB_scale, self.crossflow_drag))
         ramp = self.speed_ramp
-        return (
+        return _Draws.of((
             self.speed_mps,
             *((ramp.start_s, ramp.duration_s, ramp.final_speed_mps) if ramp is not None else ()),
             self.depth_command_m, self.initial_depth_offset_m,
@@ -275,4 +347,4 @@ class Scenario:
             *((_UNIT,) if self.x_GB_sign_random else ()),
             self.z_GB_scale, self.excess_buoyancy_fraction,
             *((self.crossflow_drag,) if self.crossflow_drag is not None else ()),
-        )
+        ))

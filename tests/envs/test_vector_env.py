@@ -11,6 +11,8 @@ from gymnasium.vector import AutoresetMode, SyncVectorEnv
 
 import subenv
 from subenv.envs import DivePlaneEnv, DivePlaneVectorEnv
+from subenv.envs.transition import COMMAND, DEPTH, DISTURBANCE
+from subenv.scenarios import Scenario, SpeedRamp, get_scenario, scenario_names
 
 ENV_IDS = subenv.env_ids()
 MODES = (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP)
@@ -120,6 +122,70 @@ def test_threaded_and_serial_stepping_agree(scenario):
         assert_same(a, b)
     if scenario == "Nominal":
         assert ends > 16  # resets ran beside the threaded steps
+
+
+# Every number of an episode drawn, the loading excepted (a batch draws one loading).
+_DRAWS_ALL_BUT_THE_LOADING = Scenario(
+    name="DrawsAllButTheLoading", description="every episode quantity drawn", speed_mps=(0.5, 2.5),
+    speed_relative=True,
+    speed_ramp=SpeedRamp(final_speed_mps=(0.3, 0.6), start_s=(10.0, 20.0), duration_s=(30.0, 60.0)),
+    depth_command_m=(5.0, 20.0), initial_depth_offset_m=(-1.0, 1.0), initial_pitch_rad=(-0.05, 0.05),
+    initial_heave_mps=(-0.02, 0.02), initial_pitch_rate_radps=(-0.01, 0.01), sensor_noise=True,
+    disturbance_std_N=0.7, duration_s=100.0,
+)
+_BATCH_READY = ("Nominal", "LowSpeed", "NearCritical", "SpeedTransient")
+
+
+def test_which_scenarios_draw_their_resets_in_batches():
+    ready = {name for name in scenario_names() if get_scenario(name)._batch_ready}
+    assert ready == set(_BATCH_READY)  # the others draw a loading per episode, or a mixture
+    assert _DRAWS_ALL_BUT_THE_LOADING._batch_ready
+    units = np.zeros((3, get_scenario("Nominal")._units_per_draw))
+    with pytest.raises(ValueError, match="scenario 'PeriscopeDepth' cannot draw in batches"):
+        get_scenario("PeriscopeDepth")._sample_batch(units, 1.0)
+    with pytest.raises(ValueError, match=r"units has shape \(3, 2\): must be \(n, 3\)"):
+        get_scenario("Nominal")._sample_batch(units[:, :2], 1.0)
+
+
+@pytest.mark.parametrize("scenario", [*_BATCH_READY, _DRAWS_ALL_BUT_THE_LOADING],
+                         ids=lambda s: s if isinstance(s, str) else s.name)
+def test_batch_resets_draw_exactly_what_one_reset_at_a_time_draws(scenario):
+    # A batch of resets (a vector env's, for a scenario with one loading) takes each sub-environment's
+    # numbers in a compiled loop and turns them into rows over arrays: the same rows, bit for bit, the
+    # same episodes and vehicles, and every generator left where one reset at a time leaves it.
+    n = 64
+    batch = DivePlaneVectorEnv(num_envs=n, scenario=scenario)
+    batch.reset(seed=5)
+    one_at_a_time = DivePlaneEnv(scenario=scenario)
+    generators = [np.random.default_rng(s) for s in range(100, 100 + n)]
+    for i, g in enumerate(generators):
+        batch._generators[i] = batch._rngs[i] = np.random.default_rng(100 + i)
+    index = np.arange(n)
+    batch._draw_batch(index)
+    for i, g in enumerate(generators):
+        vehicle, episode, row = one_at_a_time._draw_episode(g, {})
+        assert batch._rows[i].tolist() == row, i
+        assert batch.episodes[i] == episode and batch.vehicles[i] == vehicle
+        assert all(type(v) is float for v in (*episode.initial_state, episode.depth_command_m))
+        assert batch._generators[i].random() == g.random()
+    rows = batch._rows.copy()
+    assert np.unique(rows[:, [DEPTH, COMMAND, DISTURBANCE]], axis=0).shape[0] == n  # drawn, not shared
+
+
+def test_many_simultaneous_resets_reproduce_sync_vector_env():
+    # Full planes end most episodes of Nominal within a few steps of each other: autoresets come in
+    # batches (drawn as arrays), and each is still the sub-environment's own next episode.
+    sync = gym.make_vec("subenv/Nominal-v0", num_envs=32, vectorization_mode="sync")
+    native = gym.make_vec("subenv/Nominal-v0", num_envs=32)
+    assert_same(native.reset(seed=8), sync.reset(seed=8))
+    biggest = 0
+    for t in range(120):
+        actions = np.full((32, 1), 1.0 if t % 40 < 30 else -1.0, dtype=np.float32)
+        result, expected = native.step(actions), sync.step(actions)
+        assert_same(result, expected, f"step {t}")
+        biggest = max(biggest, int(np.sum(expected[2] | expected[3])))
+    assert biggest >= 8
+    assert native.unwrapped.episodes == [env.unwrapped.episode for env in sync.envs]
 
 
 def _step_threaded_in_child(queue) -> None:  # runs in a forked process

@@ -124,13 +124,13 @@ def test_one_call_draws_are_numpys_uniform_draws() -> None:
     # Scenario.sample takes its uniform numbers with one rng.random(k) call instead of k calls of
     # rng.uniform(low, high); that is only the same episode if NumPy's uniform is
     # low + (high - low) * next_double, value for value.
-    from subenv.scenarios.scenario import _draw_intervals
+    from subenv.scenarios.scenario import _Draws
 
     intervals = [(-2.0, 2.0), (0.0, 1e-9), (8, 15), (1.524, 1.524), (0.3, 1.15), (-1e3, 1e5), (0.0, 0.6)]
     for seed in range(50):
         ours, numpys = np.random.default_rng(seed), np.random.default_rng(seed)
         expected = [float(low) if low == high else float(numpys.uniform(low, high)) for low, high in intervals]
-        assert _draw_intervals(ours, intervals) == expected
+        assert _Draws.of(intervals).draw(ours) == expected
         assert ours.random() == numpys.random()  # both generators are left in the same state
 
 
