@@ -292,15 +292,17 @@ def test_render_rgb_array_shows_the_first_sub_environment():
         assert gym.make_vec("subenv/Nominal-v0", num_envs=2).render() is None
 
 
-def test_vector_env_pickles_and_continues_identically():
+@pytest.mark.parametrize("scenario", ["Randomized", "Nominal"])  # episodes drawn one at a time, in a batch
+def test_vector_env_pickles_and_continues_identically(scenario):
     import pickle
 
-    env = DivePlaneVectorEnv(num_envs=4, scenario="Randomized")
+    env = DivePlaneVectorEnv(num_envs=4, scenario=scenario)
     env.reset(seed=1)
     env.step(np.zeros((4, 1)))
     copy = pickle.loads(pickle.dumps(env))
     actions = np.random.default_rng(0).uniform(-1, 1, size=(4, 1))
     assert_same(copy.step(actions), env.step(actions))
+    assert copy.episodes == env.episodes and None not in env.episodes
 
 
 def test_every_id_registers_the_vector_entry_point():
