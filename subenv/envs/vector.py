@@ -75,6 +75,10 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
     ``(num_envs, n_actions)`` array (``(num_envs,)`` is accepted with one action);
     out-of-range actions are clipped; a NaN or infinite action raises before any
     sub-environment steps.
+
+    When several sub-environments reset together and the scenario's loading is the same in every
+    episode, their episodes are drawn as arrays (:meth:`_draw_batch`): the same numbers from the
+    same generators as one reset at a time, without the Python cost of one draw each.
     """
 
     metadata: dict[str, Any] = {  # noqa: RUF012 - Gymnasium's convention

@@ -172,11 +172,13 @@ def test_batch_resets_draw_exactly_what_one_reset_at_a_time_draws(scenario):
     assert np.unique(rows[:, [DEPTH, COMMAND, DISTURBANCE]], axis=0).shape[0] == n  # drawn, not shared
 
 
-def test_many_simultaneous_resets_reproduce_sync_vector_env():
+@pytest.mark.parametrize("mode", MODES, ids=lambda m: m.value)
+def test_many_simultaneous_resets_reproduce_sync_vector_env(mode):
     # Full planes end most episodes of Nominal within a few steps of each other: autoresets come in
     # batches (drawn as arrays), and each is still the sub-environment's own next episode.
-    sync = gym.make_vec("subenv/Nominal-v0", num_envs=32, vectorization_mode="sync")
-    native = gym.make_vec("subenv/Nominal-v0", num_envs=32)
+    sync = gym.make_vec("subenv/Nominal-v0", num_envs=32, vectorization_mode="sync",
+                        vector_kwargs={"autoreset_mode": mode})
+    native = gym.make_vec("subenv/Nominal-v0", num_envs=32, autoreset_mode=mode)
     assert_same(native.reset(seed=8), sync.reset(seed=8))
     biggest = 0
     for t in range(120):
