@@ -13,7 +13,7 @@ numbers depend on the machine; the ratios are what to compare):
 3. integrator cost: simulated seconds per wall second, the envs' compiled RK4 against
    ``rk4`` over ``derivatives`` and ``scipy.integrate.solve_ivp``;
    and where an env-step's time goes: the compiled step without resets and its parts (control
-   period, right-hand side, its sine and cosine, the hull integral), the Python resets, and the
+   period, right-hand side, its sine and cosine, the hull integral), the resets, and the
    ceiling the compiled step puts on two cores next to ``CartPoleVectorEnv``;
 4. peak memory at N = 4096 (a fresh process per environment);
 5. numba compile time: the first calls in a fresh process with an empty cache, then with the
@@ -322,7 +322,8 @@ def cost_table(seconds: float) -> list[str]:
         lines.append(f"| {label} | {ns_per_item(lambda: fn(states, out), n):{fmt}} |")
     for env_id in SUBENV_IDS:
         rate, reset_ns = resets[env_id]
-        lines.append(f"| {env_id}: one reset, in Python (draw, loading, row, observation) | {reset_ns:,.0f} |")
+        lines.append(f"| {env_id}: one reset of 64 at once (draw, loading, row, observation) "
+                     f"| {reset_ns:,.0f} |")
         lines.append(f"| {env_id}: resets per env-step with random actions: {rate:.4f}, so per env-step | "
                      f"{rate * reset_ns:.0f} |")
     cartpole = CartPoleVectorEnv(num_envs=n)
