@@ -9,9 +9,13 @@ is a polynomial, and the integrals reduce to the cumulative moments
 evaluated at s = x*: one binary search over the stations and a few multiplications per state,
 instead of a quadrature over the stations.
 
-The integral is written once, for one state, in :func:`crossflow_point` (compiled with numba, see
-:mod:`subenv.dynamics._jit`); :func:`crossflow_integrals` is its batched form for NumPy callers and
-the right-hand side (:func:`subenv.dynamics.derivatives`) calls it directly.
+The integral is written once, for one state, in four steps compiled with numba (see
+:mod:`subenv.dynamics._jit`): the root (:func:`crossflow_root`), its segment (:func:`hull_segment`),
+the moments there (:func:`moments_on_segment`) and the integrals from them
+(:func:`crossflow_from_moments`). :func:`crossflow_point` chains them, and the right-hand side
+(:func:`subenv.dynamics.rhs_point`) calls it; the block integrator
+(:func:`subenv.dynamics.integrate.control_period_lanes`) runs the same steps over a block of
+states, each as one loop. :func:`crossflow_integrals` is the batched form for NumPy callers.
 """
 
 from __future__ import annotations
@@ -25,7 +29,16 @@ import numpy as np
 from subenv._typing import FloatArray
 from subenv.dynamics._jit import gufunc, inline_kernel
 
-__all__ = ["HullTable", "crossflow_integrals", "crossflow_point", "cumulative_moments_point"]
+__all__ = [
+    "HullTable",
+    "crossflow_from_moments",
+    "crossflow_integrals",
+    "crossflow_point",
+    "crossflow_root",
+    "cumulative_moments_point",
+    "hull_segment",
+    "moments_on_segment",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -80,51 +93,75 @@ class HullTable:
 
 
 @inline_kernel
-def cumulative_moments_point(s: float, hull: FloatArray) -> tuple[float, float, float, float]:
-    """C_0..C_3 at one position ``s`` [m] (clipped to the hull); ``hull`` is :attr:`HullTable.packed`."""
+def hull_segment(s: float, hull: FloatArray) -> int:
+    """The segment i of the hull with x[i] <= s < x[i+1] (0 at or aft of the tail, the last at or
+    forward of the nose, 0 for nan): ``clip(searchsorted(x, s, side="right") - 1, 0, n_seg - 1)``.
+
+    It equals the number of inner stations x[1] .. x[n_seg - 1] at or aft of ``s``, which is how the
+    integrator over a block of states finds it (:func:`subenv.dynamics.integrate.control_period_lanes`).
+    """
     n_seg = hull.shape[1] - 1
-    lo, hi = hull[0, 0], hull[0, n_seg]
-    # Segment i with x[i] <= s < x[i+1] (the last segment for s at the nose), as
-    # clip(searchsorted(x, s, side="right") - 1, 0, n_seg - 1). Most roots of w - x q lie off the
-    # hull (|w / q| beyond its ends), where the segment is an end one: no search.
-    if s <= lo:
-        s, i = lo, 0
-    elif s >= hi:
-        s, i = hi, n_seg - 1
-    else:
-        a, b = 1, n_seg
-        while a < b:
-            mid = (a + b) >> 1
-            if hull[0, mid] <= s:
-                a = mid + 1
-            else:
-                b = mid
-        i = a - 1
-    c0, c1 = hull[1, i], hull[2, i]
+    # Most roots of w - x q lie off the hull (|w / q| beyond its ends), where the segment is an end
+    # one: no search.
+    if s <= hull[0, 0]:
+        return 0
+    if s >= hull[0, n_seg]:
+        return n_seg - 1
+    a, b = 1, n_seg
+    while a < b:
+        mid = (a + b) >> 1
+        if hull[0, mid] <= s:
+            a = mid + 1
+        else:
+            b = mid
+    return a - 1
+
+
+@inline_kernel
+def moments_on_segment(s: float, c0: float, c1: float, o0: float, o1: float, o2: float,
+                       o3: float) -> tuple[float, float, float, float]:
+    """C_0..C_3 at ``s`` on a segment with breadth ``c0 + c1 x`` and offsets ``o0..o3``
+    (:attr:`HullTable.packed` rows 1-6 of the segment's column)."""
     s2 = s * s
     s3 = s2 * s
     s4 = s3 * s
     s5 = s4 * s
     return (
-        hull[3, i] + c0 * s + c1 * s2 / 2,
-        hull[4, i] + c0 * s2 / 2 + c1 * s3 / 3,
-        hull[5, i] + c0 * s3 / 3 + c1 * s4 / 4,
-        hull[6, i] + c0 * s4 / 4 + c1 * s5 / 5,
+        o0 + c0 * s + c1 * s2 / 2,
+        o1 + c0 * s2 / 2 + c1 * s3 / 3,
+        o2 + c0 * s3 / 3 + c1 * s4 / 4,
+        o3 + c0 * s4 / 4 + c1 * s5 / 5,
     )
 
 
 @inline_kernel
-def crossflow_point(w: float, q: float, hull: FloatArray) -> tuple[float, float]:
-    """Exact I_0, I_1 (see :func:`crossflow_integrals`) for one (w, q); ``hull`` is :attr:`HullTable.packed`."""
+def cumulative_moments_point(s: float, hull: FloatArray) -> tuple[float, float, float, float]:
+    """C_0..C_3 at one position ``s`` [m] (clipped to the hull); ``hull`` is :attr:`HullTable.packed`."""
     n_seg = hull.shape[1] - 1
-    # Root of w_loc; for q == 0 w_loc has the sign of w everywhere, which the ends reproduce.
+    s = min(max(s, hull[0, 0]), hull[0, n_seg]) if s == s else s
+    i = hull_segment(s, hull)
+    return moments_on_segment(s, hull[1, i], hull[2, i], hull[3, i], hull[4, i], hull[5, i], hull[6, i])
+
+
+@inline_kernel
+def crossflow_root(w: float, q: float, hull: FloatArray) -> float:
+    """The root x* = w / q of w_loc = w - x q, clipped to the hull; for q == 0 (w_loc has the sign of
+    w everywhere) the end that reproduces that sign."""
+    lo, hi = hull[0, 0], hull[0, hull.shape[1] - 1]
     if q != 0:
         root = w / q
     elif w >= 0:
-        root = hull[0, n_seg]
+        root = hi
     else:
-        root = hull[0, 0]
-    C0, C1, C2, C3 = cumulative_moments_point(root, hull)
+        root = lo
+    return min(max(root, lo), hi) if root == root else root
+
+
+@inline_kernel
+def crossflow_from_moments(w: float, q: float, C0: float, C1: float, C2: float, C3: float,
+                           hull: FloatArray) -> tuple[float, float]:
+    """I_0, I_1 from the cumulative moments C_0..C_3 at the (clipped) root of w_loc."""
+    n_seg = hull.shape[1] - 1
     T0, T1, T2, T3 = hull[3, n_seg], hull[4, n_seg], hull[5, n_seg], hull[6, n_seg]
     ww, wq2, qq = w * w, 2.0 * w * q, q * q
     # With F_k(s) = int_{tail}^{s} x^k b w_loc^2 dx: w_loc > 0 aft of the root when q > 0.
@@ -132,6 +169,14 @@ def crossflow_point(w: float, q: float, hull: FloatArray) -> tuple[float, float]
     I0 = sigma * (2.0 * (ww * C0 - wq2 * C1 + qq * C2) - (ww * T0 - wq2 * T1 + qq * T2))
     I1 = sigma * (2.0 * (ww * C1 - wq2 * C2 + qq * C3) - (ww * T1 - wq2 * T2 + qq * T3))
     return I0, I1
+
+
+@inline_kernel
+def crossflow_point(w: float, q: float, hull: FloatArray) -> tuple[float, float]:
+    """Exact I_0, I_1 (see :func:`crossflow_integrals`) for one (w, q); ``hull`` is :attr:`HullTable.packed`."""
+    s = crossflow_root(w, q, hull)
+    C0, C1, C2, C3 = cumulative_moments_point(s, hull)
+    return crossflow_from_moments(w, q, C0, C1, C2, C3, hull)
 
 
 def crossflow_integrals(table: HullTable, w: FloatArray, q: FloatArray) -> tuple[FloatArray, FloatArray]:

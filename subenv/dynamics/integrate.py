@@ -10,6 +10,9 @@ same scheme, compiled, for one state of :func:`subenv.dynamics.rhs_point` over o
 period: the environments call it. It performs the same floating-point operations in the same
 order, so it reproduces ``rk4`` over :func:`subenv.dynamics.derivatives` bit for bit
 (``tests/envs/test_env_api.py::test_step_is_one_rk4_call_of_the_shared_dynamics``).
+:func:`control_period_lanes` is it again for a block of up to :data:`LANES` states, one per
+column, so that the compiler turns each stage into SIMD code over the block; it gives the same
+bits as ``control_period_point`` state by state (``tests/dynamics/test_integrator.py``).
 """
 
 from __future__ import annotations
@@ -19,9 +22,20 @@ from typing import Final
 
 from subenv._typing import FloatArray
 from subenv.dynamics._jit import inline_kernel
-from subenv.dynamics.model import rhs_point
+from subenv.dynamics.hull import crossflow_from_moments, crossflow_root, moments_on_segment
+from subenv.dynamics.model import PARAM_FIELDS, rhs_given_drag, rhs_point
 
-__all__ = ["CONTROL_PERIOD_S", "SUBSTEPS", "control_period_point", "rk4", "rk4_step"]
+__all__ = [
+    "CONTROL_PERIOD_S",
+    "LANES",
+    "LANE_ROWS",
+    "SUBSTEPS",
+    "control_period_lanes",
+    "control_period_point",
+    "rk4",
+    "rk4_step",
+    "set_lane",
+]
 
 CONTROL_PERIOD_S: Final = 0.5
 """Default control period of the environments [s]."""
@@ -74,23 +88,151 @@ def control_period_point(
     (a linear ramp, constant when ``speed_slope`` is 0). ``prm`` and ``hull`` as for ``rhs_point``.
     """
     h = dt / substeps
+    half = 0.5 * h
+    sixth = h / 6.0
     x0, x1, x2, x3 = theta, w, q, depth
     for i in range(substeps):
         t = t0 + i * h
-        # rk4_step, term by term: k1..k4 at t, t + h/2, t + h/2, t + h.
-        half = 0.5 * h
+        # rk4_step, term by term: k1..k4 at (t, x), (t + h/2, x + h/2 k1), (t + h/2, x + h/2 k2),
+        # (t + h, x + h k3). (One stage loop, so that the right-hand side is compiled once.)
+        s0, s1, s2 = x0, x1, x2
         u = speed0 + speed_slope * (t - t0)
-        a0, a1, a2, a3 = rhs_point(x0, x1, x2, u, stern, bow, force, 0.0, prm, hull)
-        u = speed0 + speed_slope * (t + 0.5 * h - t0)
-        b0, b1, b2, b3 = rhs_point(x0 + half * a0, x1 + half * a1, x2 + half * a2, u, stern, bow, force,
-                                   0.0, prm, hull)
-        c0, c1, c2, c3 = rhs_point(x0 + half * b0, x1 + half * b1, x2 + half * b2, u, stern, bow, force,
-                                   0.0, prm, hull)
-        u = speed0 + speed_slope * (t + h - t0)
-        d0, d1, d2, d3 = rhs_point(x0 + h * c0, x1 + h * c1, x2 + h * c2, u, stern, bow, force, 0.0, prm, hull)
-        sixth = h / 6.0
-        x0 = x0 + sixth * (a0 + 2.0 * (b0 + c0) + d0)
-        x1 = x1 + sixth * (a1 + 2.0 * (b1 + c1) + d1)
-        x2 = x2 + sixth * (a2 + 2.0 * (b2 + c2) + d2)
-        x3 = x3 + sixth * (a3 + 2.0 * (b3 + c3) + d3)
+        a0 = a1 = a2 = a3 = b0 = b1 = b2 = b3 = c0 = c1 = c2 = c3 = 0.0
+        for stage in range(4):
+            k0, k1, k2, k3 = rhs_point(s0, s1, s2, u, stern, bow, force, 0.0, prm, hull)
+            if stage == 0:
+                a0, a1, a2, a3 = k0, k1, k2, k3
+                s0, s1, s2 = x0 + half * k0, x1 + half * k1, x2 + half * k2
+                u = speed0 + speed_slope * (t + 0.5 * h - t0)
+            elif stage == 1:
+                b0, b1, b2, b3 = k0, k1, k2, k3
+                s0, s1, s2 = x0 + half * k0, x1 + half * k1, x2 + half * k2
+            elif stage == 2:
+                c0, c1, c2, c3 = k0, k1, k2, k3
+                s0, s1, s2 = x0 + h * k0, x1 + h * k1, x2 + h * k2
+                u = speed0 + speed_slope * (t + h - t0)
+            else:
+                x0 = x0 + sixth * (a0 + 2.0 * (b0 + c0) + k0)
+                x1 = x1 + sixth * (a1 + 2.0 * (b1 + c1) + k1)
+                x2 = x2 + sixth * (a2 + 2.0 * (b2 + c2) + k2)
+                x3 = x3 + sixth * (a3 + 2.0 * (b3 + c3) + k3)
     return x0, x1, x2, x3
+
+
+LANES: Final = 64
+"""Columns of a block of :func:`control_period_lanes` (its states are integrated together)."""
+# Rows of a block, each LANES wide. The caller fills the inputs of columns 0 .. n-1:
+LANE_PITCH, LANE_HEAVE, LANE_PITCH_RATE, LANE_DEPTH = 0, 1, 2, 3  # the state: in, and out after the period
+LANE_T0, LANE_SPEED0, LANE_SPEED_SLOPE = 4, 5, 6  # as for control_period_point
+LANE_STERN, LANE_BOW, LANE_FORCE = 7, 8, 9
+LANE_PARAMS: Final = 10  # the PARAM_FIELDS, one row each
+# ... and the integrator's working rows:
+_STAGE: Final = LANE_PARAMS + len(PARAM_FIELDS)  # (theta, w, q) at which a stage evaluates
+_SPEED: Final = _STAGE + 3
+_ROOT: Final = _SPEED + 1  # the root of w_loc, clipped to the hull
+_SEGMENT: Final = _ROOT + 1  # its hull segment (a count, as a float)
+_SEGMENT_COEFFICIENTS: Final = _SEGMENT + 1  # that segment's column of HullTable.packed, rows 1-6
+_SLOPE_OUT: Final = _SEGMENT_COEFFICIENTS + 6  # the right-hand side's result, 4 rows
+_SLOPES: Final = _SLOPE_OUT + 4  # k1 .. k4, 4 rows each
+LANE_ROWS: Final = _SLOPES + 16
+"""Rows of a block: a block is a float64 array of ``LANE_ROWS * LANES`` (row r, column j at ``r * LANES + j``)."""
+
+
+@inline_kernel
+def set_lane(block: FloatArray, j: int, theta: float, w: float, q: float, depth: float, t0: float, speed0: float,
+             speed_slope: float, stern: float, bow: float, force: float, prm: FloatArray) -> None:
+    """Put one state's inputs of :func:`control_period_point` into column ``j`` of a block."""
+    L = LANES
+    block[LANE_PITCH * L + j] = theta
+    block[LANE_HEAVE * L + j] = w
+    block[LANE_PITCH_RATE * L + j] = q
+    block[LANE_DEPTH * L + j] = depth
+    block[LANE_T0 * L + j] = t0
+    block[LANE_SPEED0 * L + j] = speed0
+    block[LANE_SPEED_SLOPE * L + j] = speed_slope
+    block[LANE_STERN * L + j] = stern
+    block[LANE_BOW * L + j] = bow
+    block[LANE_FORCE * L + j] = force
+    for r in range(len(PARAM_FIELDS)):
+        block[(LANE_PARAMS + r) * L + j] = prm[r]
+
+
+@inline_kernel
+def _rhs_lanes(block: FloatArray, n: int, at: int, slopes: int, hull: FloatArray) -> None:
+    """rhs_point of columns 0 .. n-1, at the (theta, w, q) in rows ``at`` .. ``at + 2`` with the
+    speed in row _SPEED, into rows ``slopes`` .. ``slopes + 3``.
+
+    Each step is a loop over the columns with the same operations in every column, and every
+    access is block[row * LANES + column] with a constant row: the compiler can tell the rows
+    apart and vectorize. Only the hull's columns are looked up by segment (a gather).
+    """
+    L = LANES
+    theta, w, q = at * L, (at + 1) * L, (at + 2) * L
+    n_seg = hull.shape[1] - 1
+    for j in range(n):
+        block[_ROOT * L + j] = crossflow_root(block[w + j], block[q + j], hull)
+        block[_SEGMENT * L + j] = 0.0
+    # hull_segment as a count of the inner stations at or aft of the root (the same segment).
+    for k in range(1, n_seg):
+        station = hull[0, k]
+        for j in range(n):
+            block[_SEGMENT * L + j] += 1.0 if station <= block[_ROOT * L + j] else 0.0
+    for j in range(n):
+        i = int(block[_SEGMENT * L + j])
+        for r in range(6):
+            block[(_SEGMENT_COEFFICIENTS + r) * L + j] = hull[1 + r, i]
+    c = _SEGMENT_COEFFICIENTS * L
+    for j in range(n):
+        w_j, q_j = block[w + j], block[q + j]
+        C0, C1, C2, C3 = moments_on_segment(block[_ROOT * L + j], block[c + j], block[c + L + j],
+                                            block[c + 2 * L + j], block[c + 3 * L + j], block[c + 4 * L + j],
+                                            block[c + 5 * L + j])
+        I0, I1 = crossflow_from_moments(w_j, q_j, C0, C1, C2, C3, hull)
+        d0, d1, d2, d3 = rhs_given_drag(block[theta + j], w_j, q_j, block[_SPEED * L + j], block[LANE_STERN * L + j],
+                                        block[LANE_BOW * L + j], block[LANE_FORCE * L + j], 0.0, I0, I1, block,
+                                        LANE_PARAMS * L + j, L)
+        block[slopes * L + j] = d0
+        block[(slopes + 1) * L + j] = d1
+        block[(slopes + 2) * L + j] = d2
+        block[(slopes + 3) * L + j] = d3
+
+
+@inline_kernel
+def control_period_lanes(block: FloatArray, n: int, dt: float, substeps: int, hull: FloatArray) -> None:
+    """:func:`control_period_point` for columns 0 .. n-1 (n <= :data:`LANES`) of ``block``, in place.
+
+    ``block`` holds the inputs of each column in the ``LANE_*`` rows (see :data:`LANE_ROWS`); the
+    period ``dt`` and ``substeps`` are shared. Afterwards rows ``LANE_PITCH`` .. ``LANE_DEPTH``
+    hold the states at the end of the period, the same bits as ``control_period_point`` gives.
+    """
+    L = LANES
+    h = dt / substeps
+    half = 0.5 * h
+    sixth = h / 6.0
+    for i in range(substeps):
+        # rk4_step, term by term, with control_period_point's times and speeds. (One stage loop, so
+        # that the right-hand side is compiled once.)
+        for stage in range(4):
+            step = 0.0 if stage == 0 else (half if stage < 3 else h)  # the stage's state is x + step k
+            offset = 0.0 if stage == 0 else (0.5 * h if stage < 3 else h)  # and its time t + offset
+            previous = _SLOPES + 4 * (stage - 1) if stage > 0 else _SLOPES
+            for j in range(n):
+                t0 = block[LANE_T0 * L + j]
+                t = t0 + i * h
+                block[_SPEED * L + j] = block[LANE_SPEED0 * L + j] + block[LANE_SPEED_SLOPE * L + j] * (
+                    t - t0 if stage == 0 else t + offset - t0)
+            for r in range(3):
+                for j in range(n):
+                    x = block[(LANE_PITCH + r) * L + j]
+                    block[(_STAGE + r) * L + j] = x if stage == 0 else x + step * block[(previous + r) * L + j]
+            _rhs_lanes(block, n, _STAGE, _SLOPE_OUT, hull)
+            for r in range(4):
+                for j in range(n):
+                    block[(_SLOPES + 4 * stage + r) * L + j] = block[(_SLOPE_OUT + r) * L + j]
+        k1, k2, k3, k4 = _SLOPES, _SLOPES + 4, _SLOPES + 8, _SLOPES + 12
+        for r in range(4):
+            for j in range(n):
+                x = (LANE_PITCH + r) * L + j
+                block[x] = block[x] + sixth * (block[(k1 + r) * L + j] + 2.0 * (block[(k2 + r) * L + j]
+                                                                               + block[(k3 + r) * L + j])
+                                               + block[(k4 + r) * L + j])

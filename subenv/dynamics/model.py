@@ -4,10 +4,12 @@ State ``x = (theta, w, q, Z)``: pitch [rad, nose-up positive], heave velocity [m
 pitch rate [rad/s] and depth [m, down positive]. Forward speed ``u`` [m/s] is an input.
 
 The equations are written once, for one state, in :func:`rhs_point`, compiled with numba (see
-:mod:`subenv.dynamics._jit`). Everything that needs the physics calls it: the environments'
-compiled transition directly, and the linearisation, controller design and analysis through
-:func:`derivatives`, its batched form: a pure function over any leading axes, states ``(..., 4)``,
-inputs and :class:`ModelParams` fields broadcast against ``(...)``.
+:mod:`subenv.dynamics._jit`): the hull's cross-flow integrals (:mod:`subenv.dynamics.hull`), then
+:func:`rhs_given_drag`, the equations given them. Everything that needs the physics calls these:
+the environments' block integrator (:func:`subenv.dynamics.integrate.control_period_lanes`, the
+same two steps over a block of states), and the linearisation, controller design and analysis
+through :func:`derivatives`, the batched form of ``rhs_point``: a pure function over any leading
+axes, states ``(..., 4)``, inputs and :class:`ModelParams` fields broadcast against ``(...)``.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import numpy as np
 from subenv._typing import ArrayLike, FloatArray
 from subenv.dynamics._jit import gufunc, inline_kernel
 from subenv.dynamics.hull import HullTable, crossflow_point
+from subenv.dynamics.sincos import sincos_point
 from subenv.vehicles.vehicle import Vehicle
 
 __all__ = [
@@ -29,6 +32,7 @@ __all__ = [
     "dual_plane_angles",
     "model_params",
     "pack_params",
+    "rhs_given_drag",
     "rhs_point",
     "stack_params",
 ]
@@ -163,14 +167,40 @@ def rhs_point(
     ``prm`` holds the fields of :class:`ModelParams` in :data:`PARAM_FIELDS` order
     (:func:`pack_params`), ``hull`` is :attr:`HullTable.packed`. Depth does not enter.
     """
+    I0, I1 = crossflow_point(w, q, hull)
+    return rhs_given_drag(theta, w, q, u, stern, bow, force, moment, I0, I1, prm, 0, 1)
+
+
+@inline_kernel
+def rhs_given_drag(
+    theta: float,
+    w: float,
+    q: float,
+    u: float,
+    stern: float,
+    bow: float,
+    force: float,
+    moment: float,
+    I0: float,
+    I1: float,
+    prm: FloatArray,
+    at: int,
+    stride: int,
+) -> tuple[float, float, float, float]:
+    """:func:`rhs_point` given the hull's cross-flow integrals ``I0``, ``I1`` (:func:`crossflow_point`).
+
+    Field k of :data:`PARAM_FIELDS` is ``prm[at + k * stride]``: a packed parameter row has
+    stride 1; the block integrator (:func:`subenv.dynamics.integrate.control_period_lanes`) keeps
+    each field as a row of its block, one sub-environment per column.
+    """
     (inv_m11, inv_m12, inv_m21, inv_m22, Z_uq, m_zG, Z_w, M_uq, M_w, Z_delta_s, Z_delta_b, M_delta_s,
      M_delta_b, W_minus_B, xGW_minus_xBB, zGW_minus_zBB, half_rho_CD) = (
-        prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6], prm[7], prm[8], prm[9], prm[10],
-        prm[11], prm[12], prm[13], prm[14], prm[15], prm[16])
-    cos_t = np.cos(theta)
-    sin_t = np.sin(theta)
+        prm[at], prm[at + stride], prm[at + 2 * stride], prm[at + 3 * stride], prm[at + 4 * stride],
+        prm[at + 5 * stride], prm[at + 6 * stride], prm[at + 7 * stride], prm[at + 8 * stride],
+        prm[at + 9 * stride], prm[at + 10 * stride], prm[at + 11 * stride], prm[at + 12 * stride],
+        prm[at + 13 * stride], prm[at + 14 * stride], prm[at + 15 * stride], prm[at + 16 * stride])
+    sin_t, cos_t = sincos_point(theta)
     uu = u * u
-    I0, I1 = crossflow_point(w, q, hull)
     # Riedel (1993) eqs 2.38 and 2.39, right-hand sides, with the forces of eqs 2.42 and 2.43.
     heave = (
         Z_uq * u * q

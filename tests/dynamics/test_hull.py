@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from subenv.dynamics import HullTable, crossflow_integrals
+from subenv.dynamics.hull import hull_segment
 
 
 def _quadrature(vehicle, w: float, q: float, n: int = 400001) -> tuple[float, float]:
@@ -52,3 +53,17 @@ def test_batched_equals_elementwise(suboff):
         for j in range(5):
             a, b = crossflow_integrals(table, w[i, j], q[i, j])
             assert I0[i, j] == a and I1[i, j] == b
+
+
+def test_segment_search_is_searchsorted_and_the_count_of_stations_aft(suboff):
+    table = HullTable.from_offsets(suboff.hull.x_m, suboff.hull.breadth_m)
+    x, n_seg = table.x, table.x.size - 1
+    mids = (x[:-1] + x[1:]) / 2
+    s = np.concatenate([x, np.nextafter(x, -np.inf), np.nextafter(x, np.inf), mids, [-10.0, 10.0, np.nan]])
+    found = np.array([hull_segment(v, table.packed) for v in s])
+    with np.errstate(invalid="ignore"):
+        expected = np.clip(np.searchsorted(x, s, side="right") - 1, 0, n_seg - 1)
+        counted = np.array([np.count_nonzero(x[1:n_seg] <= v) for v in s])  # the block integrator's way
+    expected[np.isnan(s)] = 0
+    np.testing.assert_array_equal(found, expected)
+    np.testing.assert_array_equal(found, counted)

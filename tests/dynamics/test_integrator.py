@@ -1,4 +1,5 @@
-"""RK4 at the environments' step against scipy's solve_ivp (rtol 1e-10) over 600 s.
+"""RK4 at the environments' step against scipy's solve_ivp (rtol 1e-10) over 600 s, and the
+environments' block integrator against the same scheme one state at a time.
 
 Both integrate the same problem: planes held over each 0.5 s control period (zero-order hold),
 set either by an open-loop schedule or by the thesis's full-state feedback of the state each
@@ -7,13 +8,23 @@ integrator has reached (closed loop). The worst errors are printed in the "measu
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 from scipy.signal import place_poles
 
 from subenv.analysis import linear_model
-from subenv.dynamics import CONTROL_PERIOD_S, SUBSTEPS, derivatives, model_params, rk4
+from subenv.dynamics import (
+    CONTROL_PERIOD_S,
+    PARAM_FIELDS,
+    SUBSTEPS,
+    derivatives,
+    integrate,
+    model_params,
+    pack_params,
+    rk4,
+)
 from subenv.units import fps_to_mps
 
 DURATION_S = 600.0
@@ -83,3 +94,56 @@ def test_rk4_matches_solve_ivp_through_a_deceleration(suboff, report):
     assert abs(x_ref[3] - 8.0) > 1.0  # the trajectory moved (to the ordered depth)
     assert worst_depth < DEPTH_TOL_M
     assert worst_pitch < PITCH_TOL_RAD
+
+
+# --- the block integrator ----------------------------------------------------------------------
+@numba.njit(error_model="numpy")
+def _periods_in_blocks(x, t0, u0, slope, stern, bow, force, prm, hull, dt, substeps):
+    """control_period_lanes over rows of x, LANES at a time (as the environments' kernel fills a block)."""
+    L = integrate.LANES
+    block = np.full(integrate.LANE_ROWS * L, np.nan)  # (unused columns stay nan: they must not matter)
+    for b in range(0, x.shape[0], L):
+        n = min(L, x.shape[0] - b)
+        for j in range(n):
+            integrate.set_lane(block, j, x[b + j, 0], x[b + j, 1], x[b + j, 2], x[b + j, 3], t0[b + j], u0[b + j],
+                               slope[b + j], stern[b + j], bow[b + j], force[b + j], prm[b + j])
+        integrate.control_period_lanes(block, n, dt, substeps, hull)
+        for j in range(n):
+            for r in range(4):
+                x[b + j, r] = block[(integrate.LANE_PITCH + r) * L + j]
+
+
+@numba.njit(error_model="numpy")
+def _periods_one_at_a_time(x, t0, u0, slope, stern, bow, force, prm, hull, dt, substeps):
+    for i in range(x.shape[0]):
+        x[i, 0], x[i, 1], x[i, 2], x[i, 3] = integrate.control_period_point(
+            x[i, 0], x[i, 1], x[i, 2], x[i, 3], t0[i], dt, substeps, u0[i], slope[i], stern[i], bow[i], force[i],
+            prm[i], hull)
+
+
+@pytest.mark.parametrize("n", [1, 63, 64, 65, 1000])
+def test_block_integrator_gives_the_bits_of_one_state_at_a_time(suboff, n):
+    rng = np.random.default_rng(n)
+    params = model_params(suboff)
+    hull = params.hull.packed
+    x = np.column_stack([rng.uniform(-0.5, 0.5, n), rng.uniform(-0.5, 0.5, n), rng.uniform(-0.2, 0.2, n),
+                         rng.uniform(1.0, 30.0, n)])
+    # Roots of w - x q on stations, at the ends and off the hull; q = 0; w = 0; states that do not
+    # stay finite; a pitch beyond the sine's range.
+    stations = hull[0]
+    x[::5, 1] = x[::5, 2] * rng.choice(stations, x[::5].shape[0])
+    x[1::7, 2] = 0.0
+    x[2::11, 1] = 0.0
+    if n >= 65:
+        x[3, 0], x[4, 1], x[5, 2], x[6, 0] = np.nan, np.inf, -np.inf, 1e7
+    # Each state its own time, speed ramp, planes, force and loading.
+    t0 = rng.uniform(0.0, 600.0, n)
+    u0, slope = rng.uniform(0.1, 2.5, n), rng.uniform(-0.02, 0.02, n) * (rng.random(n) < 0.5)
+    stern, bow, force = rng.uniform(-0.4, 0.4, n), rng.uniform(-0.4, 0.4, n), rng.normal(0.0, 2.0, n)
+    prm = pack_params(params)[None, :] * rng.uniform(0.8, 1.2, (n, len(PARAM_FIELDS)))
+    args = (t0, u0, slope, stern, bow, force, prm, hull, CONTROL_PERIOD_S, SUBSTEPS)
+    one, block = x.copy(), x.copy()
+    _periods_one_at_a_time(one, *args)
+    _periods_in_blocks(block, *args)
+    np.testing.assert_array_equal(block, one)  # bit for bit (NaN where NaN)
+    assert np.isfinite(one[: min(n, 3)]).all() and not np.array_equal(one, x)  # and the states moved
