@@ -195,15 +195,15 @@ def integrator_table(seconds: float) -> list[str]:
             return x
         return run
 
-    compiled(x0, 1)
     rows = []
     integrators: list[tuple[str, Callable[[np.ndarray, int], np.ndarray]]] = [
-        ("RK4, compiled (what the environments run)", compiled),
+        ("RK4, compiled, one state (`control_period_point`)", compiled),
         ("RK4, `rk4` over `derivatives` (Python loop)", python_rk4),
         ("`solve_ivp` RK45, default tolerances", scipy(1e-3, 1e-6)),
         ("`solve_ivp` RK45, rtol 1e-10, atol 1e-12", scipy(1e-10, 1e-12)),
     ]
     for label, run in integrators:
+        run(x0, 1)  # compiled (or loaded from the cache) before the clock starts
         count, start = 0, time.perf_counter()
         while True:
             run(x0, periods)
@@ -227,37 +227,61 @@ def cost_table(seconds: float) -> list[str]:
     import numba
 
     from subenv.dynamics import CONTROL_PERIOD_S, SUBSTEPS, control_period_point, model_params, pack_params, rhs_point
+    from subenv.dynamics import integrate as ig
     from subenv.dynamics.hull import crossflow_point
+    from subenv.dynamics.sincos import sincos_point
     from subenv.envs import transition as tr
 
     n = 4096
     params = model_params(subenv.load_vehicle("suboff"))
-    prm, hull = pack_params(params), params.hull.packed
+    hull = params.hull.packed
+    prm = np.repeat(pack_params(params)[None], n, axis=0)  # one parameter row per state, as in the envs
     rng = np.random.default_rng(0)
     states = np.column_stack([rng.uniform(-0.05, 0.05, n), rng.uniform(-0.05, 0.05, n), rng.uniform(-0.01, 0.01, n),
                               rng.uniform(8.0, 15.0, n)])
     out = np.zeros((n, 4))
 
     @numba.njit
-    def periods(x: np.ndarray, out: np.ndarray) -> None:
+    def periods(x: np.ndarray, prm: np.ndarray, out: np.ndarray) -> None:
         for i in range(x.shape[0]):
             out[i, 0], out[i, 1], out[i, 2], out[i, 3] = control_period_point(
                 x[i, 0], x[i, 1], x[i, 2], x[i, 3], 0.0, CONTROL_PERIOD_S, SUBSTEPS, 1.0, 0.0, 0.05, 0.0, 0.0,
-                prm, hull)
+                prm[i], hull)
 
     @numba.njit
-    def rhs(x: np.ndarray, out: np.ndarray) -> None:
+    def periods_in_blocks(x: np.ndarray, prm: np.ndarray, out: np.ndarray) -> None:
+        L = ig.LANES
+        block = np.empty(ig.LANE_ROWS * L)
+        for b in range(0, x.shape[0], L):
+            m = min(L, x.shape[0] - b)
+            for j in range(m):  # the inputs, as step_batch fills them
+                ig.set_lane(block, j, x[b + j, 0], x[b + j, 1], x[b + j, 2], x[b + j, 3], 0.0, 1.0, 0.0, 0.05, 0.0, 0.0,
+                            prm[b + j])
+            ig.control_period_lanes(block, m, CONTROL_PERIOD_S, SUBSTEPS, hull)
+            for j in range(m):
+                for r in range(4):
+                    out[b + j, r] = block[(ig.LANE_PITCH + r) * L + j]
+
+    @numba.njit
+    def rhs(x: np.ndarray, prm: np.ndarray, out: np.ndarray) -> None:
         for i in range(x.shape[0]):
             out[i, 0], out[i, 1], out[i, 2], out[i, 3] = rhs_point(x[i, 0], x[i, 1], x[i, 2], 1.0, 0.05, 0.0, 0.0, 0.0,
-                                                                   prm, hull)
+                                                                   prm[i], hull)
+
+    pitch, sin_cos = states[:, 0].copy(), np.empty((2, n))  # contiguous: a loop over them is SIMD
 
     @numba.njit
-    def trig(x: np.ndarray, out: np.ndarray) -> None:
+    def trig(x: np.ndarray, prm: np.ndarray, out: np.ndarray) -> None:
         for i in range(x.shape[0]):
-            out[i, 0], out[i, 1] = math.cos(x[i, 0]), math.sin(x[i, 0])
+            out[0, i], out[1, i] = sincos_point(x[i])
 
     @numba.njit
-    def drag(x: np.ndarray, out: np.ndarray) -> None:
+    def libm_trig(x: np.ndarray, prm: np.ndarray, out: np.ndarray) -> None:
+        for i in range(x.shape[0]):
+            out[0, i], out[1, i] = math.sin(x[i]), math.cos(x[i])
+
+    @numba.njit
+    def drag(x: np.ndarray, prm: np.ndarray, out: np.ndarray) -> None:
         for i in range(x.shape[0]):
             out[i, 0], out[i, 1] = crossflow_point(x[i, 1], x[i, 2], hull)
 
@@ -288,7 +312,7 @@ def cost_table(seconds: float) -> list[str]:
             ends += int((terminated | truncated).sum())
         vec = env.unwrapped
         a = np.asarray(actions[0], dtype=float).reshape(n, -1)
-        report = np.empty((n, tr.N_REPORT))
+        report = np.empty((tr.N_REPORT, n))
         active = np.ones(n, dtype=bool)
         rows = vec._rows.copy()
 
@@ -314,12 +338,18 @@ def cost_table(seconds: float) -> list[str]:
     for env_id in SUBENV_IDS:
         lines.append(f"| {env_id}: compiled step of one sub-environment (`step_batch`, no reset) "
                      f"| {kernel[env_id]:.0f} |")
-    parts = (("of which: one control period, 2 RK4 steps = 8 right-hand sides", periods, ".0f"),
-             ("one right-hand side (`rhs_point`)", rhs, ".1f"),
-             ("of which: its cosine and sine of the pitch", trig, ".1f"),
-             ("of which: the exact hull drag integral (`crossflow_point`)", drag, ".1f"))
-    for label, fn, fmt in parts:
-        lines.append(f"| {label} | {ns_per_item(lambda: fn(states, out), n):{fmt}} |")
+    per_state, per_pitch = (states, prm, out), (pitch, prm, sin_cos)
+    parts = (("of which: one control period (2 RK4 steps = 8 right-hand sides) in a block of 64 states "
+              "(`control_period_lanes`, SIMD code), per state", periods_in_blocks, per_state, ".0f"),
+             ("the same control period, one state at a time (`control_period_point`)", periods, per_state, ".0f"),
+             ("one right-hand side, one state (`rhs_point`)", rhs, per_state, ".1f"),
+             ("the sine and cosine of the pitch (`sincos_point`), in a loop over an array of pitches (SIMD)", trig,
+              per_pitch, ".1f"),
+             ("the same loop with the C library's `sin` and `cos` (calls, one value at a time)", libm_trig, per_pitch,
+              ".1f"),
+             ("the exact hull drag integral, one state (`crossflow_point`)", drag, per_state, ".1f"))
+    for label, fn, args, fmt in parts:
+        lines.append(f"| {label} | {ns_per_item(lambda: fn(*args), n):{fmt}} |")
     for env_id in SUBENV_IDS:
         rate, reset_ns = resets[env_id]
         lines.append(f"| {env_id}: one reset of 64 at once (draw, loading, row, observation) "

@@ -256,7 +256,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         self._rows[0, tr.CRITICAL_SPEED] = math.nan
         self._row = self._rows[0]
         self._obs_rows = np.zeros((1, len(OBSERVATION_NAMES)), dtype=np.float32)
-        self._report = np.zeros((1, tr.N_REPORT))  # (unused here: the info is built from the row)
+        self._report = np.zeros((tr.N_REPORT, 1))  # (unused here: the info is built from the row)
         self._active = np.ones(1, dtype=bool)
         self._last_obs = self._obs_rows[0]
         self._rngs: Any = None  # numba typed list holding self.np_random, for the transition

@@ -1,12 +1,14 @@
 """The dive-plane environment's transition, compiled, for one sub-environment or a batch of them.
 
 Both :class:`~subenv.envs.DivePlaneEnv` and :class:`~subenv.envs.DivePlaneVectorEnv` step through
-:func:`step_env` (Gymnasium's functional-env split: a pure transition over arrays, thin ``Env``
-classes around it). It applies the action to the planes, integrates one control period with
-:func:`subenv.dynamics.integrate.control_period_point` over the shared right-hand side
-:func:`subenv.dynamics.rhs_point`, advances the disturbance, classifies the episode end, computes
-the reward terms and the observation (with sensor noise drawn from the sub-environment's own
-``numpy.random.Generator``, in the order the single environment always drew it).
+:func:`step_batch` (Gymnasium's functional-env split: a pure transition over arrays, thin ``Env``
+classes around it; the single env is a batch of one). It applies the action to the planes
+(:func:`set_planes`), integrates one control period with
+:func:`subenv.dynamics.integrate.control_period_lanes` over the shared right-hand side
+:func:`subenv.dynamics.rhs_point`, and then (:func:`finish_step`) advances the disturbance,
+classifies the episode end, computes the reward terms and the observation (with sensor noise
+drawn from the sub-environment's own ``numpy.random.Generator``, in the order the single
+environment always drew it).
 
 Each sub-environment is one row of a float64 array (columns below); the environment's constants
 are one float64 array (``C_*`` indices). Resets stay in Python (they draw a scenario); the vector
@@ -23,7 +25,14 @@ import numpy as np
 
 from subenv._typing import FloatArray
 from subenv.dynamics._jit import inline_kernel, kernel
-from subenv.dynamics.integrate import control_period_point
+from subenv.dynamics.integrate import (
+    LANE_PITCH,
+    LANE_ROWS,
+    LANES,
+    control_period_lanes,
+    control_period_point,
+    set_lane,
+)
 from subenv.dynamics.model import PARAM_FIELDS
 
 __all__ = [
@@ -37,14 +46,16 @@ __all__ = [
     "observe_batch",
     "observe_env",
     "speed_at_point",
+    "finish_step",
+    "set_planes",
     "step_batch",
-    "step_env",
 ]
 
 # --- columns of a sub-environment's row ------------------------------------------------------
 PITCH, HEAVE, PITCH_RATE, DEPTH = 0, 1, 2, 3  # the state (theta, w, q, Z) [rad, m/s, rad/s, m]
 PARAMS: Final = 4  # ModelParams in PARAM_FIELDS order (pack_params)
-STERN: Final = PARAMS + len(PARAM_FIELDS)  # applied plane angles [rad]
+N_PARAMS: Final = len(PARAM_FIELDS)
+STERN: Final = PARAMS + N_PARAMS  # applied plane angles [rad]
 BOW: Final = STERN + 1
 TIME: Final = BOW + 1  # [s] since reset
 MAX_KNOTS: Final = 4
@@ -74,9 +85,9 @@ REASONS: Final = ("", "diverged", "pitch_limit", "broached", "left_depth_band")
 """``info["termination_reason"]`` for each value of the ``REASON`` column."""
 _DIVERGED, _PITCH_LIMIT, _BROACHED, _LEFT_DEPTH_BAND = 1, 2, 3, 4
 
-# --- columns of a step's report, one row per sub-environment: the single env's info
+# --- rows of a step's report, one column per sub-environment: the single env's info
 # (subenv.envs.dive_plane._info), key by key, then the step's outcome. The vector env hands each
-# column out as an array over the sub-environments.
+# row out as an array over the sub-environments.
 REPORT_KEYS: Final = ("time_s", "depth_m", "depth_command_m", "depth_error_m", "pitch_rad", "heave_mps",
                       "pitch_rate_radps", "stern_plane_rad", "bow_plane_rad", "speed_mps", "froude_number",
                       "critical_speed_mps", "critical_froude", "disturbance_N", "reward_depth", "reward_pitch",
@@ -96,6 +107,10 @@ C_OBS_LOW: Final = 19
 C_OBS_HIGH: Final = C_OBS_LOW + N_OBS
 C_NOISE_STD: Final = C_OBS_HIGH + N_OBS
 N_CONFIG: Final = C_NOISE_STD + N_OBS
+
+_LANES_FROM: Final = 8
+"""step_batch of fewer rows integrates them one at a time (the block integrator's loops cost more than
+they save on a few states; the same bits either way)."""
 
 
 def episode_time_limit(max_episode_steps: int | None) -> float:
@@ -169,9 +184,9 @@ def observe_env(row: FloatArray, obs: np.ndarray, rngs: numba.typed.List, i: int
 
 
 @inline_kernel
-def step_env(row: FloatArray, action: FloatArray, obs: np.ndarray, rngs: numba.typed.List, i: int,
-             cfg: FloatArray, hull: FloatArray) -> None:
-    """One control period of sub-environment ``i`` (its action must be finite: see :func:`step_batch`)."""
+def set_planes(row: FloatArray, action: FloatArray, cfg: FloatArray) -> float:
+    """Apply an action (finite: see :func:`step_batch`) to the row's planes; returns the effort term's
+    mean squared command."""
     limit = cfg[C_PLANE_LIMIT]
     a0 = min(max(action[0], -1.0), 1.0)
     stern = a0 * limit
@@ -186,19 +201,17 @@ def step_env(row: FloatArray, action: FloatArray, obs: np.ndarray, rngs: numba.t
         move = cfg[C_MAX_MOVE]
         stern = row[STERN] + min(max(stern - row[STERN], -move), move)
         bow = row[BOW] + min(max(bow - row[BOW], -move), move)
-    stern = min(max(stern, -limit), limit)
-    bow = min(max(bow, -limit), limit)
-    row[STERN] = stern
-    row[BOW] = bow
+    row[STERN] = min(max(stern, -limit), limit)
+    row[BOW] = min(max(bow, -limit), limit)
+    return effort
 
-    t0 = row[TIME]
-    dt = cfg[C_DT]
-    u0 = speed_at_point(t0, row)
-    u1 = speed_at_point(t0 + dt, row)
-    x0, x1, x2, x3 = control_period_point(
-        row[PITCH], row[HEAVE], row[PITCH_RATE], row[DEPTH], t0, dt, int(cfg[C_SUBSTEPS]), u0, (u1 - u0) / dt,
-        stern, bow, row[DISTURBANCE], row[PARAMS:PARAMS + len(PARAM_FIELDS)], hull)
-    row[TIME] = t0 + dt
+
+@inline_kernel
+def finish_step(row: FloatArray, x0: float, x1: float, x2: float, x3: float, speed_end: float, effort: float,
+                obs: np.ndarray, rngs: numba.typed.List, i: int, cfg: FloatArray) -> None:
+    """The rest of sub-environment ``i``'s step, given the state (x0..x3) at the end of the control
+    period and the speed then: disturbance, episode end, reward terms, observation."""
+    row[TIME] = row[TIME] + cfg[C_DT]
     std = row[DISTURBANCE_STD]
     if std > 0.0:
         # First-order Gauss-Markov process with stationary standard deviation std.
@@ -234,39 +247,39 @@ def step_env(row: FloatArray, action: FloatArray, obs: np.ndarray, rngs: numba.t
     row[TERMINATED] = 1.0 if terminated else 0.0
     row[TRUNCATED] = 1.0 if truncated else 0.0
     if reason == _DIVERGED:
-        row[SPEED] = u1  # the observation stays the last valid one
+        row[SPEED] = speed_end  # the observation stays the last valid one
     else:
         observe_env(row, obs, rngs, i, cfg)
 
 
 @inline_kernel
 def report_env(row: FloatArray, report: FloatArray, j: int) -> None:
-    """Write row ``j`` of a step's report (columns ``R_*``) from a transition row, as the single env's
-    info computes it. (Row-major: one env's report is contiguous, which the threads write fastest.)"""
+    """Write column ``j`` of ``report`` (rows ``R_*``) from a transition row, as the single env's info
+    computes it."""
     depth, command, speed = row[DEPTH], row[COMMAND], row[SPEED]
     froude_scale, ucr = row[SQRT_G_ZGB], row[CRITICAL_SPEED]  # nan when z_GB <= 0 (then no Froude numbers)
-    report[j, R_TIME] = row[TIME]
-    report[j, R_DEPTH] = depth
-    report[j, R_COMMAND] = command
-    report[j, R_DEPTH_ERROR] = depth - command
-    report[j, R_PITCH] = row[PITCH]
-    report[j, R_HEAVE] = row[HEAVE]
-    report[j, R_PITCH_RATE] = row[PITCH_RATE]
-    report[j, R_STERN] = row[STERN]
-    report[j, R_BOW] = row[BOW]
-    report[j, R_SPEED] = speed
-    report[j, R_FROUDE] = speed / froude_scale
-    report[j, R_CRITICAL_SPEED] = ucr
-    report[j, R_CRITICAL_FROUDE] = ucr / froude_scale
-    report[j, R_DISTURBANCE] = row[DISTURBANCE]
-    report[j, R_REWARD_DEPTH] = row[REWARD_DEPTH]
-    report[j, R_REWARD_PITCH] = row[REWARD_PITCH]
-    report[j, R_REWARD_EFFORT] = row[REWARD_EFFORT]
-    report[j, R_REWARD_TERMINATION] = row[REWARD_TERMINATION]
-    report[j, R_REASON] = row[REASON]
-    report[j, R_REWARD] = row[REWARD]
-    report[j, R_TERMINATED] = row[TERMINATED]
-    report[j, R_TRUNCATED] = row[TRUNCATED]
+    report[R_TIME, j] = row[TIME]
+    report[R_DEPTH, j] = depth
+    report[R_COMMAND, j] = command
+    report[R_DEPTH_ERROR, j] = depth - command
+    report[R_PITCH, j] = row[PITCH]
+    report[R_HEAVE, j] = row[HEAVE]
+    report[R_PITCH_RATE, j] = row[PITCH_RATE]
+    report[R_STERN, j] = row[STERN]
+    report[R_BOW, j] = row[BOW]
+    report[R_SPEED, j] = speed
+    report[R_FROUDE, j] = speed / froude_scale
+    report[R_CRITICAL_SPEED, j] = ucr
+    report[R_CRITICAL_FROUDE, j] = ucr / froude_scale
+    report[R_DISTURBANCE, j] = row[DISTURBANCE]
+    report[R_REWARD_DEPTH, j] = row[REWARD_DEPTH]
+    report[R_REWARD_PITCH, j] = row[REWARD_PITCH]
+    report[R_REWARD_EFFORT, j] = row[REWARD_EFFORT]
+    report[R_REWARD_TERMINATION, j] = row[REWARD_TERMINATION]
+    report[R_REASON, j] = row[REASON]
+    report[R_REWARD, j] = row[REWARD]
+    report[R_TERMINATED, j] = row[TERMINATED]
+    report[R_TRUNCATED, j] = row[TRUNCATED]
 
 
 @inline_kernel
@@ -285,10 +298,27 @@ def first_non_finite(actions: FloatArray, active: np.ndarray) -> int:
     return _first_non_finite(actions, active)
 
 
+@inline_kernel
+def _begin_step(row: FloatArray, action: FloatArray, cfg: FloatArray) -> tuple[float, float, float, float]:
+    """Set the planes (:func:`set_planes`); returns the effort, the time and the speeds at the start and
+    the end of the control period."""
+    effort = set_planes(row, action, cfg)
+    t0 = row[TIME]
+    return effort, t0, speed_at_point(t0, row), speed_at_point(t0 + cfg[C_DT], row)
+
+
 @kernel
 def step_batch(rows: FloatArray, actions: FloatArray, active: np.ndarray, obs: np.ndarray, rngs: numba.typed.List,
                first: int, cfg: FloatArray, hull: FloatArray, report: FloatArray) -> int:
-    """:func:`step_env` and :func:`report_env` for each row with ``active`` set; the single env is one row.
+    """One control period of each row with ``active`` set, and its column of ``report``
+    (:func:`report_env`, shape ``(N_REPORT, number of sub-environments)``); the single env is one row.
+
+    Each row's step: set the planes (:func:`set_planes`), integrate the control period, finish the
+    step (:func:`finish_step`). With :data:`_LANES_FROM` rows or more, the active rows go in blocks
+    of :data:`~subenv.dynamics.integrate.LANES` and each block's control period is integrated
+    together (:func:`~subenv.dynamics.integrate.control_period_lanes`, SIMD code); fewer rows are
+    integrated one at a time (:func:`~subenv.dynamics.integrate.control_period_point`). The two give
+    the same bits.
 
     Returns -1, or the index (in ``rows``) of the first active row with a non-finite action, and
     then steps nothing. ``rows``, ``actions``, ``active`` and ``obs`` may be a slice of the
@@ -298,10 +328,49 @@ def step_batch(rows: FloatArray, actions: FloatArray, active: np.ndarray, obs: n
     bad = _first_non_finite(actions, active)
     if bad >= 0:
         return bad
-    for i in range(rows.shape[0]):
-        if active[i]:
-            step_env(rows[i], actions[i], obs[i], rngs, first + i, cfg, hull)
-            report_env(rows[i], report, first + i)
+    dt = cfg[C_DT]
+    substeps = int(cfg[C_SUBSTEPS])
+    if rows.shape[0] < _LANES_FROM:
+        for i in range(rows.shape[0]):
+            if active[i]:
+                row = rows[i]
+                effort, t0, u0, u1 = _begin_step(row, actions[i], cfg)
+                x0, x1, x2, x3 = control_period_point(
+                    row[PITCH], row[HEAVE], row[PITCH_RATE], row[DEPTH], t0, dt, substeps, u0, (u1 - u0) / dt,
+                    row[STERN], row[BOW], row[DISTURBANCE], row[PARAMS:PARAMS + N_PARAMS], hull)
+                finish_step(row, x0, x1, x2, x3, u1, effort, obs[i], rngs, first + i, cfg)
+                report_env(row, report, first + i)
+        return -1
+    L = LANES
+    block = np.empty(LANE_ROWS * L)
+    block_report = np.empty((N_REPORT, L))  # (the columns of the step's report, written in rows below)
+    efforts = np.empty(L)
+    speeds_end = np.empty(L)
+    members = np.empty(L, dtype=np.int64)
+    i = 0
+    while i < rows.shape[0]:
+        n = 0
+        while i < rows.shape[0] and n < L:
+            if active[i]:
+                row = rows[i]
+                efforts[n], t0, u0, u1 = _begin_step(row, actions[i], cfg)
+                speeds_end[n] = u1
+                set_lane(block, n, row[PITCH], row[HEAVE], row[PITCH_RATE], row[DEPTH], t0, u0, (u1 - u0) / dt,
+                         row[STERN], row[BOW], row[DISTURBANCE], row[PARAMS:PARAMS + N_PARAMS])
+                members[n] = i
+                n += 1
+            i += 1
+        control_period_lanes(block, n, dt, substeps, hull)
+        for j in range(n):
+            k = members[j]
+            finish_step(rows[k], block[LANE_PITCH * L + j], block[(LANE_PITCH + 1) * L + j],
+                        block[(LANE_PITCH + 2) * L + j], block[(LANE_PITCH + 3) * L + j], speeds_end[j], efforts[j],
+                        obs[k], rngs, first + k, cfg)
+            report_env(rows[k], block_report, j)
+        # Key by key into the step's report (each key's row written in order, not 22 rows per env).
+        for c in range(N_REPORT):
+            for j in range(n):
+                report[c, first + members[j]] = block_report[c, j]
     return -1
 
 

@@ -25,7 +25,7 @@ __all__ = ["DivePlaneVectorEnv"]
 
 _REASONS: Final = np.array(tr.REASONS, dtype=object)
 _INFO_KEYS: Final = (*tr.REPORT_KEYS[: tr.R_REASON], "termination_reason")
-"""The single environment's info keys (subenv.envs.dive_plane._info), as the report's columns."""
+"""The single environment's info keys (subenv.envs.dive_plane._info), as the report's rows."""
 _MASK_KEYS: Final = tuple("_" + key for key in _INFO_KEYS)
 _AUTORESET_MODES: Final = (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP, AutoresetMode.DISABLED)
 _BATCH_RESETS: Final = 4
@@ -157,8 +157,11 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         self.vehicles: list[Vehicle] = [self.single_env.base_vehicle] * n
         """Each sub-environment's vehicle (its episode's loading)."""
         self._episodes: list[EpisodeConfig | None] = [None] * n
-        # Episodes drawn in a batch, as (scenario, uniform numbers), until someone asks for them.
-        self._unbuilt: dict[int, tuple[Scenario, np.ndarray]] = {}
+        # Episodes drawn in a batch are kept as their scenario and uniform numbers until someone asks
+        # for them (as arrays: a batch stores them without a Python loop over its resets).
+        self._unbuilt = np.zeros(n, dtype=bool)
+        self._unbuilt_scenario = np.full(n, None, dtype=object)
+        self._unbuilt_units = np.empty((n, 0))
         self._history: list[tuple[float, float, float]] = []  # of the first sub-environment, for render()
 
     # --- Gymnasium API ----------------------------------------------------------------------
@@ -196,11 +199,11 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
                     self._rngs[i] = self._generators[i]
         if self._rngs is None:
             self._rngs = typed.List(self._generators)
-        report = np.zeros((n, tr.N_REPORT))
+        report = np.zeros((tr.N_REPORT, n))
         self._reset_envs(indices, options, report)
         self._done[indices] = False
         self._any_done = bool(self._done.any())
-        return self._obs.copy(), self._infos(report.T.copy(), None if mask is self._everyone else mask)
+        return self._obs.copy(), self._infos(report, None if mask is self._everyone else mask)
 
     def step(
         self, actions: np.ndarray
@@ -221,7 +224,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
                 )
             resetting = np.flatnonzero(self._done)  # NEXT_STEP: these reset instead of stepping
             active = ~self._done
-        report = np.empty((self.num_envs, tr.N_REPORT))
+        report = np.empty((tr.N_REPORT, self.num_envs))  # one row per info key, filled by the kernels
         if self.threads == 1:  # (step_batch checks the actions before it steps anything)
             _check_finite(tr.step_batch(self._rows, actions, active, self._obs, self._rngs, 0, self._cfg, self._hull,
                                         report), actions)
@@ -236,24 +239,23 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         if self.render_mode is not None and active[0]:
             row = self._rows[0]
             self._history.append((row[tr.TIME], row[tr.DEPTH], row[tr.COMMAND]))
-        columns = report.T.copy()  # one array per key
-        rewards = columns[tr.R_REWARD]
-        terminated, truncated = columns[tr.R_TERMINATED:tr.R_TRUNCATED + 1] > 0.0
+        rewards = report[tr.R_REWARD].copy()
+        terminated, truncated = report[tr.R_TERMINATED:tr.R_TRUNCATED + 1] > 0.0
         done = terminated | truncated
         self._any_done = np.count_nonzero(done) > 0
         self._done = done
         if mode is not AutoresetMode.SAME_STEP or not self._any_done:
-            return self._obs.copy(), rewards, terminated, truncated, self._infos(columns, None)
+            return self._obs.copy(), rewards, terminated, truncated, self._infos(report, None)
         final_obs = np.full(self.num_envs, None, dtype=object)
         ended = np.flatnonzero(done)
         for i in ended:
             final_obs[i] = self._obs[i].copy()
-        final = {"final_obs": final_obs, "_final_obs": done.copy(), "final_info": self._infos(columns.copy(), done),
+        final = {"final_obs": final_obs, "_final_obs": done.copy(), "final_info": self._infos(report.copy(), done),
                  "_final_info": done.copy()}
         self._reset_envs(ended, {}, report)
         self._done = np.zeros(self.num_envs, dtype=bool)
         self._any_done = False
-        infos = self._infos(report.T.copy(), None)
+        infos = self._infos(report, None)
         infos.update(final)
         return self._obs.copy(), rewards, terminated, truncated, infos
 
@@ -296,11 +298,13 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
     @property
     def episodes(self) -> list[EpisodeConfig | None]:
         """Each sub-environment's episode draw (None before its first reset)."""
-        if self._unbuilt:  # built on demand: a batch of resets draws numbers, not EpisodeConfigs
+        if self._unbuilt.any():  # built on demand: a batch of resets draws numbers, not EpisodeConfigs
             weight_N = self.single_env.base_vehicle.weight_N
-            for i, (scenario, units) in self._unbuilt.items():
+            for i in np.flatnonzero(self._unbuilt).tolist():
+                scenario = self._unbuilt_scenario[i]
+                units = self._unbuilt_units[i, : scenario._units_per_draw].copy()
                 self._episodes[i] = scenario._episode_from_units(units, weight_N)
-            self._unbuilt.clear()
+            self._unbuilt[:] = False
         return list(self._episodes)
 
     @property
@@ -337,7 +341,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         Resets run in Python and hold the GIL; the compiled steps release it. So this thread first
         steps a slice of rows (which lets the pool's threads start theirs), then draws the new
         episodes while they run. The slice is sized from the measured costs so that all threads
-        finish together. The threads touch different rows, generators and report rows.
+        finish together. The threads touch different rows, generators and report columns.
         """
         n, n_reset = self.num_envs, len(resetting)
         kernel_s = self._kernel_s_per_env * (n - n_reset)
@@ -387,7 +391,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         return a if a.flags.c_contiguous else np.ascontiguousarray(a)
 
     def _reset_envs(self, indices: Sequence[int] | np.ndarray, options: dict[str, Any], report: np.ndarray) -> None:
-        """Draw new episodes for ``indices`` (and write their rows of ``report``)."""
+        """Draw new episodes for ``indices`` (and write their columns of ``report``)."""
         rows, vehicles, index = self._rows, self.vehicles, np.asarray(indices, dtype=np.intp)
         if len(index) >= _BATCH_RESETS and not options and self.single_env.scenario._batch_ready:
             self._draw_batch(index)
@@ -395,7 +399,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
             draw, generators, episodes = self.single_env._draw_episode, self._generators, self._episodes
             for i in index.tolist():
                 vehicles[i], episodes[i], rows[i] = draw(generators[i], options)  # type: ignore[arg-type]
-                self._unbuilt.pop(i, None)
+            self._unbuilt[index] = False
         tr.observe_batch(rows, index, self._obs, self._rngs, self._cfg, report)
         if not self._ready:
             self._started[index] = True
@@ -426,16 +430,23 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         for column, value in drawn:
             block[:, column] = value
         self._rows[index] = block
-        vehicles, unbuilt = self.vehicles, self._unbuilt
-        for j, i in enumerate(index.tolist()):
+        vehicles = self.vehicles
+        for i in index.tolist():
             vehicles[i] = vehicle
-            unbuilt[i] = (scenario, units[j])
+        k = units.shape[1]
+        if self._unbuilt_units.shape[1] < k:  # (a scenario that draws more numbers than any before)
+            wider = np.empty((self.num_envs, k))
+            wider[:, : self._unbuilt_units.shape[1]] = self._unbuilt_units
+            self._unbuilt_units = wider
+        self._unbuilt_units[index, :k] = units
+        self._unbuilt_scenario[index] = scenario
+        self._unbuilt[index] = True
 
-    def _infos(self, columns: np.ndarray, mask: np.ndarray | None) -> dict[str, Any]:
-        """Gymnasium's vector ``info`` from a step's report, transposed (whose rows it hands out);
-        with ``mask``, only those sub-environments report, as in ``SyncVectorEnv``."""
-        values = list(columns[: tr.R_REASON])
-        values.append(_REASONS.take(columns[tr.R_REASON].astype(np.intp)))
+    def _infos(self, report: np.ndarray, mask: np.ndarray | None) -> dict[str, Any]:
+        """Gymnasium's vector ``info`` from a step's report (whose rows it hands out); with ``mask``,
+        only those sub-environments report, as in ``SyncVectorEnv``."""
+        values = list(report[: tr.R_REASON])
+        values.append(_REASONS.take(report[tr.R_REASON].astype(np.intp)))
         if mask is None:
             masks = np.ones((len(_INFO_KEYS), self.num_envs), dtype=bool)
         else:  # SyncVectorEnv leaves the others at zero (None for strings)

@@ -190,6 +190,28 @@ def test_many_simultaneous_resets_reproduce_sync_vector_env(mode):
     assert native.unwrapped.episodes == [env.unwrapped.episode for env in sync.envs]
 
 
+def test_episodes_of_batches_from_different_scenarios_are_each_their_own():
+    # A batch keeps its episodes as their scenario and numbers until `episodes` is read. A switch to a
+    # scenario that draws more numbers, back again, and resets one at a time in between must leave
+    # every sub-environment with its own episode, as SyncVectorEnv's.
+    sync = gym.make_vec("subenv/Nominal-v0", num_envs=32, vectorization_mode="sync")
+    native = gym.make_vec("subenv/Nominal-v0", num_envs=32)
+    native.reset(seed=4)
+    sync.reset(seed=4)
+    widths = []
+    for t in range(150):
+        if t in (40, 100):
+            scenario = "SpeedTransient" if t == 40 else "Nominal"
+            native.unwrapped.set_scenario(scenario)
+            sync.call("set_scenario", scenario)
+        if t in (70, 149):
+            assert native.unwrapped.episodes == [env.unwrapped.episode for env in sync.envs], t
+        actions = np.full((32, 1), 1.0 if t % 40 < 30 else -1.0, dtype=np.float32)
+        assert_same(native.step(actions), sync.step(actions), f"step {t}")
+        widths.append(native.unwrapped._unbuilt_units.shape[1])
+    assert widths[0] == get_scenario("Nominal")._units_per_draw < widths[-1]  # SpeedTransient drew in a batch
+
+
 def _step_threaded_in_child(queue) -> None:  # runs in a forked process
     env = DivePlaneVectorEnv(num_envs=64, threads=2)
     env.reset(seed=0)
