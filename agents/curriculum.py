@@ -137,6 +137,7 @@ class CurriculumCallback(BaseCallback):
         super().__init__(verbose)
         self.scenarios = scenarios
         self.schedule = CurriculumSchedule(len(scenarios), config.threshold, config.window, stage)
+        self.start_stage = stage
         self.state_dir = Path(state_dir) if state_dir is not None else None
         self.advances: list[tuple[int, int]] = []
         """(timestep, new stage) of every advance."""
@@ -183,16 +184,30 @@ class CurriculumCallback(BaseCallback):
         if self.verbose:
             print(f"curriculum: stage {stage} ({self.scenarios[stage].name}) at {self.num_timesteps} steps")
         if self.state_dir is not None:
-            write_state(self.state_dir, stage, self.advances)
+            write_state(self.state_dir, stage, self.advances, self.start_stage)
 
 
-def write_state(state_dir: Path, stage: int, advances: list[tuple[int, int]]) -> None:
-    """Write :data:`STATE_FILE` completely or not at all."""
+def write_state(state_dir: Path, stage: int, advances: list[tuple[int, int]], start_stage: int = 0) -> None:
+    """Write :data:`STATE_FILE` completely or not at all: the stage now, the stage the run started at
+    and the (timestep, new stage) of every advance since."""
     state_dir.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(state_dir / STATE_FILE, json.dumps({"stage": stage, "advances": advances}) + "\n")
+    atomic_write_text(state_dir / STATE_FILE, json.dumps({"stage": stage, "start_stage": start_stage,
+                                                          "advances": advances}) + "\n")
 
 
-def read_stage(state_dir: Path) -> int:
-    """The stage recorded in ``state_dir`` (0 if none was)."""
+def read_stage(state_dir: Path, timestep: int | None = None) -> int:
+    """The stage recorded in ``state_dir`` (0 if none was); with ``timestep``, the stage training was at
+    after that many steps (a checkpoint's or a selected policy's, not the run's last)."""
     path = Path(state_dir) / STATE_FILE
-    return int(json.loads(path.read_text())["stage"]) if path.exists() else 0
+    if not path.exists():
+        return 0
+    state = json.loads(path.read_text())
+    if timestep is None:
+        return int(state["stage"])
+    stage = state.get("start_stage")
+    if stage is None:  # written before start stages were: a run that advanced started at 0
+        stage = 0 if state["advances"] else state["stage"]
+    for step, new_stage in state["advances"]:
+        if step <= timestep:
+            stage = new_stage
+    return int(stage)

@@ -16,12 +16,12 @@ on the native vector environment (:func:`subenv.envs.sb3.make_sb3_vec_env`) wrap
     progress.csv                  SB3's training log (and tensorboard/ if TensorBoard is installed)
     best_model.zip, evaluations.npz   from the evaluation callback (a separately seeded env)
     checkpoints/rl_model_<N>_steps.zip and rl_model_vecnormalize_<N>_steps.pkl
-    curriculum.json               the curriculum's stage (when it has one)
+    curriculum.json               the curriculum's stage, the stage it started at and its advances
     selected/, selection.json     with --select-freq: the policy that did best on validation episodes
                                   (agents.selection), loadable on its own, and the record of every check
 
-``--trained-agent`` continues a run from its model or a checkpoint (statistics and curriculum
-stage included) into a new folder.
+``--trained-agent`` continues a run from its model, a checkpoint or its selected policy into a new
+folder, with that model's statistics and the curriculum stage training was at when it was saved.
 """
 
 from __future__ import annotations
@@ -178,7 +178,7 @@ def train(
                 stats = statistics_file(previous.path, _run_dir_of(previous.path))
                 venv = VecNormalize.load(str(stats), venv.venv)
                 model.set_env(venv)
-            stage = read_stage(_run_dir_of(previous.path))
+            stage = read_stage(_training_run_of(previous.path), model.num_timesteps)
         else:
             model = algo_class(config.policy, venv, seed=seed, verbose=0, device="cpu", **model_kwargs(config))
         formats = ["csv"] + (["stdout"] if verbose else []) + (["tensorboard"] if find_spec("tensorboard") else [])
@@ -193,7 +193,7 @@ def train(
             scenarios = stage_scenarios(venv.get_attr("scenario")[0], curriculum, vehicle, alpha)
             stage = min(stage, len(scenarios) - 1)
             curriculum_callback = CurriculumCallback(scenarios, curriculum, run_dir, stage=stage, verbose=verbose)
-            write_state(run_dir, stage, [])
+            write_state(run_dir, stage, [], start_stage=stage)
             callbacks.append(curriculum_callback)
         if eval_freq:
             callbacks.append(EvalCallback(eval_env, n_eval_episodes=eval_episodes, eval_freq=max(eval_freq // n_envs, 1),
@@ -247,6 +247,14 @@ def _next_run_dir(log_folder: Path, config: AgentConfig) -> Path:
 
 def _run_dir_of(model_file: Path) -> Path:
     return model_file.parent.parent if model_file.parent.name == "checkpoints" else model_file.parent
+
+
+def _training_run_of(model_file: Path) -> Path:
+    """The run that trained ``model_file``: its folder, or the one above for a checkpoint or the selected
+    policy (whose curriculum stage is the run's at the model's step count)."""
+    from agents.selection import SELECTED_DIR
+
+    return model_file.parent.parent if model_file.parent.name in ("checkpoints", SELECTED_DIR) else model_file.parent
 
 
 def _quote(arg: str) -> str:

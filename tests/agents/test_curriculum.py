@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -10,7 +11,7 @@ import pytest
 pytest.importorskip("stable_baselines3")
 
 from agents.config import CurriculumConfig
-from agents.curriculum import CurriculumCallback, CurriculumSchedule, stage_scenarios
+from agents.curriculum import STATE_FILE, CurriculumCallback, CurriculumSchedule, read_stage, stage_scenarios, write_state
 from subenv.analysis import critical_speed
 from subenv.analysis.curriculum import DEFAULT_STAGES
 from subenv.scenarios import get_scenario
@@ -142,3 +143,15 @@ def test_short_or_terminated_episodes_do_not_count_as_success(suboff, length: in
     env = _FakeVecEnv(1)
     _run(callback, env, [(0, True)] * 3, length=length, truncated=truncated)
     assert callback.schedule.stage == 0 and callback.schedule.success_rate == 0.0
+
+
+def test_the_stage_at_a_step_is_the_start_stage_and_the_advances_up_to_it(tmp_path) -> None:
+    write_state(tmp_path, 3, [(1000, 2), (5000, 3)], start_stage=1)
+    assert read_stage(tmp_path) == 3  # the run's last
+    assert [read_stage(tmp_path, t) for t in (0, 999, 1000, 4999, 5000, 10**9)] == [1, 1, 2, 2, 3, 3]
+    assert read_stage(tmp_path / "no-curriculum", 100) == 0
+    # Files written before the start stage was: a run that advanced started at stage 0.
+    (tmp_path / STATE_FILE).write_text(json.dumps({"stage": 2, "advances": [[10, 1], [20, 2]]}))
+    assert [read_stage(tmp_path, t) for t in (5, 10, 25)] == [0, 1, 2]
+    (tmp_path / STATE_FILE).write_text(json.dumps({"stage": 2, "advances": []}))
+    assert read_stage(tmp_path, 5) == 2

@@ -13,6 +13,7 @@ pytest.importorskip("yaml")
 
 from agents.card import lineage, total_training_time_s
 from agents.config import ALGORITHMS, algorithm_class, load_config
+from agents.curriculum import write_state
 from agents.controller import AgentController
 from agents.policy import load_agent
 from agents.train import main, train
@@ -129,6 +130,25 @@ def test_resume_continues_from_a_checkpoint(trained, tmp_path) -> None:  # type:
     assert lineage(result.run_dir) == [parent]
     assert total_training_time_s({**record, "continued_from": [parent]}) == record["wall_time_s"] + parent["wall_time_s"]
     assert load_agent(result.run_dir).predict(_observations()).shape == (32, 2)
+
+
+def test_resume_takes_the_curriculum_stage_of_the_models_step(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """A checkpoint or the selected policy resumes at the stage training was at when it was saved."""
+    config = _config("ppo", n_timesteps=2048, curriculum=True)
+    first = train(config, seed=0, run_dir=tmp_path / "first", eval_freq=0, save_freq=256, select_freq=1024,
+                  select_episodes=1, verbose=0)
+    assert json.loads((first.run_dir / "curriculum.json").read_text())["start_stage"] == 0
+    # As if the curriculum had advanced to stage 2 at step 1500 (too few steps here to earn it).
+    write_state(first.run_dir, 2, [(1500, 2)], start_stage=0)
+    checkpoint = first.run_dir / "checkpoints" / "rl_model_1024_steps.zip"
+    selected = first.run_dir / "selected" / "model.zip"
+    selected_step = algorithm_class("ppo").load(selected, device="cpu").num_timesteps
+    for k, (model, expected) in enumerate([(checkpoint, 0), (first.run_dir, 2),
+                                           (selected, 2 if selected_step >= 1500 else 0)]):
+        resumed = train(_config("ppo", n_timesteps=1024, curriculum=True), seed=1, run_dir=tmp_path / f"resumed{k}",
+                        trained_agent=model, eval_freq=0, save_freq=0, verbose=0)
+        state = json.loads((resumed.run_dir / "curriculum.json").read_text())
+        assert state["start_stage"] == expected, model
 
 
 def test_resume_with_the_depth_integral_observation(tmp_path) -> None:  # type: ignore[no-untyped-def]
