@@ -27,7 +27,7 @@ import yaml
 from agents import MODELS_DIR
 from agents.controller import AgentController
 from agents.generalisation import HELD_OUT, evaluate_held_out
-from agents.policy import CONFIG_FILE, MODEL_FILE, VECNORMALIZE_FILE
+from agents.policy import CONFIG_FILE, MODEL_FILE, VECNORMALIZE_FILE, training_run
 from agents.selection import SELECTED_DIR, SELECTION_SCENARIOS
 from subenv.evaluation.results import atomic_output_dir, atomic_write_bytes, atomic_write_text
 
@@ -86,11 +86,7 @@ def lineage(run_dir: Path) -> list[dict[str, Any]]:
     records: list[dict[str, Any]] = []
     record = json.loads((run_dir / "train.json").read_text())
     while record.get("trained_agent"):
-        parent = Path(record["trained_agent"])
-        if parent.suffix == ".zip":
-            parent = parent.parent
-        if parent.name in ("checkpoints", SELECTED_DIR):
-            parent = parent.parent
+        parent = training_run(record["trained_agent"])
         if not (parent / "train.json").is_file():
             raise FileNotFoundError(f"{run_dir} continued from {record['trained_agent']!r}, whose run folder "
                                     f"{str(parent)!r} has no train.json: its training time is unknown")

@@ -26,13 +26,18 @@ from gymnasium import spaces
 from agents.config import AgentConfig, load_config
 from subenv.evaluation.results import atomic_write_bytes
 
-__all__ = ["CONFIG_FILE", "MODEL_FILE", "VECNORMALIZE_FILE", "NumpyActor", "TrainedAgent", "load_agent",
-           "save_model", "save_statistics", "statistics_file"]
+__all__ = ["CHECKPOINT_DIR", "CONFIG_FILE", "MODEL_FILE", "SELECTED_DIR", "VECNORMALIZE_FILE", "NumpyActor",
+           "TrainedAgent", "load_agent", "model_folder", "save_model", "save_statistics", "statistics_file",
+           "training_run"]
 
 MODEL_FILE: Final = "model.zip"
 VECNORMALIZE_FILE: Final = "vecnormalize.pkl"
 CONFIG_FILE: Final = "config.yml"
 """The resolved hyperparameters of the run (one entry, keyed by its env id), with ``algo``."""
+CHECKPOINT_DIR: Final = "checkpoints"
+"""A run's sub-folder of SB3 checkpoints, ``rl_model_<N>_steps.zip``."""
+SELECTED_DIR: Final = "selected"
+"""A run's sub-folder with the policy that did best on validation episodes (:mod:`agents.selection`)."""
 _CHECKPOINT = re.compile(r"^(?P<prefix>.+)_(?P<steps>\d+)_steps\.zip$")
 
 
@@ -217,9 +222,7 @@ def load_agent(path: str | Path, env: Any = None, device: str = "cpu") -> Traine
     model_file = path / MODEL_FILE if path.is_dir() else path
     if not model_file.is_file():
         raise FileNotFoundError(f"no trained model at {str(path)!r} (expected a folder with {MODEL_FILE} or a .zip file)")
-    run_dir = model_file.parent
-    if not (run_dir / CONFIG_FILE).is_file() and (run_dir.parent / CONFIG_FILE).is_file():
-        run_dir = run_dir.parent  # a checkpoint in <run>/checkpoints/
+    run_dir = model_folder(model_file)
     config = read_config(run_dir / CONFIG_FILE)
     model = algorithm_class(config.algo).load(model_file, device=device)
     stats_file = statistics_file(model_file, run_dir)
@@ -238,6 +241,24 @@ def load_agent(path: str | Path, env: Any = None, device: str = "cpu") -> Traine
     if env is not None:
         agent.check_spaces(env)
     return agent
+
+
+def model_folder(model_file: Path) -> Path:
+    """The folder with ``model_file``'s ``config.yml`` (and its statistics, but for a checkpoint's): the
+    file's own folder (a run, its ``selected/`` folder, a shipped model), or the one above it for a
+    checkpoint in ``<run>/checkpoints/``."""
+    folder = Path(model_file).parent
+    if not (folder / CONFIG_FILE).is_file() and (folder.parent / CONFIG_FILE).is_file():
+        return folder.parent
+    return folder
+
+
+def training_run(path: str | Path) -> Path:
+    """The run folder that trained the model at ``path`` (a run folder, its ``selected/`` folder, a model
+    file or a checkpoint): where its ``train.json`` and curriculum state are."""
+    path = Path(path)
+    folder = path.parent if path.suffix == ".zip" else path
+    return folder.parent if folder.name in (CHECKPOINT_DIR, SELECTED_DIR) else folder
 
 
 def statistics_file(model_file: Path, run_dir: Path) -> Path:

@@ -27,7 +27,8 @@ import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
 from agents.config import AgentConfig
-from agents.policy import CONFIG_FILE, MODEL_FILE, VECNORMALIZE_FILE, TrainedAgent, save_model, save_statistics
+from agents.policy import (CONFIG_FILE, MODEL_FILE, SELECTED_DIR, VECNORMALIZE_FILE, TrainedAgent, save_model,
+                           save_statistics)
 from subenv.evaluation.results import atomic_output_dir, atomic_write_bytes, atomic_write_text
 
 __all__ = ["SELECTED_DIR", "SELECTION_SCENARIOS", "VALIDATION_SEED", "SelectionCallback", "validation_score"]
@@ -36,7 +37,6 @@ SELECTION_SCENARIOS: Final = ("LowSpeed", "NearCritical", "SpeedTransient")
 """Where the shipped agents' target is measured, and so where they are selected."""
 VALIDATION_SEED: Final = 50_000
 """Validation episode i is ``reset(seed=VALIDATION_SEED + i)``: disjoint from the evaluation suites' seeds."""
-SELECTED_DIR: Final = "selected"
 SELECTION_FILE: Final = "selection.json"
 
 

@@ -42,8 +42,8 @@ from typing import Any, Final
 import yaml
 
 from agents.config import ALGORITHMS, AgentConfig, algorithm_class, load_config, model_kwargs, parse_overrides
-from agents.policy import (CONFIG_FILE, MODEL_FILE, VECNORMALIZE_FILE, load_agent, save_model, save_statistics,
-                           statistics_file)
+from agents.policy import (CHECKPOINT_DIR, CONFIG_FILE, MODEL_FILE, VECNORMALIZE_FILE, load_agent, model_folder,
+                           save_model, save_statistics, statistics_file, training_run)
 from subenv.evaluation.results import atomic_write_text
 
 __all__ = ["DEFAULT_ENV_ID", "EVAL_SEED_OFFSET", "TrainResult", "main", "make_vec_env", "train"]
@@ -175,10 +175,10 @@ def train(
                 raise ValueError(f"policy_kwargs {changed} differ from the trained agent's {model.policy_kwargs}: "
                                  "a run cannot change the network it continues")
             if isinstance(venv, VecNormalize) and previous.obs_mean is not None:
-                stats = statistics_file(previous.path, _run_dir_of(previous.path))
+                stats = statistics_file(previous.path, model_folder(previous.path))
                 venv = VecNormalize.load(str(stats), venv.venv)
                 model.set_env(venv)
-            stage = read_stage(_training_run_of(previous.path), model.num_timesteps)
+            stage = read_stage(training_run(previous.path), model.num_timesteps)
         else:
             model = algo_class(config.policy, venv, seed=seed, verbose=0, device="cpu", **model_kwargs(config))
         formats = ["csv"] + (["stdout"] if verbose else []) + (["tensorboard"] if find_spec("tensorboard") else [])
@@ -206,7 +206,7 @@ def train(
             selection = SelectionCallback(config, run_dir, select_freq, select_episodes, verbose=verbose)
             callbacks.append(selection)
         if save_freq:
-            callbacks.append(CheckpointCallback(max(save_freq // n_envs, 1), str(run_dir / "checkpoints"),
+            callbacks.append(CheckpointCallback(max(save_freq // n_envs, 1), str(run_dir / CHECKPOINT_DIR),
                                                 save_vecnormalize=True))
     except BaseException:
         # Nothing trained yet: leave no half-made run folder behind (it would block the same --run-dir).
@@ -243,18 +243,6 @@ def _next_run_dir(log_folder: Path, config: AgentConfig) -> Path:
     while (folder / f"{name}_{k}").exists():
         k += 1
     return folder / f"{name}_{k}"
-
-
-def _run_dir_of(model_file: Path) -> Path:
-    return model_file.parent.parent if model_file.parent.name == "checkpoints" else model_file.parent
-
-
-def _training_run_of(model_file: Path) -> Path:
-    """The run that trained ``model_file``: its folder, or the one above for a checkpoint or the selected
-    policy (whose curriculum stage is the run's at the model's step count)."""
-    from agents.selection import SELECTED_DIR
-
-    return model_file.parent.parent if model_file.parent.name in ("checkpoints", SELECTED_DIR) else model_file.parent
 
 
 def _quote(arg: str) -> str:

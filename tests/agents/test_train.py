@@ -15,7 +15,7 @@ from agents.card import lineage, total_training_time_s
 from agents.config import ALGORITHMS, algorithm_class, load_config
 from agents.curriculum import write_state
 from agents.controller import AgentController
-from agents.policy import load_agent
+from agents.policy import CHECKPOINT_DIR, CONFIG_FILE, MODEL_FILE, SELECTED_DIR, load_agent, model_folder, training_run
 from agents.train import main, train
 from subenv.evaluation import evaluate
 
@@ -130,6 +130,22 @@ def test_resume_continues_from_a_checkpoint(trained, tmp_path) -> None:  # type:
     assert lineage(result.run_dir) == [parent]
     assert total_training_time_s({**record, "continued_from": [parent]}) == record["wall_time_s"] + parent["wall_time_s"]
     assert load_agent(result.run_dir).predict(_observations()).shape == (32, 2)
+
+
+def test_a_model_path_names_its_config_folder_and_the_run_that_trained_it(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    run = tmp_path / "ppo" / "run_1"
+    for folder in (run, run / SELECTED_DIR):
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / CONFIG_FILE).write_text("algo: ppo\n")
+    (run / CHECKPOINT_DIR).mkdir()
+    checkpoint = run / CHECKPOINT_DIR / "rl_model_1024_steps.zip"
+    cases = {  # path: (the folder with its config.yml, the run that trained it)
+        run / MODEL_FILE: (run, run), run / "best_model.zip": (run, run), checkpoint: (run, run),
+        run / SELECTED_DIR / MODEL_FILE: (run / SELECTED_DIR, run),
+    }
+    for path, (config_folder, trained_by) in cases.items():
+        assert (model_folder(path), training_run(path)) == (config_folder, trained_by), path
+    assert training_run(run) == training_run(run / SELECTED_DIR) == training_run(str(run / SELECTED_DIR)) == run
 
 
 def test_resume_takes_the_curriculum_stage_of_the_models_step(tmp_path) -> None:  # type: ignore[no-untyped-def]
