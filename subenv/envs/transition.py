@@ -3,12 +3,12 @@
 Both :class:`~subenv.envs.DivePlaneEnv` and :class:`~subenv.envs.DivePlaneVectorEnv` step through
 :func:`step_batch` (Gymnasium's functional-env split: a pure transition over arrays, thin ``Env``
 classes around it; the single env is a batch of one). It applies the action to the planes
-(:func:`set_planes`), integrates one control period with
-:func:`subenv.dynamics.integrate.control_period_lanes` over the shared right-hand side
-:func:`subenv.dynamics.rhs_point`, and then (:func:`finish_step`) advances the disturbance,
-classifies the episode end, computes the reward terms and the observation (with sensor noise
-drawn from the sub-environment's own ``numpy.random.Generator``, in the order the single
-environment always drew it).
+(:func:`set_planes`), integrates one control period over the shared right-hand side
+:func:`subenv.dynamics.rhs_point` (:func:`~subenv.dynamics.integrate.control_period_lanes` for
+blocks of sub-environments, :func:`~subenv.dynamics.integrate.control_period_point` for a few),
+and then (:func:`finish_step`) advances the disturbance, classifies the episode end, computes the
+reward terms and the observation (with sensor noise drawn from the sub-environment's own
+``numpy.random.Generator``, in the order the single environment always drew it).
 
 Each sub-environment is one row of a float64 array (columns below); the environment's constants
 are one float64 array (``C_*`` indices). Resets stay in Python (they draw a scenario); the vector
@@ -42,12 +42,12 @@ __all__ = [
     "REASONS",
     "REPORT_KEYS",
     "draw_reset_numbers",
+    "finish_step",
     "first_non_finite",
     "observe_batch",
     "observe_env",
-    "speed_at_point",
-    "finish_step",
     "set_planes",
+    "speed_at_point",
     "step_batch",
 ]
 
