@@ -158,16 +158,16 @@ def set_lane(block: FloatArray, j: int, theta: float, w: float, q: float, depth:
 
 
 @inline_kernel
-def _rhs_lanes(block: FloatArray, n: int, at: int, slopes: int, hull: FloatArray) -> None:
-    """rhs_point of columns 0 .. n-1, at the (theta, w, q) in rows ``at`` .. ``at + 2`` with the
-    speed in row _SPEED, into rows ``slopes`` .. ``slopes + 3``.
+def _rhs_lanes(block: FloatArray, n: int, hull: FloatArray) -> None:
+    """rhs_point of columns 0 .. n-1, at the (theta, w, q) in rows _STAGE .. _STAGE + 2 with the speed
+    in row _SPEED, into rows _SLOPE_OUT .. _SLOPE_OUT + 3.
 
     Each step is a loop over the columns with the same operations in every column, and every
     access is block[row * LANES + column] with a constant row: the compiler can tell the rows
     apart and vectorize. Only the hull's columns are looked up by segment (a gather).
     """
     L = LANES
-    theta, w, q = at * L, (at + 1) * L, (at + 2) * L
+    theta, w, q = _STAGE * L, (_STAGE + 1) * L, (_STAGE + 2) * L
     n_seg = hull.shape[1] - 1
     for j in range(n):
         block[_ROOT * L + j] = crossflow_root(block[w + j], block[q + j], hull)
@@ -191,10 +191,10 @@ def _rhs_lanes(block: FloatArray, n: int, at: int, slopes: int, hull: FloatArray
         d0, d1, d2, d3 = rhs_given_drag(block[theta + j], w_j, q_j, block[_SPEED * L + j], block[LANE_STERN * L + j],
                                         block[LANE_BOW * L + j], block[LANE_FORCE * L + j], 0.0, I0, I1, block,
                                         LANE_PARAMS * L + j, L)
-        block[slopes * L + j] = d0
-        block[(slopes + 1) * L + j] = d1
-        block[(slopes + 2) * L + j] = d2
-        block[(slopes + 3) * L + j] = d3
+        block[_SLOPE_OUT * L + j] = d0
+        block[(_SLOPE_OUT + 1) * L + j] = d1
+        block[(_SLOPE_OUT + 2) * L + j] = d2
+        block[(_SLOPE_OUT + 3) * L + j] = d3
 
 
 @inline_kernel
@@ -225,7 +225,9 @@ def control_period_lanes(block: FloatArray, n: int, dt: float, substeps: int, hu
                 for j in range(n):
                     x = block[(LANE_PITCH + r) * L + j]
                     block[(_STAGE + r) * L + j] = x if stage == 0 else x + step * block[(previous + r) * L + j]
-            _rhs_lanes(block, n, _STAGE, _SLOPE_OUT, hull)
+            _rhs_lanes(block, n, hull)
+            # Into k_stage here, not in _rhs_lanes: rows that depend on the stage would hide from the
+            # compiler that they differ from the rows it reads, and it would not vectorize.
             for r in range(4):
                 for j in range(n):
                     block[(_SLOPES + 4 * stage + r) * L + j] = block[(_SLOPE_OUT + r) * L + j]
