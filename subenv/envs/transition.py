@@ -236,7 +236,9 @@ def finish_step(row: FloatArray, x0: float, x1: float, x2: float, x3: float, spe
         truncated = True  # as gymnasium.wrappers.TimeLimit: truncated even on a terminal step
 
     ratio = row[PITCH] / cfg[C_MAX_PITCH]
-    r_depth = 1.0 - math.tanh(abs(row[DEPTH] - row[COMMAND]) / cfg[C_DEPTH_SCALE])
+    # 1 - tanh(x) as 2 / (1 + e^(2x)), the same number: libm's exp costs a third of its tanh (about 20 ns
+    # less per step), and the small rewards far off depth keep their relative precision.
+    r_depth = 2.0 / (1.0 + math.exp(2.0 * abs(row[DEPTH] - row[COMMAND]) / cfg[C_DEPTH_SCALE]))
     r_pitch = -cfg[C_PITCH_WEIGHT] * (ratio * ratio)
     r_effort = -cfg[C_EFFORT_WEIGHT] * effort
     r_termination = -cfg[C_TERMINATION_PENALTY] if terminated else 0.0

@@ -99,6 +99,19 @@ def test_info_reports_the_required_quantities(env_id):
         info["froude_number"] * info["critical_speed_mps"] / info["speed_mps"])
 
 
+def test_depth_reward_is_one_minus_tanh_of_the_scaled_error():
+    env = gym.make("subenv/Nominal-v0")
+    scale = env.unwrapped.depth_scale_m
+    errors = []
+    for offset in (0.0, 1e-9, 0.3, 2.0, 7.5, 20.0):  # from on depth to the edge of the depth band
+        _, info = env.reset(seed=0, options={"depth_command": 40.0, "initial_state": {"depth": 40.0 + offset}})
+        *_, info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))
+        error = abs(info["depth_error_m"])
+        errors.append(error)
+        assert info["reward_depth"] == pytest.approx(1.0 - math.tanh(error / scale), rel=1e-14, abs=1e-16)
+    assert min(errors) < 0.1 and max(errors) > 15.0
+
+
 def test_observation_matches_info_without_noise():
     env = gym.make("subenv/Nominal-v0")
     env.reset(seed=1)
