@@ -37,7 +37,7 @@ KERNEL_OPTIONS: Final[dict[str, Any]] = {"cache": True, "nogil": True, "error_mo
 
 _PACKAGE = Path(__file__).resolve().parents[1]
 KERNEL_SOURCES: Final = ("dynamics/_jit.py", "dynamics/hull.py", "dynamics/model.py", "dynamics/integrate.py",
-                         "dynamics/sincos.py", "envs/transition.py")
+                         "dynamics/sincos.py", "envs/transition.py", "envs/handoff.py")
 """The files the compiled kernels are written in (relative to the package): any edit recompiles them all."""
 _STAMP_PREFIX: Final = "subenv-kernels."
 

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import itertools
+import math
 import os
-import threading
 import time
 from collections.abc import Sequence
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any, Final, cast
 
 import numpy as np
@@ -18,6 +18,7 @@ from numba import typed
 
 from subenv.envs import transition as tr
 from subenv.envs.dive_plane import OBSERVATION_NAMES, DivePlaneEnv
+from subenv.envs.handoff import SPIN_S, SPIN_WHEN_GAP_S, Worker
 from subenv.scenarios.scenario import EpisodeConfig, Scenario
 from subenv.vehicles.vehicle import Vehicle
 
@@ -30,6 +31,9 @@ _MASK_KEYS: Final = tuple("_" + key for key in _INFO_KEYS)
 _AUTORESET_MODES: Final = (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP, AutoresetMode.DISABLED)
 _BATCH_RESETS: Final = 4
 """Draw this many resets or more as arrays (``_draw_batch``): about where it costs less than one at a time."""
+_GAP_CAP_S: Final = 10e-3
+"""A pause longer than this counts as this long in the moving average of the time between steps (so that
+the workers poll again a dozen steps after a pause)."""
 ENVS_PER_THREAD: Final = 512
 """``threads=None`` uses one thread per this many sub-environments, up to the available cores."""
 
@@ -63,7 +67,11 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
     threads : int, optional
         Step slices of the sub-environments on this many threads (the compiled transition
         releases the GIL). Default: one per :data:`ENVS_PER_THREAD` sub-environments, at most
-        the cores available to the process. Results do not depend on it.
+        the cores available to the process. Results do not depend on it. While the caller's steps
+        come close together (under :data:`~subenv.envs.handoff.SPIN_WHEN_GAP_S` apart on average)
+        and there are no more threads than cores, the other threads poll for their next slice for
+        up to :data:`~subenv.envs.handoff.SPIN_S` instead of sleeping (:mod:`subenv.envs.handoff`);
+        ``close()`` sends them away at once.
     **kwargs
         The arguments of :class:`~subenv.envs.DivePlaneEnv` (scenario, vehicle, control, ...),
         shared by all sub-environments.
@@ -138,6 +146,10 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         # Measured costs [s] of stepping and of resetting one sub-environment, to share work between threads.
         self._kernel_s_per_env = 300e-9
         self._reset_s_per_env = 10e-6
+        self._workers = [Worker() for _ in range(self.threads - 1)]
+        self._may_poll = self.threads <= _available_cores()  # (polling threads beyond the cores would take turns)
+        self._gap_s = math.inf  # moving average of the caller's time between steps (workers poll when short)
+        self._returned_at: float | None = None  # when step() last returned
         self.single_action_space = self.single_env.action_space
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.single_observation_space = self.single_env.observation_space
@@ -209,6 +221,17 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         return self._obs.copy(), self._infos(report, None if mask is self._everyone else mask)
 
     def step(
+        self, actions: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        if self._returned_at is not None:
+            gap = min(time.perf_counter() - self._returned_at, _GAP_CAP_S)
+            self._gap_s = gap if math.isinf(self._gap_s) else self._gap_s + 0.2 * (gap - self._gap_s)
+        try:
+            return self._step(actions)
+        finally:
+            self._returned_at = time.perf_counter()
+
+    def _step(
         self, actions: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         if not self._ready:
@@ -318,33 +341,37 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         state["_rngs"] = None  # a numba typed list does not pickle
+        state["_workers"] = len(self._workers)  # (threads and mailboxes are this process's)
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
+        self._workers = [Worker() for _ in range(state["_workers"])]
         if any(g is not None for g in self._generators):
             self._rngs = typed.List([g if g is not None else np.random.default_rng() for g in self._generators])
 
     # --- helpers ----------------------------------------------------------------------------
     def _step_rows(self, actions: np.ndarray, active: np.ndarray, report: np.ndarray) -> None:
-        """Step the active rows on :attr:`threads` threads (this one and the pool's)."""
-        start = time.perf_counter()
+        """Step the active rows on :attr:`threads` threads (this one and the workers')."""
         first, *others = self._slices
-        pending = self._submit_rows(actions, active, report, others)
-        self._step_slice(first, actions, active, report)
-        for future, _ in pending:
-            future.result()
-        self._kernel_s_per_env += 0.1 * ((time.perf_counter() - start) * self.threads / self.num_envs
-                                         - self._kernel_s_per_env)
+        self._post(actions, active, report, others)
+        try:
+            start = time.perf_counter()
+            self._step_slice(first, actions, active, report)
+            self._kernel_s_per_env += 0.1 * ((time.perf_counter() - start) / (first.stop - first.start)
+                                             - self._kernel_s_per_env)
+        finally:
+            for worker in self._workers:
+                worker.wait()
 
     def _step_rows_while_resetting(self, actions: np.ndarray, active: np.ndarray, report: np.ndarray,
                                    resetting: np.ndarray) -> None:
-        """Step the active rows on the pool's threads and part of them here, then reset ``resetting`` here.
+        """Step the active rows on the workers' threads and part of them here, then reset ``resetting`` here.
 
         Resets run in Python and hold the GIL; the compiled steps release it. So this thread first
-        steps a slice of rows (which lets the pool's threads start theirs), then draws the new
-        episodes while they run. The slice is sized from the measured costs so that all threads
-        finish together. The threads touch different rows, generators and report columns.
+        steps a slice of rows (while the workers start theirs), then draws the new episodes while
+        they run. The slice is sized from the measured costs so that all threads finish together.
+        The threads touch different rows, generators and report columns.
         """
         n, n_reset = self.num_envs, len(resetting)
         kernel_s = self._kernel_s_per_env * (n - n_reset)
@@ -352,33 +379,37 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         here_s = max((kernel_s + reset_s) / self.threads - reset_s, 0.05 * kernel_s)
         here = min(n - 1, max(1, round(n * here_s / kernel_s))) if kernel_s > 0 else 1
         edges = np.linspace(here, n, self.threads).round().astype(int).tolist()
-        pending = self._submit_rows(actions, active, report, [slice(a, b) for a, b in itertools.pairwise(edges)])
+        self._post(actions, active, report, [slice(a, b) for a, b in itertools.pairwise(edges)])
         try:
+            start = time.perf_counter()
             self._step_slice(slice(0, here), actions, active, report)
-            for _, started in pending:  # (releases the GIL:) the others are in their compiled steps
-                started.wait()
+            self._kernel_s_per_env += 0.1 * ((time.perf_counter() - start) / here - self._kernel_s_per_env)
+            for worker in self._workers:  # (until each runs compiled code: then the GIL is free for the resets)
+                worker.wait(taken_only=True)
             start = time.perf_counter()
             self._reset_envs(resetting, {}, report)
             self._reset_s_per_env += 0.1 * ((time.perf_counter() - start) / n_reset - self._reset_s_per_env)
         finally:
-            per_row = [future.result() for future, _ in pending]
-        self._kernel_s_per_env += 0.1 * (sum(per_row) / len(per_row) - self._kernel_s_per_env)
+            for worker in self._workers:
+                worker.wait()
 
     def _step_slice(self, s: slice, actions: np.ndarray, active: np.ndarray, report: np.ndarray) -> None:
         tr.step_batch(self._rows[s], actions[s], active[s], self._obs[s], self._rngs, s.start, self._cfg,
                       self._hull, report)
 
-    def _submit_rows(self, actions: np.ndarray, active: np.ndarray, report: np.ndarray,
-                     slices: Sequence[slice]) -> list[tuple[Future[float], threading.Event]]:
-        """Step ``slices`` on the pool; each comes with an event set just before its compiled step."""
+    def _post(self, actions: np.ndarray, active: np.ndarray, report: np.ndarray, pieces: Sequence[slice]) -> None:
+        """Hand ``pieces`` of the rows to the workers (:class:`~subenv.envs.handoff.Worker`); they poll for
+        the next step only while the caller's steps come close together."""
         pool = _thread_pool(self.threads)
-        pending = []
-        for s in slices:
-            started = threading.Event()
-            args = (self._rows[s], actions[s], active[s], self._obs[s], self._rngs, s.start, self._cfg, self._hull,
-                    report)
-            pending.append((pool.submit(_step_batch_after, started, args), started))
-        return pending
+        bound = (self._rows, self._obs, self._rngs, self._cfg, self._hull)
+        spin_s = SPIN_S if self._may_poll and self._gap_s < SPIN_WHEN_GAP_S else 0.0
+        for worker, piece in zip(self._workers, pieces, strict=True):
+            worker.post(pool, bound, piece, actions, active, report, spin_s)
+
+    def close_extras(self, **kwargs: Any) -> None:
+        """Tell polling workers to leave."""
+        for worker in self._workers:
+            worker.stop()
 
     def _check_actions(self, actions: Any) -> np.ndarray:
         n, shape = self.num_envs, tuple(self.single_action_space.shape or ())
@@ -464,14 +495,6 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
 def _check_finite(bad: int, actions: np.ndarray) -> None:
     if bad >= 0:
         raise ValueError(f"actions[{bad}]={actions[bad].tolist()!r} is invalid: must be finite (no NaN or inf)")
-
-
-def _step_batch_after(started: threading.Event, args: tuple[Any, ...]) -> float:
-    """Step a slice (``tr.step_batch(*args)``) on a pool thread; the seconds per row it took."""
-    started.set()
-    start = time.perf_counter()
-    tr.step_batch(*args)
-    return (time.perf_counter() - start) / max(1, len(args[0]))
 
 
 def _available_cores() -> int:

@@ -212,10 +212,11 @@ def test_episodes_of_batches_from_different_scenarios_are_each_their_own():
     assert widths[0] == get_scenario("Nominal")._units_per_draw < widths[-1]  # SpeedTransient drew in a batch
 
 
-def _step_threaded_in_child(queue) -> None:  # runs in a forked process
+def _step_threaded_in_child(queue, inherited) -> None:  # runs in a forked process
     env = DivePlaneVectorEnv(num_envs=64, threads=2)
     env.reset(seed=0)
     queue.put(env.step(np.zeros((64, 1)))[0].shape)
+    queue.put([inherited.step(np.zeros((64, 1)))[0] for _ in range(3)])  # the parent's env, forked
 
 
 def test_threaded_stepping_survives_fork():
@@ -223,13 +224,18 @@ def test_threaded_stepping_survives_fork():
 
     env = DivePlaneVectorEnv(num_envs=64, threads=2)
     env.reset(seed=0)
-    env.step(np.zeros((64, 1)))  # the parent's thread pool is running
+    for _ in range(5):
+        env.step(np.zeros((64, 1)))  # the parent's worker is polling for the next step
+    assert env._workers[0].polling
     context = multiprocessing.get_context("fork")
     queue = context.Queue()
-    child = context.Process(target=_step_threaded_in_child, args=(queue,))
+    child = context.Process(target=_step_threaded_in_child, args=(queue, env))
     child.start()
+    shape, child_obs = queue.get(timeout=60), queue.get(timeout=60)
     child.join(60)
-    assert child.exitcode == 0 and queue.get(timeout=1) == (64, 8)
+    assert child.exitcode == 0 and shape == (64, 8)
+    for obs in child_obs:  # the child stepped its copy as the parent steps the original
+        np.testing.assert_array_equal(obs, env.step(np.zeros((64, 1)))[0])
 
 
 def test_autoreset_modes_are_declared_and_same_step_keeps_the_final_observation():
