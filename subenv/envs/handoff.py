@@ -218,8 +218,12 @@ class Worker:
 
     def post(self, pool: ThreadPoolExecutor, bound: Sequence[Any], piece: slice, actions: np.ndarray,
              active: np.ndarray, report: np.ndarray, spin_s: float) -> None:
-        """Step ``piece`` of the rows on the worker's thread (``actions`` and ``active``: of all rows;
-        they and ``report`` must stay alive until :meth:`wait` returns)."""
+        """Step ``piece`` of the rows on the worker's thread.
+
+        ``actions`` (float64, one row per sub-environment), ``active`` (bool) and ``report`` (float64,
+        ``(N_REPORT, number of sub-environments)``) are C-contiguous arrays over all sub-environments,
+        as :func:`~subenv.envs.transition.step_batch` takes them; they must stay alive until
+        :meth:`wait` returns (the worker reads them by address)."""
         if self._pid != os.getpid():  # a forked copy: the worker polling this mailbox is the parent's
             self._mailbox, self._bound, self._future, self._pid = None, (), None, os.getpid()
         if self._mailbox is None or len(bound) != len(self._bound) or any(
