@@ -31,7 +31,7 @@ _MASK_KEYS: Final = tuple("_" + key for key in _INFO_KEYS)
 _AUTORESET_MODES: Final = (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP, AutoresetMode.DISABLED)
 _BATCH_RESETS: Final = 4
 """Draw this many resets or more as arrays (``_draw_batch``): about where it costs less than one at a time."""
-_GAP_CAP_S: Final = 10e-3
+_GAP_CAP_S: Final = 2e-3
 """A pause longer than this counts as this long in the moving average of the time between steps (so that
 the workers poll again a dozen steps after a pause)."""
 ENVS_PER_THREAD: Final = 512

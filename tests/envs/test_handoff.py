@@ -8,7 +8,7 @@ import numpy as np
 
 from subenv.envs import DivePlaneVectorEnv
 from subenv.envs import transition as tr
-from subenv.envs.handoff import IDLE, STATE, Worker
+from subenv.envs.handoff import IDLE, SPIN_WHEN_GAP_S, STATE, Worker
 from subenv.envs.vector import _thread_pool
 
 
@@ -28,6 +28,12 @@ def _assert_identical(a, b) -> None:
         np.testing.assert_array_equal(a[4][key], b[4][key], err_msg=key)
 
 
+def _busy_wait(seconds: float) -> None:
+    end = time.perf_counter() + seconds
+    while time.perf_counter() < end:
+        pass
+
+
 def test_steps_close_together_keep_the_worker_polling_and_change_nothing():
     serial, threaded = _pair(256, "Randomized")
     actions = np.random.default_rng(0).uniform(-1, 1, size=(60, 256, 1))
@@ -38,6 +44,21 @@ def test_steps_close_together_keep_the_worker_polling_and_change_nothing():
         _assert_identical(result, serial.step(a))
     assert polling
     assert starts < 30  # most steps found the worker polling (it is started after a pause)
+
+
+def test_workers_do_not_poll_while_the_caller_works_between_steps():
+    """0.3 ms between steps (a policy's forward pass) is beyond SPIN_WHEN_GAP_S: no worker polls
+    through it, so every step starts one."""
+    assert SPIN_WHEN_GAP_S < 0.3e-3
+    serial, threaded = _pair(128, "Nominal")
+    actions = np.random.default_rng(4).uniform(-1, 1, size=(30, 128, 1))
+    trace = []
+    for a in actions:
+        trace.append(threaded.step(a))
+        _busy_wait(0.3e-3)
+    assert threaded._workers[0].starts == len(actions)
+    for a, result in zip(actions, trace):
+        _assert_identical(result, serial.step(a))
 
 
 def test_a_worker_leaves_after_a_pause_and_the_next_step_starts_it_again():
@@ -56,12 +77,6 @@ def test_a_worker_leaves_after_a_pause_and_the_next_step_starts_it_again():
     actions = rng.uniform(-1, 1, size=(128, 1))
     _assert_identical(threaded.step(actions), serial.step(actions))
     assert worker.starts == starts + 1
-
-
-def _busy_wait(seconds: float) -> None:
-    end = time.perf_counter() + seconds
-    while time.perf_counter() < end:
-        pass
 
 
 def test_posts_racing_a_leaving_worker_are_stepped_exactly_once():
