@@ -356,10 +356,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         first, *others = self._slices
         self._post(actions, active, report, others)
         try:
-            start = time.perf_counter()
             self._step_slice(first, actions, active, report)
-            self._kernel_s_per_env += 0.1 * ((time.perf_counter() - start) / (first.stop - first.start)
-                                             - self._kernel_s_per_env)
         finally:
             for worker in self._workers:
                 worker.wait()
@@ -381,9 +378,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         edges = np.linspace(here, n, self.threads).round().astype(int).tolist()
         self._post(actions, active, report, [slice(a, b) for a, b in itertools.pairwise(edges)])
         try:
-            start = time.perf_counter()
             self._step_slice(slice(0, here), actions, active, report)
-            self._kernel_s_per_env += 0.1 * ((time.perf_counter() - start) / here - self._kernel_s_per_env)
             for worker in self._workers:  # (until each runs compiled code: then the GIL is free for the resets)
                 worker.wait(taken_only=True)
             start = time.perf_counter()
@@ -394,8 +389,12 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
                 worker.wait()
 
     def _step_slice(self, s: slice, actions: np.ndarray, active: np.ndarray, report: np.ndarray) -> None:
+        """Step slice ``s`` of the rows on this thread, and update the measured cost per row."""
+        start = time.perf_counter()
         tr.step_batch(self._rows[s], actions[s], active[s], self._obs[s], self._rngs, s.start, self._cfg,
                       self._hull, report)
+        per_row = (time.perf_counter() - start) / (s.stop - s.start)
+        self._kernel_s_per_env += 0.1 * (per_row - self._kernel_s_per_env)
 
     def _post(self, actions: np.ndarray, active: np.ndarray, report: np.ndarray, pieces: Sequence[slice]) -> None:
         """Hand ``pieces`` of the rows to the workers (:class:`~subenv.envs.handoff.Worker`); they poll for
