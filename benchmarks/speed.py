@@ -230,7 +230,7 @@ def cost_table(seconds: float) -> list[str]:
     from subenv.dynamics.hull import crossflow_point
     from subenv.dynamics.sincos import sincos_point
     from subenv.envs import transition as tr
-    from subenv.envs.handoff import SPIN_S, Worker
+    from subenv.envs.handoff import SPIN_S, Crew
     from subenv.envs.vector import _thread_pool
 
     n = 4096
@@ -324,20 +324,17 @@ def cost_table(seconds: float) -> list[str]:
         copy_ns = ns_per_item(lambda: rows.__setitem__(slice(None), vec._rows), n)
         kernel[env_id] = ns_per_item(step, n) - copy_ns
 
-        # The same steps on two threads, half the rows each, handed over as the vector env hands them
-        # (a polling worker): what two cores make of the kernel alone.
-        worker, pool = Worker(), _thread_pool(2)
-        bound, first_half = (rows, vec._obs, vec._rngs, vec._cfg, vec._hull), slice(0, n // 2)
+        # The same steps on two threads, shared as the vector env shares them (chunks claimed by this
+        # thread and a polling worker): what two cores make of the kernel alone.
+        crew, pool = Crew(1), _thread_pool(2)
+        bound = (rows, vec._obs, vec._rngs, vec._cfg, vec._hull)
 
         def on_two_threads() -> None:
             rows[:] = vec._rows
-            worker.post(pool, bound, slice(n // 2, n), a, active, report, SPIN_S)
-            tr.step_batch(rows[first_half], a[first_half], active[first_half], vec._obs[first_half], vec._rngs, 0,
-                          vec._cfg, vec._hull, report)
-            worker.wait()
+            crew.step(pool, bound, a, active, report, SPIN_S)
 
         two_threads[env_id] = ns_per_item(on_two_threads, n) - copy_ns
-        worker.stop()
+        crew.stop()
         index = np.arange(64)
         reset_ns = ns_per_item(lambda: vec._reset_envs(index, {}, report), 64)
         resets[env_id] = (ends / (200 * n), reset_ns)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import itertools
 import math
 import os
 import time
@@ -18,7 +17,7 @@ from numba import typed
 
 from subenv.envs import transition as tr
 from subenv.envs.dive_plane import OBSERVATION_NAMES, DivePlaneEnv
-from subenv.envs.handoff import SPIN_S, SPIN_WHEN_GAP_S, Worker
+from subenv.envs.handoff import SPIN_S, SPIN_WHEN_GAP_S, Crew
 from subenv.scenarios.scenario import EpisodeConfig, Scenario
 from subenv.vehicles.vehicle import Vehicle
 
@@ -65,13 +64,14 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
     render_mode : {None, "rgb_array"}
         ``render()`` returns a one-element tuple with the first sub-environment's frame.
     threads : int, optional
-        Step slices of the sub-environments on this many threads (the compiled transition
-        releases the GIL). Default: one per :data:`ENVS_PER_THREAD` sub-environments, at most
-        the cores available to the process. Results do not depend on it. While the caller's steps
-        come close together (under :data:`~subenv.envs.handoff.SPIN_WHEN_GAP_S` apart on average)
-        and there are no more threads than cores, the other threads poll for their next slice for
-        up to :data:`~subenv.envs.handoff.SPIN_S` instead of sleeping (:mod:`subenv.envs.handoff`);
-        ``close()`` sends them away at once.
+        Step the sub-environments on this many threads, the calling one and pool threads (the
+        compiled transition releases the GIL): each has a range of the rows and, once done with
+        it, steps chunks of the others', so they finish together (:mod:`subenv.envs.handoff`).
+        Default: one per :data:`ENVS_PER_THREAD` sub-environments, at most the cores available to
+        the process. Results do not depend on it. While the caller's steps come close together
+        (under :data:`~subenv.envs.handoff.SPIN_WHEN_GAP_S` apart on average) and there are no
+        more threads than cores, the pool threads poll for the next step for up to
+        :data:`~subenv.envs.handoff.SPIN_S` instead of sleeping; ``close()`` sends them away at once.
     **kwargs
         The arguments of :class:`~subenv.envs.DivePlaneEnv` (scenario, vehicle, control, ...),
         shared by all sub-environments.
@@ -141,12 +141,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         if threads is None:
             threads = min(_available_cores(), max(1, self.num_envs // ENVS_PER_THREAD))
         self.threads = min(int(threads), self.num_envs)
-        edges = np.linspace(0, self.num_envs, self.threads + 1).round().astype(int)
-        self._slices = [slice(a, b) for a, b in zip(edges[:-1].tolist(), edges[1:].tolist())]
-        # Measured costs [s] of stepping and of resetting one sub-environment, to share work between threads.
-        self._kernel_s_per_env = 300e-9
-        self._reset_s_per_env = 10e-6
-        self._workers = [Worker() for _ in range(self.threads - 1)]
+        self._crew = Crew(self.threads - 1)
         self._may_poll = self.threads <= _available_cores()  # (polling threads beyond the cores would take turns)
         self._gap_s = math.inf  # moving average of the caller's time between steps (workers poll when short)
         self._returned_at: float | None = None  # when step() last returned
@@ -169,6 +164,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         self._started = np.zeros(n, dtype=bool)
         self._ready = False  # every sub-environment has been reset once
         self._everyone = np.ones(n, dtype=bool)
+        self._no_reasons = np.full(n, _REASONS[0], dtype=object)  # every termination_reason "" (not terminated)
         self.vehicles: list[Vehicle] = [self.single_env.base_vehicle] * n
         """Each sub-environment's vehicle (its episode's loading)."""
         self._episodes: list[EpisodeConfig | None] = [None] * n
@@ -258,10 +254,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
                 self._reset_envs(resetting, {}, report)  # reported as reward 0, not terminated, not truncated
         else:
             _check_finite(tr.first_non_finite(actions, active), actions)
-            if resetting is None:
-                self._step_rows(actions, active, report)
-            else:
-                self._step_rows_while_resetting(actions, active, report, resetting)
+            self._step_rows(actions, active, report, resetting)
         if self.render_mode is not None and active[0]:
             row = self._rows[0]
             self._history.append((row[tr.TIME], row[tr.DEPTH], row[tr.COMMAND]))
@@ -341,74 +334,33 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         state["_rngs"] = None  # a numba typed list does not pickle
-        state["_workers"] = len(self._workers)  # (threads and mailboxes are this process's)
+        state["_crew"] = len(self._crew.workers)  # (threads and mailboxes are this process's)
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
-        self._workers = [Worker() for _ in range(state["_workers"])]
+        self._crew = Crew(state["_crew"])
         if any(g is not None for g in self._generators):
             self._rngs = typed.List([g if g is not None else np.random.default_rng() for g in self._generators])
 
     # --- helpers ----------------------------------------------------------------------------
-    def _step_rows(self, actions: np.ndarray, active: np.ndarray, report: np.ndarray) -> None:
-        """Step the active rows on :attr:`threads` threads (this one and the workers')."""
-        first, *others = self._slices
-        self._post(actions, active, report, others)
-        try:
-            self._step_slice(first, actions, active, report)
-        finally:
-            for worker in self._workers:
-                worker.wait()
+    def _step_rows(self, actions: np.ndarray, active: np.ndarray, report: np.ndarray,
+                   resetting: np.ndarray | None) -> None:
+        """Step the active rows on :attr:`threads` threads (this one and the workers'), and reset
+        ``resetting`` on this one meanwhile (:meth:`Crew.step <subenv.envs.handoff.Crew.step>`).
 
-    def _step_rows_while_resetting(self, actions: np.ndarray, active: np.ndarray, report: np.ndarray,
-                                   resetting: np.ndarray) -> None:
-        """Step the active rows on the workers' threads and part of them here, then reset ``resetting`` here.
-
-        Resets run in Python and hold the GIL; the compiled steps release it. So this thread first
-        steps a slice of rows (while the workers start theirs), then draws the new episodes while
-        they run. The slice is sized from the measured costs so that all threads finish together.
-        The threads touch different rows, generators and report columns.
+        Resets run in Python and hold the GIL; the compiled steps release it. The threads claim the rows
+        in chunks, so this thread steps fewer of them when it has resets to draw. The threads touch
+        different rows, generators and report columns.
         """
-        n, n_reset = self.num_envs, len(resetting)
-        kernel_s = self._kernel_s_per_env * (n - n_reset)
-        reset_s = self._reset_s_per_env * n_reset
-        here_s = max((kernel_s + reset_s) / self.threads - reset_s, 0.05 * kernel_s)
-        here = min(n - 1, max(1, round(n * here_s / kernel_s))) if kernel_s > 0 else 1
-        edges = np.linspace(here, n, self.threads).round().astype(int).tolist()
-        self._post(actions, active, report, [slice(a, b) for a, b in itertools.pairwise(edges)])
-        try:
-            self._step_slice(slice(0, here), actions, active, report)
-            for worker in self._workers:  # (until each runs compiled code: then the GIL is free for the resets)
-                worker.wait(taken_only=True)
-            start = time.perf_counter()
-            self._reset_envs(resetting, {}, report)
-            self._reset_s_per_env += 0.1 * ((time.perf_counter() - start) / n_reset - self._reset_s_per_env)
-        finally:
-            for worker in self._workers:
-                worker.wait()
-
-    def _step_slice(self, s: slice, actions: np.ndarray, active: np.ndarray, report: np.ndarray) -> None:
-        """Step slice ``s`` of the rows on this thread, and update the measured cost per row."""
-        start = time.perf_counter()
-        tr.step_batch(self._rows[s], actions[s], active[s], self._obs[s], self._rngs, s.start, self._cfg,
-                      self._hull, report)
-        per_row = (time.perf_counter() - start) / (s.stop - s.start)
-        self._kernel_s_per_env += 0.1 * (per_row - self._kernel_s_per_env)
-
-    def _post(self, actions: np.ndarray, active: np.ndarray, report: np.ndarray, pieces: Sequence[slice]) -> None:
-        """Hand ``pieces`` of the rows to the workers (:class:`~subenv.envs.handoff.Worker`); they poll for
-        the next step only while the caller's steps come close together."""
-        pool = _thread_pool(self.threads)
-        bound = (self._rows, self._obs, self._rngs, self._cfg, self._hull)
         spin_s = SPIN_S if self._may_poll and self._gap_s < SPIN_WHEN_GAP_S else 0.0
-        for worker, piece in zip(self._workers, pieces, strict=True):
-            worker.post(pool, bound, piece, actions, active, report, spin_s)
+        self._crew.step(_thread_pool(self.threads), (self._rows, self._obs, self._rngs, self._cfg, self._hull),
+                        actions, active, report, spin_s,
+                        None if resetting is None else lambda: self._reset_envs(resetting, {}, report))
 
     def close_extras(self, **kwargs: Any) -> None:
         """Tell polling workers to leave."""
-        for worker in self._workers:
-            worker.stop()
+        self._crew.stop()
 
     def _check_actions(self, actions: Any) -> np.ndarray:
         n, shape = self.num_envs, tuple(self.single_action_space.shape or ())
@@ -479,7 +431,11 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         """Gymnasium's vector ``info`` from a step's report (whose rows it hands out); with ``mask``,
         only those sub-environments report, as in ``SyncVectorEnv``."""
         values = list(report[: tr.R_REASON])
-        values.append(_REASONS.take(report[tr.R_REASON].astype(np.intp)))
+        codes = report[tr.R_REASON]
+        ended = np.flatnonzero(codes != 0.0)  # (few: copying an array of one string costs a third of a take)
+        reasons = self._no_reasons.copy()
+        reasons[ended] = _REASONS.take(codes[ended].astype(np.intp))
+        values.append(reasons)
         if mask is None:
             masks = np.ones((len(_INFO_KEYS), self.num_envs), dtype=bool)
         else:  # SyncVectorEnv leaves the others at zero (None for strings)

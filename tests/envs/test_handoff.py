@@ -8,7 +8,7 @@ import numpy as np
 
 from subenv.envs import DivePlaneVectorEnv
 from subenv.envs import transition as tr
-from subenv.envs.handoff import IDLE, SPIN_WHEN_GAP_S, STATE, Worker
+from subenv.envs.handoff import BUDGET, IDLE, SPIN_WHEN_GAP_S, STATE, Crew
 from subenv.envs.vector import _thread_pool
 
 
@@ -38,35 +38,37 @@ def test_steps_close_together_keep_the_worker_polling_and_change_nothing():
     serial, threaded = _pair(256, "Randomized")
     actions = np.random.default_rng(0).uniform(-1, 1, size=(60, 256, 1))
     trace = [threaded.step(a) for a in actions]  # (nothing else between the steps)
-    worker = threaded._workers[0]
-    polling, starts = worker.polling, worker.starts
+    worker = threaded._crew.workers[0]
+    polling, starts, chunks = worker.polling, worker.starts, worker.chunks
     for a, result in zip(actions, trace):
         _assert_identical(result, serial.step(a))
     assert polling
     assert starts < 30  # most steps found the worker polling (it is started after a pause)
+    assert chunks >= 30  # and it stepped rows in most steps
 
 
 def test_workers_do_not_poll_while_the_caller_works_between_steps():
-    """0.3 ms between steps (a policy's forward pass) is beyond SPIN_WHEN_GAP_S: no worker polls
-    through it, so every step starts one."""
+    """0.3 ms between steps (a policy's forward pass) is beyond SPIN_WHEN_GAP_S: every step posts a
+    budget of 0 polls, so no worker polls through the caller's work."""
     assert SPIN_WHEN_GAP_S < 0.3e-3
     serial, threaded = _pair(128, "Nominal")
     actions = np.random.default_rng(4).uniform(-1, 1, size=(30, 128, 1))
-    trace = []
+    trace, budgets = [], []
     for a in actions:
         trace.append(threaded.step(a))
+        budgets.append(int(threaded._crew.workers[0]._mailbox[BUDGET]))
         _busy_wait(0.3e-3)
-    assert threaded._workers[0].starts == len(actions)
+    assert budgets == [0] * len(actions)
     for a, result in zip(actions, trace):
         _assert_identical(result, serial.step(a))
 
 
 def test_a_worker_leaves_after_a_pause_and_the_next_step_starts_it_again():
-    serial, threaded = _pair(128, "Nominal")
+    serial, threaded = _pair(1024, "Nominal")
     rng = np.random.default_rng(1)
-    actions = rng.uniform(-1, 1, size=(20, 128, 1))
+    actions = rng.uniform(-1, 1, size=(20, 1024, 1))
     trace = [threaded.step(a) for a in actions]
-    worker = threaded._workers[0]
+    worker = threaded._crew.workers[0]
     assert worker.polling
     for a, result in zip(actions, trace):
         _assert_identical(result, serial.step(a))
@@ -74,18 +76,22 @@ def test_a_worker_leaves_after_a_pause_and_the_next_step_starts_it_again():
     time.sleep(0.05)  # far beyond the polling budget
     future.result(timeout=5)  # the worker's thread has returned
     assert int(worker._mailbox[STATE]) == IDLE and not worker.polling
-    actions = rng.uniform(-1, 1, size=(128, 1))
+    actions = rng.uniform(-1, 1, size=(1024, 1))
     _assert_identical(threaded.step(actions), serial.step(actions))
     assert worker.starts == starts + 1
 
 
-def test_posts_racing_a_leaving_worker_are_stepped_exactly_once():
-    """A worker whose budget runs out as the next post comes either takes the post or has left, and
-    the post then starts a new worker: each slice is stepped once. (Budgets and pauses drawn around
-    each other, so that posts meet leaving workers.)"""
-    n, here = 32, 8
+def test_every_row_is_stepped_once_whoever_claims_it():
+    """The caller and a worker claim chunks of each step while the worker's budget runs out as the
+    next step comes, and the caller spends a while on its own work in the middle of the step (as it
+    does on resets). Budgets and pauses are drawn around each other, so that steps meet polling
+    workers, leaving ones, and ones that start after the caller has stepped every row and taken the
+    step back. Every step's results equal one thread's. (Claims by a plain store instead of the
+    compare-and-swap fail this test.)"""
+    n = 256
     reference, env = _pair(n, "Randomized")
-    worker, pool = Worker(), _thread_pool(2)
+    crew, pool = Crew(1, min_rows=16), _thread_pool(2)
+    worker = crew.workers[0]
     bound = (env._rows, env._obs, env._rngs, env._cfg, env._hull)
     rng = np.random.default_rng(2)
     active = np.ones(n, dtype=bool)
@@ -93,13 +99,14 @@ def test_posts_racing_a_leaving_worker_are_stepped_exactly_once():
     all_actions = rng.uniform(-1, 1, size=(posts, n, 1))
     budgets = rng.uniform(0, 60e-6, size=posts)
     budgets[::50] = 1.0  # (these the next post finds polling)
-    pauses = rng.uniform(0, 40e-6, size=posts)
+    pauses = rng.uniform(0, 40e-6, size=(posts, 2))
     reports = np.empty((posts, tr.N_REPORT, n))
+    chunks = []
     for k in range(posts):
-        worker.post(pool, bound, slice(here, n), all_actions[k], active, reports[k], float(budgets[k]))
-        env._step_slice(slice(0, here), all_actions[k], active, reports[k])
-        worker.wait()
-        _busy_wait(pauses[k])
+        crew.step(pool, bound, all_actions[k], active, reports[k], float(budgets[k]),
+                  during=lambda k=k: _busy_wait(pauses[k, 0]))
+        chunks.append(worker.chunks)
+        _busy_wait(pauses[k, 1])
     future = worker.stop()
     future.result(timeout=5)  # stop() makes a polling worker leave
     for k in range(posts):
@@ -110,12 +117,15 @@ def test_posts_racing_a_leaving_worker_are_stepped_exactly_once():
     np.testing.assert_array_equal(env._rows, reference._rows)
     np.testing.assert_array_equal(env._obs, reference._obs)
     assert 1 < worker.starts < posts  # both: workers that left, and posts that found one polling
+    assert worker.taken_back > 0  # and steps the caller took back
+    assert np.count_nonzero(np.diff(chunks) > 0) > posts // 10  # the worker stepped rows in many steps
 
 
 def test_new_arrays_start_a_new_session():
     reference, env = _pair(64, "Nominal")
     other_reference, other = _pair(64, "LowSpeed")
-    worker, pool = Worker(), _thread_pool(2)
+    crew, pool = Crew(1, min_rows=8), _thread_pool(2)
+    worker = crew.workers[0]
     active = np.ones(64, dtype=bool)
     actions = np.full((64, 1), 0.3)
     futures = []
@@ -124,8 +134,7 @@ def test_new_arrays_start_a_new_session():
         for _ in range(3):
             expected, report = np.empty((tr.N_REPORT, 64)), np.empty((tr.N_REPORT, 64))
             tr.step_batch(ref._rows, actions, active, ref._obs, ref._rngs, 0, ref._cfg, ref._hull, expected)
-            worker.post(pool, bound, slice(0, 64), actions, active, report, 60.0)  # (a minute's polling)
-            worker.wait()
+            crew.step(pool, bound, actions, active, report, 60.0)  # (a minute's polling)
             np.testing.assert_array_equal(report, expected)
             np.testing.assert_array_equal(target._rows, ref._rows)
         futures.append(worker._future)

@@ -226,7 +226,7 @@ def test_threaded_stepping_survives_fork():
     env.reset(seed=0)
     for _ in range(5):
         env.step(np.zeros((64, 1)))  # the parent's worker is polling for the next step
-    assert env._workers[0].polling
+    assert env._crew.workers[0].polling
     context = multiprocessing.get_context("fork")
     queue = context.Queue()
     child = context.Process(target=_step_threaded_in_child, args=(queue, env))
