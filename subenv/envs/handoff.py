@@ -107,14 +107,6 @@ _MACHINE: Final = platform.machine().lower()
 
 
 @intrinsic
-def _fetch_add(typingctx: Any, array: Any, index: Any, value: Any) -> Any:
-    def codegen(context: Any, builder: Any, sig: Any, args: Any) -> Any:
-        return builder.atomic_rmw("add", _item_pointer(context, builder, sig, args), args[2], "acq_rel")
-
-    return types.int64(array, types.intp, types.int64), codegen
-
-
-@intrinsic
 def _cpu_relax(typingctx: Any) -> Any:
     """The spin-wait hint (x86 ``pause``, ARM ``yield``): lets a sibling hyperthread run."""
 
@@ -145,7 +137,6 @@ def _pointer_intrinsic(dtype: Any) -> Any:
 _float_pointer = _pointer_intrinsic(types.float64)
 _bool_pointer = _pointer_intrinsic(types.boolean)
 _int_pointer = _pointer_intrinsic(types.int64)
-
 
 
 # --- kernels ------------------------------------------------------------------------------------
@@ -190,11 +181,12 @@ def _step_chunks(ranges: np.ndarray, threads: int, home: int, min_rows: int, max
 
 
 @kernel
-def share(ranges: np.ndarray, threads: int, min_rows: int, max_chunks: int, rows: np.ndarray, actions: np.ndarray,
+def share(ranges: np.ndarray, min_rows: int, max_chunks: int, rows: np.ndarray, actions: np.ndarray,
           active: np.ndarray, obs: np.ndarray, rngs: numba.typed.List, cfg: np.ndarray, hull: np.ndarray,
           report: np.ndarray) -> int:
     """The caller's part of a step (its home is range 0): :func:`_step_chunks`."""
-    return _step_chunks(ranges, threads, 0, min_rows, max_chunks, rows, actions, active, obs, rngs, cfg, hull, report)
+    return _step_chunks(ranges, ranges.shape[0] // RANGE_WORDS, 0, min_rows, max_chunks, rows, actions, active, obs,
+                        rngs, cfg, hull, report)
 
 
 @kernel
@@ -392,9 +384,9 @@ class Crew:
         pool thread needs the GIL to start), then runs ``during`` while they step (and, when done with
         theirs, its range), then steps chunks with them until none is left."""
         rows, obs, rngs, cfg, hull = bound
-        ranges, threads, min_rows = self._ranges, len(self.workers) + 1, self.min_rows
+        ranges, min_rows = self._ranges, self.min_rows
         if rows.shape[0] != self._rows:
-            edges = np.linspace(0, rows.shape[0], threads + 1).round().astype(np.int64)
+            edges = np.linspace(0, rows.shape[0], len(self.workers) + 2).round().astype(np.int64)
             self._homes, self._rows = edges[:-1] | (edges[1:] << 32), rows.shape[0]
         ranges[::RANGE_WORDS] = self._homes  # (published to the workers by the post's release)
         for home, worker in enumerate(self.workers, start=1):
@@ -402,10 +394,10 @@ class Crew:
         try:
             if during is not None:
                 while not all(worker.taken for worker in self.workers) and share(
-                        ranges, threads, min_rows, 1, rows, actions, active, obs, rngs, cfg, hull, report):
+                        ranges, min_rows, 1, rows, actions, active, obs, rngs, cfg, hull, report):
                     pass
                 during()
-            share(ranges, threads, min_rows, -1, rows, actions, active, obs, rngs, cfg, hull, report)
+            share(ranges, min_rows, -1, rows, actions, active, obs, rngs, cfg, hull, report)
         finally:
             for worker in self.workers:
                 worker.finish()
