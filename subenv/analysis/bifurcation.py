@@ -28,10 +28,8 @@ from subenv.vehicles.vehicle import Vehicle
 
 __all__ = [
     "approximate_cusp",
-    "beta_from_offset",
     "exact_bifurcation_set",
     "exact_cusp",
-    "lambda_from_speed",
     "offset_from_beta",
     "saturation_cusp",
     "saturation_cusp_closed_form",
@@ -42,23 +40,13 @@ __all__ = [
 CuspForm = Literal["consistent", "thesis"]
 
 
-def lambda_from_speed(vehicle: Vehicle, speed_mps: FloatArray | float) -> FloatArray:
-    """lambda = u^2 / (g z_GB) (eq. 4.25)."""
-    return np.asarray(speed_mps, dtype=float) ** 2 / (vehicle.gravity_m_s2 * vehicle.z_GB_m)
-
-
 def speed_from_lambda(vehicle: Vehicle, lam: FloatArray | float) -> FloatArray:
-    """u = sqrt(lambda g z_GB) [m/s]."""
+    """u = sqrt(lambda g z_GB) [m/s], lambda as in eq. 4.25."""
     return np.sqrt(np.asarray(lam, dtype=float) * vehicle.gravity_m_s2 * vehicle.z_GB_m)
 
 
-def beta_from_offset(vehicle: Vehicle, x_GB_m: FloatArray | float, speed_mps: FloatArray | float) -> FloatArray:
-    """beta = -x_GB g / u^2 (eq. 4.27)."""
-    return -np.asarray(x_GB_m, dtype=float) * vehicle.gravity_m_s2 / np.asarray(speed_mps, dtype=float) ** 2
-
-
 def offset_from_beta(vehicle: Vehicle, beta: FloatArray | float, speed_mps: FloatArray | float) -> FloatArray:
-    """x_GB = -beta u^2 / g [m]."""
+    """x_GB = -beta u^2 / g [m], beta as in eq. 4.27."""
     return -np.asarray(beta, dtype=float) * np.asarray(speed_mps, dtype=float) ** 2 / vehicle.gravity_m_s2
 
 

@@ -4,7 +4,6 @@ from subenv.dynamics.hull import HullTable, crossflow_integrals, crossflow_point
 from subenv.dynamics.integrate import CONTROL_PERIOD_S, SUBSTEPS, control_period_point, rk4, rk4_step
 from subenv.dynamics.model import (
     PARAM_FIELDS,
-    STATE_NAMES,
     ModelParams,
     derivatives,
     dual_plane_angles,
@@ -17,7 +16,6 @@ from subenv.dynamics.model import (
 __all__ = [
     "CONTROL_PERIOD_S",
     "PARAM_FIELDS",
-    "STATE_NAMES",
     "SUBSTEPS",
     "HullTable",
     "ModelParams",

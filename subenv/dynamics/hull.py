@@ -87,10 +87,6 @@ class HullTable:
         packed.flags.writeable = False
         return packed
 
-    def cumulative_moments(self, s: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        """C_0..C_3 at positions ``s`` (clipped to the hull), each shaped like ``s``."""
-        return tuple(_gufunc("moments")(s, self.packed))  # type: ignore[return-value]
-
 
 @inline_kernel
 def hull_segment(s: float, hull: FloatArray) -> int:
@@ -206,14 +202,8 @@ def _crossflow_loop(w: float, q: float, hull: FloatArray, I0: FloatArray, I1: Fl
     I0[0], I1[0] = crossflow_point(w, q, hull)
 
 
-def _moments_loop(s: float, hull: FloatArray, C0: FloatArray, C1: FloatArray, C2: FloatArray,
-                  C3: FloatArray) -> None:
-    C0[0], C1[0], C2[0], C3[0] = cumulative_moments_point(s, hull)
-
-
 _GUFUNC_SPECS: dict[str, tuple[Any, str, str]] = {
     "crossflow": (_crossflow_loop, "void(f8, f8, f8[:, :], f8[:], f8[:])", "(),(),(r,n)->(),()"),
-    "moments": (_moments_loop, "void(f8, f8[:, :], f8[:], f8[:], f8[:], f8[:])", "(),(r,n)->(),(),(),()"),
 }
 _GUFUNCS: dict[str, Any] = {}
 

@@ -26,7 +26,6 @@ from subenv.vehicles.vehicle import Vehicle
 
 __all__ = [
     "PARAM_FIELDS",
-    "STATE_NAMES",
     "ModelParams",
     "derivatives",
     "dual_plane_angles",
@@ -36,9 +35,6 @@ __all__ = [
     "rhs_point",
     "stack_params",
 ]
-
-STATE_NAMES = ("pitch_rad", "heave_mps", "pitch_rate_radps", "depth_m")
-"""Names (with units) of the state components, in order."""
 
 
 class ModelParams(NamedTuple):

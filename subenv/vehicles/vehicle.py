@@ -10,7 +10,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
@@ -306,7 +306,3 @@ class Vehicle:
             object.__setattr__(vehicle, field_name, value)
         vehicle._check(field for field in changes if field in _CHECKED_FIELDS)  # (not "name")
         return vehicle
-
-    def to_dict(self) -> Mapping[str, Any]:
-        """The vehicle's stored fields (SI), e.g. for logging."""
-        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
