@@ -188,10 +188,11 @@ def crossflow_integrals(table: HullTable, w: FloatArray, q: FloatArray) -> tuple
     Returns
     -------
     I0 : ndarray
-        [m^3/s^2]; the hull's drag force is Z = -(rho/2) C_D I0 (Riedel 1993 eq. 2.42).
+        [m^4/s^2]: b [m] times w_loc^2 [m^2/s^2] times dx [m]. The hull's drag force is
+        Z = -(rho/2) C_D I0 [N] (Riedel 1993 eq. 2.42).
     I1 : ndarray
-        [m^4/s^2]; the drag moment is M = +(rho/2) C_D I1 (from M = -x Z_F with x forward; the
-        thesis prints the opposite sign in eqs 2.43 and 4.2).
+        [m^5/s^2]: one more factor x [m]. The drag moment is M = +(rho/2) C_D I1 [N m] (from
+        M = -x Z_F with x forward; the thesis prints the opposite sign in eqs 2.43 and 4.2).
     """
     I0, I1 = _gufunc("crossflow")(w, q, table.packed)
     return np.asarray(I0), np.asarray(I1)
