@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from baselines._common import feedback_state
-from subenv.analysis import THESIS_DESIGN_SPEED_MPS, THESIS_POLES, place_gain
+from subenv.analysis import thesis_gain
 from subenv.vehicles import Vehicle
 
 
@@ -37,7 +37,7 @@ class ThesisPolePlacement:
 
     def reset(self, info: Mapping[str, Any], vehicle: Vehicle) -> None:
         if vehicle is not self._vehicle:  # design once per design model
-            self._gain = place_gain(vehicle, THESIS_DESIGN_SPEED_MPS, THESIS_POLES, self.alpha)
+            self._gain = thesis_gain(vehicle, self.alpha)
             self._vehicle = vehicle
             self._limit = vehicle.planes.limit_rad
 

@@ -23,7 +23,7 @@ import numpy as np
 
 import subenv  # noqa: F401  (registers the environments)
 from subenv.analysis import THESIS_POLES, critical_speed, thesis_gain
-from subenv.scenarios import DESIGN_SPEED_MPS
+from subenv.thesis import THESIS_DESIGN_SPEED_MPS
 from subenv.units import mps_to_fps
 
 @dataclass
@@ -109,7 +109,7 @@ def demo(args: argparse.Namespace) -> int:
     if not (args.low_speed > 0 and math.isfinite(args.low_speed)):
         raise SystemExit(f"--low-speed={args.low_speed!r} is invalid: must be a number > 0 (m/s)")
     runs = [
-        fly(args.env, DESIGN_SPEED_MPS, args.seed, f"{DESIGN_SPEED_MPS:.3f} m/s (design speed)"),
+        fly(args.env, THESIS_DESIGN_SPEED_MPS, args.seed, f"{THESIS_DESIGN_SPEED_MPS:.3f} m/s (design speed)"),
         fly(args.low_env, args.low_speed, args.seed, f"{args.low_speed:.3f} m/s"),
     ]
     print(f"subenv demo on {args.env} and {args.low_env}: thesis pole placement at 5 fps "

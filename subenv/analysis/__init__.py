@@ -23,7 +23,6 @@ from subenv.analysis.continuation import Branch, ContinuationError, continue_equ
 from subenv.analysis.critical import critical_froude, critical_speed, froude_number
 from subenv.analysis.curriculum import SpeedStage, speed_curriculum
 from subenv.analysis.design import (
-    THESIS_DESIGN_SPEED_MPS,
     THESIS_POLES,
     closed_loop_eigenvalues,
     controllability_determinant,
@@ -38,7 +37,6 @@ from subenv.analysis.reversal import LevelFlightTrim, level_flight_trim
 
 __all__ = [
     "BOW_PLANES_ONLY",
-    "THESIS_DESIGN_SPEED_MPS",
     "THESIS_POLES",
     "Branch",
     "ContinuationError",

@@ -15,11 +15,10 @@ from scipy.signal import place_poles
 
 from subenv._typing import FloatArray
 from subenv.analysis.linear import linear_model
-from subenv.units import fps_to_mps
+from subenv.thesis import THESIS_DESIGN_SPEED_MPS
 from subenv.vehicles.vehicle import Vehicle
 
 __all__ = [
-    "THESIS_DESIGN_SPEED_MPS",
     "THESIS_POLES",
     "closed_loop_eigenvalues",
     "controllability_determinant",
@@ -29,9 +28,6 @@ __all__ = [
     "scheduled_depth_gain",
     "thesis_gain",
 ]
-
-THESIS_DESIGN_SPEED_MPS: Final = fps_to_mps(5.0)
-"""Design speed of the thesis controller, 5 fps (Riedel 1993 Ch. II.B)."""
 
 THESIS_POLES: Final = (-0.3, -0.31, -0.32, -0.33)
 """Closed-loop poles of the thesis controller [1/s] (Riedel 1993 Ch. II.B)."""

@@ -1,12 +1,10 @@
 """Scenarios: named, documented episode distributions, and their registry."""
 
 from subenv.scenarios import presets as _presets  # noqa: F401  (registers the shipped scenarios)
-from subenv.scenarios.presets import DESIGN_SPEED_MPS
 from subenv.scenarios.registry import get_scenario, register_scenario, scenario_names
 from subenv.scenarios.scenario import EpisodeConfig, Interval, Scenario, SpeedRamp
 
 __all__ = [
-    "DESIGN_SPEED_MPS",
     "EpisodeConfig",
     "Interval",
     "Scenario",

@@ -9,19 +9,16 @@ from __future__ import annotations
 
 from subenv.scenarios.registry import register_scenario
 from subenv.scenarios.scenario import Scenario, SpeedRamp
-from subenv.units import fps_to_mps
+from subenv.thesis import THESIS_DESIGN_SPEED_MPS
 
-__all__ = ["BASE_SCENARIOS", "DESIGN_SPEED_MPS"]
-
-DESIGN_SPEED_MPS = fps_to_mps(5.0)
-"""The thesis's design speed, 5 fps (Riedel 1993 Ch. II.B)."""
+__all__ = ["BASE_SCENARIOS"]
 
 _SMALL_PITCH = (-0.05, 0.05)  # rad, about +-3 deg
 
 NOMINAL = Scenario(
     name="Nominal",
     description="Design speed 5 fps (1.524 m/s), well above critical: the thesis controller works here.",
-    speed_mps=(DESIGN_SPEED_MPS, DESIGN_SPEED_MPS),
+    speed_mps=(THESIS_DESIGN_SPEED_MPS, THESIS_DESIGN_SPEED_MPS),
     depth_command_m=(8.0, 15.0),
     initial_depth_offset_m=(-2.0, 2.0),
     initial_pitch_rad=_SMALL_PITCH,

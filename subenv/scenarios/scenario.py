@@ -16,6 +16,8 @@ from typing import Any
 
 import numpy as np
 
+from subenv.thesis import THESIS_DESIGN_SPEED_MPS
+
 __all__ = ["EpisodeConfig", "Interval", "Scenario", "SpeedRamp"]
 
 Interval = tuple[float, float]
@@ -181,7 +183,7 @@ class Scenario:
 
     name: str
     description: str
-    speed_mps: Interval = (1.524, 1.524)
+    speed_mps: Interval = (THESIS_DESIGN_SPEED_MPS, THESIS_DESIGN_SPEED_MPS)
     speed_relative: bool = False
     speed_ramp: SpeedRamp | None = None
     depth_command_m: Interval = (10.0, 10.0)
