@@ -9,9 +9,10 @@ ballast offset x_GB and the excess buoyancy grow with the stages too. After the 
 environment's own scenario (for ``subenv/DivePlane-v0``: ``Randomized``) takes over.
 
 A stage advances when the success rate of its last ``window`` episodes reaches ``threshold``.
-An episode succeeds as in :mod:`subenv.evaluation.metrics`: it ran to its time limit (not
-terminated) and |depth error| stayed within :data:`~subenv.evaluation.metrics.DEPTH_TOLERANCE_M`
-over the final :data:`~subenv.evaluation.metrics.HOLD_WINDOW_S`.
+An episode succeeds as :func:`subenv.evaluation.metrics.episode_success` decides: it ran to its
+time limit (not terminated) and |depth error| stayed within
+:data:`~subenv.evaluation.metrics.DEPTH_TOLERANCE_M` over the final
+:data:`~subenv.evaluation.metrics.HOLD_WINDOW_S`.
 
 :class:`CurriculumSchedule` is the bookkeeping (no Stable-Baselines3); :class:`CurriculumCallback`
 drives it from a training run and moves the environment with ``set_scenario``.
@@ -29,7 +30,7 @@ from stable_baselines3.common.callbacks import BaseCallback
 
 from agents.config import CurriculumConfig
 from subenv.analysis.curriculum import DEFAULT_STAGES, speed_curriculum
-from subenv.evaluation.metrics import DEPTH_TOLERANCE_M, HOLD_WINDOW_S
+from subenv.evaluation.metrics import DEPTH_TOLERANCE_M, episode_success
 from subenv.evaluation.results import atomic_write_text
 from subenv.scenarios import Scenario
 from subenv.vehicles import Vehicle
@@ -156,7 +157,7 @@ class CurriculumCallback(BaseCallback):
         dones: np.ndarray = self.locals["dones"]
         errors = np.array([info["depth_error_m"] for info in infos])
         times = np.array([info["time_s"] for info in infos])
-        outside = np.abs(errors) > DEPTH_TOLERANCE_M
+        outside = ~(np.abs(errors) <= DEPTH_TOLERANCE_M)  # as in episode_metrics: a nan error is outside
         self._last_violation_s[outside] = times[outside]
         # Sub-environments autoreset on the step that ends an episode, before this callback runs:
         # their new episodes were drawn from the scenario of the stage before any advance below.
@@ -164,9 +165,11 @@ class CurriculumCallback(BaseCallback):
         for i in np.flatnonzero(dones):
             info = infos[i]
             if self._episode_stage[i] == self.schedule.stage:
-                # The final HOLD_WINDOW_S (its first sample included) within tolerance, not terminated.
-                success = (bool(info.get("TimeLimit.truncated", False)) and not info.get("termination_reason")
-                           and times[i] >= HOLD_WINDOW_S and self._last_violation_s[i] < times[i] - HOLD_WINDOW_S)
+                # Episodes start at time 0. Their reset sample, not seen here, lies in the hold
+                # window only for an episode no longer than the window (the stages last 600 s).
+                terminated = not info.get("TimeLimit.truncated", False) or bool(info.get("termination_reason"))
+                success = episode_success(terminated=terminated, start_s=0.0, end_s=float(times[i]),
+                                          last_outside_s=float(self._last_violation_s[i]))
                 if self.schedule.record(success):
                     self._advance()
             self._episode_stage[i] = drawn_stage

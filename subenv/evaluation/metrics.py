@@ -32,6 +32,7 @@ __all__ = [
     "STEADY_PITCH_RATE_RADPS",
     "EpisodeMetrics",
     "episode_metrics",
+    "episode_success",
 ]
 
 DEPTH_TOLERANCE_M: Final = 0.5
@@ -191,6 +192,51 @@ def _positive(name: str, value: float) -> None:
         raise ValueError(f"{name}={value!r} is invalid: must be a finite number > 0")
 
 
+def _hold_window(start_s: float, end_s: float, hold_window_s: float) -> tuple[float, bool]:
+    """The start of the hold window of an episode sampled from ``start_s`` to ``end_s`` (the samples
+    at or after it are in the window), and whether the episode covers the window."""
+    # A small slack absorbs float sums of dt.
+    slack = 1e-9 * max(1.0, abs(end_s))
+    window_start = end_s - hold_window_s - slack
+    return window_start, start_s <= window_start + 2 * slack
+
+
+def episode_success(
+    *,
+    terminated: bool,
+    start_s: float,
+    end_s: float,
+    last_outside_s: float,
+    hold_window_s: float = HOLD_WINDOW_S,
+) -> bool:
+    """Whether an episode succeeded: :attr:`EpisodeMetrics.success`, from what a running episode can keep.
+
+    :func:`episode_metrics` calls this with the whole record; a training callback that sees one step
+    at a time (``agents.curriculum``) keeps only the time of the last sample off depth.
+
+    Parameters
+    ----------
+    terminated : bool
+        The episode was terminated (broached, left the depth band, ...) rather than run to its
+        time limit.
+    start_s, end_s : float
+        Times of the episode's first (the reset) and last samples [s].
+    last_outside_s : float
+        Time of the last sample with |depth error| not within the depth tolerance
+        (:data:`DEPTH_TOLERANCE_M`; a nan error counts as outside) [s]; ``-inf`` if none was.
+    hold_window_s : float
+        See :data:`HOLD_WINDOW_S`.
+
+    Returns
+    -------
+    bool
+        Not terminated, the record covers the final ``hold_window_s``, and no sample of that window
+        (its first included) is off depth.
+    """
+    window_start, covers_window = _hold_window(start_s, end_s, hold_window_s)
+    return (not terminated) and covers_window and last_outside_s < window_start
+
+
 def episode_metrics(
     time_s: ArrayLike,
     depth_error_m: ArrayLike,
@@ -239,7 +285,7 @@ def episode_metrics(
         depth tolerance; "steady": max |q| over W <= 0.2 deg/s):
 
         - ``success``: not terminated, the record covers at least W, and |e| <= tol at every
-          sample of W.
+          sample of W (:func:`episode_success`).
         - ``settling_time_s``: t_k - t_0 for the first sample k from which |e| <= tol at every
           later sample; 0 if always within; inf if the last sample is outside or the episode
           terminated.
@@ -294,20 +340,21 @@ def episode_metrics(
     duration = float(t[-1] - t[0])
     within = abs_e <= depth_tolerance_m
 
-    # Hold window W: the samples of the final W seconds (a small slack absorbs float sums of dt),
-    # and the steps (zero-order-hold intervals) lying wholly in it.
-    slack = 1e-9 * max(1.0, abs(float(t[-1])))
-    window_start = t[-1] - hold_window_s - slack
-    covers_window = t[0] <= window_start + 2 * slack
+    # Hold window W: the samples of the final W seconds, and the steps (zero-order-hold intervals)
+    # lying wholly in it.
+    start_s, end_s = float(t[0]), float(t[-1])
+    window_start, covers_window = _hold_window(start_s, end_s, hold_window_s)
     in_window = t >= window_start
     hold_max = float(abs_e[in_window].max())
-    success = (not terminated) and covers_window and bool(within[in_window].all())
+    outside = np.flatnonzero(~within)
+    last_outside_s = float(t[outside[-1]]) if outside.size else -math.inf
+    success = episode_success(terminated=terminated, start_s=start_s, end_s=end_s, last_outside_s=last_outside_s,
+                              hold_window_s=hold_window_s)
 
     # Settling: the first sample after the last one outside the tolerance.
     if terminated or not within[-1]:
         settling = math.inf
     else:
-        outside = np.flatnonzero(~within)
         settling = 0.0 if outside.size == 0 else float(t[outside[-1] + 1] - t[0])
 
     e0 = e[0]

@@ -14,6 +14,7 @@ from subenv.evaluation.metrics import (
     OUTCOMES,
     STEADY_PITCH_RATE_RADPS,
     episode_metrics,
+    episode_success,
 )
 
 LIMIT = 0.4  # rad
@@ -85,6 +86,32 @@ def test_success_needs_the_whole_final_window_within_tolerance():
     exactly = e.copy()
     exactly[-1] = DEPTH_TOLERANCE_M  # the tolerance is inclusive
     assert _metrics(t, exactly).success
+
+
+@pytest.mark.parametrize(
+    ("duration_s", "off_depth_at_s", "reason", "success"),
+    [
+        (300.0, None, "", True),
+        (300.0, 300.0 - HOLD_WINDOW_S - DT, "", True),  # the last sample before the window
+        (300.0, 300.0 - HOLD_WINDOW_S, "", False),  # the window's first sample is in it
+        (300.0, 300.0, "", False),
+        (300.0, None, "broached", False),
+        (HOLD_WINDOW_S - DT, None, "", False),  # shorter than the window
+        (HOLD_WINDOW_S, None, "", True),  # exactly the window
+    ],
+)
+def test_success_from_the_last_time_off_depth_agrees_with_the_whole_record(
+    duration_s: float, off_depth_at_s: float | None, reason: str, success: bool
+) -> None:
+    # What a training callback keeps (start, end, last time off depth) decides as the record does.
+    t = _time(duration_s)
+    e = np.zeros_like(t)
+    if off_depth_at_s is not None:
+        e[t == off_depth_at_s] = DEPTH_TOLERANCE_M + 0.01
+    last_outside_s = -math.inf if off_depth_at_s is None else off_depth_at_s
+    streamed = episode_success(terminated=reason != "", start_s=float(t[0]), end_s=float(t[-1]),
+                               last_outside_s=last_outside_s)
+    assert streamed == _metrics(t, e, reason=reason).success == success
 
 
 def test_a_record_shorter_than_the_window_cannot_succeed():
