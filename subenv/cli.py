@@ -10,9 +10,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import math
-import os
 import sys
-import tempfile
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -67,6 +65,8 @@ def _write_plot(runs: Sequence[Run], ucr: float, path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from subenv.evaluation.plots import save_figure
+
     fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
     for run in runs:
         axes[0].plot(run.times, run.depth_error, label=run.label)
@@ -82,24 +82,8 @@ def _write_plot(runs: Sequence[Run], ucr: float, path: Path) -> None:
     axes[0].legend(loc="best")
     fig.suptitle(f"Thesis pole-placement controller (5 fps design); critical speed {ucr:.3f} m/s")
     fig.tight_layout()
-    _atomic_savefig(fig, path)
+    save_figure(fig, path, image_format=path.suffix[1:] or "png")  # the format the file name says
     plt.close(fig)
-
-
-def _atomic_savefig(fig: object, path: Path) -> None:
-    """Write the figure completely or not at all (temporary file, then rename)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
-    os.close(fd)
-    try:
-        fig.savefig(tmp, dpi=110)  # type: ignore[attr-defined]
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; give the file the usual mode
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def demo(args: argparse.Namespace) -> int:

@@ -19,7 +19,7 @@ from subenv.evaluation.metrics import DEPTH_TOLERANCE_M
 from subenv.evaluation.results import atomic_write_bytes
 from subenv.evaluation.rollout import EpisodeResult
 
-__all__ = ["plot_metrics_vs_speed", "plot_trajectories", "require_matplotlib"]
+__all__ = ["plot_metrics_vs_speed", "plot_trajectories", "require_matplotlib", "save_figure"]
 
 _DPI: Final = 110
 
@@ -32,9 +32,14 @@ def require_matplotlib() -> None:
         raise ImportError("the evaluation plots need matplotlib: pip install 'subenv[plot]'") from exc
 
 
-def _save(fig: Any, path: str | os.PathLike[str]) -> Path:
+def save_figure(fig: Any, path: str | os.PathLike[str], image_format: str = "png") -> Path:
+    """Write a matplotlib figure to ``path`` completely or not at all.
+
+    The figure is rendered in memory (``image_format``, e.g. ``"png"``, ``"pdf"``, ``"svg"``; 110 dpi)
+    and written with :func:`~subenv.evaluation.results.atomic_write_bytes`. Returns the path.
+    """
     buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=_DPI)
+    fig.savefig(buffer, format=image_format, dpi=_DPI)
     return atomic_write_bytes(path, buffer.getvalue())
 
 
@@ -97,7 +102,7 @@ def plot_trajectories(
         f"{first.scenario}, seed {first.seed}: speed {speeds}, u_cr {', '.join(f'{u:.3f}' for u in ucrs)} m/s"
     ))
     fig.tight_layout()
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 _MAX_CRITICAL_LINES: Final = 3
@@ -177,4 +182,4 @@ def plot_metrics_vs_speed(
     scenarios = ", ".join(dict.fromkeys(r.scenario for r in results))
     fig.suptitle(f"Metrics versus speed ({scenarios})", fontsize="medium")
     fig.tight_layout()
-    return _save(fig, path)
+    return save_figure(fig, path)
