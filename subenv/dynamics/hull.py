@@ -21,7 +21,7 @@ states, each as one loop. :func:`crossflow_integrals` is the batched form for Nu
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cache, cached_property
 from typing import Any
 
 import numpy as np
@@ -194,24 +194,15 @@ def crossflow_integrals(table: HullTable, w: FloatArray, q: FloatArray) -> tuple
         [m^5/s^2]: one more factor x [m]. The drag moment is M = +(rho/2) C_D I1 [N m] (from
         M = -x Z_F with x forward; the thesis prints the opposite sign in eqs 2.43 and 4.2).
     """
-    I0, I1 = _gufunc("crossflow")(w, q, table.packed)
+    I0, I1 = _crossflow_gufunc()(w, q, table.packed)
     return np.asarray(I0), np.asarray(I1)
 
 
-# --- the batched (generalized ufunc) forms, compiled on first use ------------------------------
+# --- the batched (generalized ufunc) form, compiled on first use -------------------------------
 def _crossflow_loop(w: float, q: float, hull: FloatArray, I0: FloatArray, I1: FloatArray) -> None:
     I0[0], I1[0] = crossflow_point(w, q, hull)
 
 
-_GUFUNC_SPECS: dict[str, tuple[Any, str, str]] = {
-    "crossflow": (_crossflow_loop, "void(f8, f8, f8[:, :], f8[:], f8[:])", "(),(),(r,n)->(),()"),
-}
-_GUFUNCS: dict[str, Any] = {}
-
-
-def _gufunc(name: str) -> Any:
-    ufunc = _GUFUNCS.get(name)
-    if ufunc is None:
-        fn, signature, layout = _GUFUNC_SPECS[name]
-        ufunc = _GUFUNCS[name] = gufunc(fn, signature, layout)
-    return ufunc
+@cache
+def _crossflow_gufunc() -> Any:
+    return gufunc(_crossflow_loop, "void(f8, f8, f8[:, :], f8[:], f8[:])", "(),(),(r,n)->(),()")
