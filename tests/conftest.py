@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
+import io
 import os
+from pathlib import Path
+from typing import NamedTuple
 
 import pytest
 
@@ -47,3 +51,29 @@ def suboff():
     from subenv import load_vehicle
 
     return load_vehicle("suboff")
+
+
+class AnalysisReport(NamedTuple):
+    folder: Path
+    """Where ``subenv analyze --out <folder>`` wrote the report; it did not exist before."""
+    exit_code: int
+    printed: str
+    """What the command printed (stdout)."""
+
+
+@pytest.fixture(scope="session")
+def analysis_report(tmp_path_factory: pytest.TempPathFactory) -> AnalysisReport:
+    """The reproduction report of Riedel (1993), written once per session (tens of seconds).
+
+    ``subenv analyze --out <folder>`` writes it: the command calls ``write_report(folder,
+    load_vehicle("suboff"))``, so the tests of ``write_report`` (tests/analysis) and of the command
+    (tests/test_cli.py) share this one folder. Its parent holds nothing else. Tests read it and must
+    not change it; one that needs an existing report to replace works on a copy.
+    """
+    from subenv.cli import main
+
+    folder = tmp_path_factory.mktemp("analysis") / "report"
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        exit_code = main(["analyze", "--out", str(folder)])
+    return AnalysisReport(folder, exit_code, printed.getvalue())

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import pytest
@@ -34,15 +35,18 @@ def test_list_names_every_id(capsys):
     assert "subenv/LowSpeed-v0" in text and "subenv/DivePlane-v0" in text
 
 
-def test_analyze_writes_the_report_and_refuses_to_overwrite(tmp_path: Path, capsys):
-    out = tmp_path / "analysis"
-    assert main(["analyze", "--out", str(out)]) == 0
-    text = capsys.readouterr().out
+def test_analyze_writes_the_report_and_refuses_to_overwrite(tmp_path: Path, analysis_report):
+    # `subenv analyze --out <folder>` into a folder that did not exist, once per session (tests/conftest.py).
+    out = analysis_report.folder
+    assert analysis_report.exit_code == 0
+    text = analysis_report.printed
     assert "| quantity | thesis value | computed value | difference |" in text
     assert (out / "report.md").is_file() and len(list(out.glob("*.png"))) == 14
     with pytest.raises(SystemExit, match="exists; pass overwrite=True"):
         main(["analyze", "--out", str(out)])
-    assert main(["analyze", "--out", str(out), "--force"]) == 0
+    existing = tmp_path / "analysis"  # the shared report stays as it is: --force replaces a copy of it
+    shutil.copytree(out, existing)
+    assert main(["analyze", "--out", str(existing), "--force"]) == 0
 
 
 def test_evaluate_end_to_end_on_the_tiny_suite(tmp_path: Path, capsys):

@@ -226,14 +226,16 @@ def test_curriculum_stages_are_placed_by_the_critical_speed(suboff):
         speed_curriculum(suboff, stages=[("x", 1.0, 0.5)])
 
 
-def test_report_is_written_completely_and_not_over_an_existing_folder(tmp_path, suboff):
-    out = write_report(tmp_path / "report", suboff)
+def test_report_is_written_completely_and_not_over_an_existing_folder(analysis_report, suboff):
+    # write_report(folder, SUBOFF) into a folder that did not exist, once per session (tests/conftest.py).
+    out = analysis_report.folder
+    assert f"report written to {out}/report.md" in analysis_report.printed  # the folder write_report returned
     text = (out / "report.md").read_text()
     assert "| u_cr, eq. 3.9 closed form | 1.8979 | 1.8979 |" in text
     assert len(list(out.glob("*.png"))) == 14
     with pytest.raises(FileExistsError, match="exists; pass overwrite=True"):
-        write_report(tmp_path / "report", suboff)
-    assert [p.name for p in tmp_path.iterdir()] == ["report"]  # no temporary folder left behind
+        write_report(out, suboff)
+    assert [p.name for p in out.parent.iterdir()] == ["report"]  # no temporary folder left behind
 
 
 def test_unlimited_planes_return_every_root_of_eq_4_3(thesis_boat):
