@@ -80,12 +80,28 @@ def _check_model(algo: str, log_folder: Path) -> None:
         env.close()
 
 
+@pytest.fixture(scope="module")
+def conf_file_run(tmp_path_factory):  # type: ignore[no-untyped-def]
+    """``conf_file_run(algo)``: ``(log folder, process)`` of rl_zoo3.train with ``HYPERPARAMS[algo]`` as
+    its conf file (seed 0), trained on first use and then shared: the PPO run is the one rl_zoo3.enjoy
+    loads. Tests only read the log folder."""
+    runs: dict[str, tuple[Path, subprocess.CompletedProcess[str]]] = {}
+
+    def run(algo: str) -> tuple[Path, subprocess.CompletedProcess[str]]:
+        if algo not in runs:
+            cwd = tmp_path_factory.mktemp(f"zoo-{algo}")
+            conf = cwd / f"{algo}.yml"
+            conf.write_text(yaml.safe_dump({ENV_ID: HYPERPARAMS[algo]}))
+            logs = cwd / "logs"
+            runs[algo] = logs, _train(algo, logs, cwd, ["--conf-file", str(conf)])
+        return runs[algo]
+
+    return run
+
+
 @pytest.mark.parametrize("algo", ["ppo", "sac"])
-def test_rl_zoo_trains_with_conf_file(algo, tmp_path):
-    conf = tmp_path / f"{algo}.yml"
-    conf.write_text(yaml.safe_dump({ENV_ID: HYPERPARAMS[algo]}))
-    logs = tmp_path / "logs"
-    proc = _train(algo, logs, tmp_path, ["--conf-file", str(conf)])
+def test_rl_zoo_trains_with_conf_file(algo, conf_file_run):
+    logs, proc = conf_file_run(algo)
     assert f"Saving to {logs / algo / f'{ENV_NAME}_1'}" in proc.stdout
     _check_model(algo, logs)
 
@@ -98,13 +114,10 @@ def test_rl_zoo_trains_with_shipped_default_hyperparameters(tmp_path):
     _check_model("ppo", logs)
 
 
-def test_rl_zoo_enjoy_loads_the_trained_agent(tmp_path):
+def test_rl_zoo_enjoy_loads_the_trained_agent(tmp_path, conf_file_run):
     # rl_zoo3 2.9.2's enjoy imports `requests` (rl_zoo3/load_from_hub.py) without declaring it.
     pytest.importorskip("requests", reason="rl_zoo3.enjoy imports requests, which rl_zoo3 does not install")
-    conf = tmp_path / "ppo.yml"
-    conf.write_text(yaml.safe_dump({ENV_ID: HYPERPARAMS["ppo"]}))
-    logs = tmp_path / "logs"
-    _train("ppo", logs, tmp_path, ["--conf-file", str(conf)])
+    logs, _ = conf_file_run("ppo")  # enjoy writes nothing into the log folder (no --reward-log)
     proc = _run_zoo("rl_zoo3.enjoy", ["--algo", "ppo", "--env", ENV_ID, "--gym-packages", "subenv",
                                       "-f", str(logs), "--exp-id", "0", "-n", str(gym.spec(ENV_ID).max_episode_steps + 100), "--no-render",
                                       "--deterministic", "--num-threads", "1"], tmp_path)
