@@ -23,7 +23,7 @@ def test_wheel_installs_into_a_clean_venv(tmp_path: Path):
     env_dir = tmp_path / "venv"
     venv.EnvBuilder(with_pip=True).create(env_dir)
     python = env_dir / "bin" / "python"
-    subprocess.run([str(python), "-m", "pip", "install", "-q", str(wheel)], check=True)
+    subprocess.run([str(python), "-m", "pip", "install", "-q", "--no-compile", str(wheel)], check=True)
     code = (
         "import gymnasium as gym, subenv, pathlib\n"
         "assert 'site-packages' in pathlib.Path(subenv.__file__).as_posix()\n"
