@@ -12,6 +12,11 @@ import pytest
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")  # pygame renders headless in tests
 os.environ.setdefault("MPLBACKEND", "Agg")
+# One OpenBLAS thread (read when numpy/scipy load, which is after this file). The tests' matrices are
+# at most 10 x 10: more threads do not split the work (the results are bitwise the same) but each call
+# then waits for the pool; on 2 shared cores one gain-schedule design of the LQR baselines (190 CARE
+# solves) took 1.5-3 s instead of 0.12 s.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 _MEASURED: list[tuple[str, str]] = []
 
