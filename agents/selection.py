@@ -27,8 +27,15 @@ import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
 from agents.config import AgentConfig
-from agents.policy import (CONFIG_FILE, MODEL_FILE, SELECTED_DIR, VECNORMALIZE_FILE, TrainedAgent, save_model,
-                           save_statistics)
+from agents.policy import (
+    CONFIG_FILE,
+    MODEL_FILE,
+    SELECTED_DIR,
+    VECNORMALIZE_FILE,
+    TrainedAgent,
+    save_model,
+    save_statistics,
+)
 from subenv.evaluation.results import atomic_output_dir, atomic_write_bytes, atomic_write_text
 
 __all__ = ["SELECTED_DIR", "SELECTION_SCENARIOS", "VALIDATION_SEED", "SelectionCallback", "validation_score"]

@@ -42,8 +42,18 @@ from typing import Any, Final
 import yaml
 
 from agents.config import ALGORITHMS, AgentConfig, algorithm_class, load_config, model_kwargs, parse_overrides
-from agents.policy import (CHECKPOINT_DIR, CONFIG_FILE, MODEL_FILE, VECNORMALIZE_FILE, load_agent, model_folder,
-                           save_model, save_statistics, statistics_file, training_run)
+from agents.policy import (
+    CHECKPOINT_DIR,
+    CONFIG_FILE,
+    MODEL_FILE,
+    VECNORMALIZE_FILE,
+    load_agent,
+    model_folder,
+    save_model,
+    save_statistics,
+    statistics_file,
+    training_run,
+)
 from subenv.evaluation.results import atomic_write_text
 
 __all__ = ["DEFAULT_ENV_ID", "EVAL_SEED_OFFSET", "TrainResult", "main", "make_vec_env", "train"]
@@ -86,7 +96,7 @@ def make_vec_env(config: AgentConfig, n_envs: int, seed: int, curriculum: bool =
     if config.depth_integral is not None:
         from agents.features import DepthIntegralVecEnv
 
-        venv = DepthIntegralVecEnv(venv, config.depth_integral, venv.get_attr("single_env")[0].dt)
+        venv = DepthIntegralVecEnv(venv, config.depth_integral, venv.get_attr("config")[0].dt)
     venv = VecMonitor(venv)
     if config.normalize is not None:
         norm = config.normalize
@@ -188,7 +198,7 @@ def train(
         callbacks: list[Any] = []
         curriculum_callback = None
         if curriculum is not None:
-            vehicle = venv.get_attr("single_env")[0].base_vehicle
+            vehicle = venv.get_attr("config")[0].base_vehicle
             alpha = float(config.env_kwargs.get("alpha", 0.0))
             scenarios = stage_scenarios(venv.get_attr("scenario")[0], curriculum, vehicle, alpha)
             stage = min(stage, len(scenarios) - 1)

@@ -1,6 +1,6 @@
 """How fast subenv steps, next to Gymnasium's own environments, measured in one run on one machine.
 
-    .venv/bin/python benchmarks/speed.py [--seconds 1.0] [--repeats 3] [--quick]
+    .venv/bin/python benchmarks/speed.py [--seconds 1.0] [--repeats 3] [--quick] [--baseline DIR]
 
 Prints Markdown tables of ratios against references measured in the same process (absolute
 numbers depend on the machine; the ratios are what to compare):
@@ -17,7 +17,10 @@ numbers depend on the machine; the ratios are what to compare):
    ceiling the compiled step puts on two cores next to ``CartPoleVectorEnv``;
 4. peak memory at N = 4096 (a fresh process per environment);
 5. numba compile time: the first calls in a fresh process with an empty cache, then with the
-   cache written by that process.
+   cache written by that process;
+6. with ``--baseline DIR`` (a checkout of another commit, e.g. ``git worktree add /tmp/base HEAD~1``):
+   the single env and the vector env on one and two threads, measured through the public API in
+   child processes that take turns between this tree and DIR, and the ratios between them.
 
 Every rate is the best of ``--repeats`` runs of ``--seconds`` each, taken in turns across the
 environments of a table (machines share their cores; the two-thread probe printed before and
@@ -38,6 +41,7 @@ import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -154,15 +158,9 @@ def integrator_table(seconds: float) -> list[str]:
     import numba
     from scipy.integrate import solve_ivp
 
-    from subenv.dynamics import (
-        CONTROL_PERIOD_S,
-        SUBSTEPS,
-        control_period_point,
-        derivatives,
-        model_params,
-        pack_params,
-        rk4,
-    )
+    from subenv.dynamics import CONTROL_PERIOD_S, SUBSTEPS, derivatives, model_params, rk4
+    from subenv.dynamics.model import pack_params
+    from subenv.dynamics import integrate as ig
 
     vehicle = subenv.load_vehicle("suboff")  # C_D = 0.3: hull drag on
     params = model_params(vehicle)
@@ -173,10 +171,12 @@ def integrator_table(seconds: float) -> list[str]:
 
     @numba.njit
     def compiled(x: np.ndarray, periods: int) -> np.ndarray:
+        block = np.empty(ig.LANE_ROWS * ig.LANES)
         a, b, c, d = x[0], x[1], x[2], x[3]
-        for k in range(periods):
-            a, b, c, d = control_period_point(a, b, c, d, k * CONTROL_PERIOD_S, CONTROL_PERIOD_S, SUBSTEPS, speed,
-                                              0.0, plane, 0.0, 0.0, prm, hull)
+        for k in range(periods):  # a block of one state, as the single environment steps
+            ig.set_lane(block, 0, a, b, c, d, k * CONTROL_PERIOD_S, speed, 0.0, plane, 0.0, 0.0, prm)
+            ig.control_period_lanes(block, 1, CONTROL_PERIOD_S, SUBSTEPS, hull)
+            a, b, c, d = (block[(ig.LANE_PITCH + r) * ig.LANES] for r in range(4))
         return np.array([a, b, c, d])
 
     def python_rk4(x: np.ndarray, periods: int) -> np.ndarray:
@@ -196,7 +196,7 @@ def integrator_table(seconds: float) -> list[str]:
 
     rows = []
     integrators: list[tuple[str, Callable[[np.ndarray, int], np.ndarray]]] = [
-        ("RK4, compiled, one state (`control_period_point`)", compiled),
+        ("RK4, compiled, one state (`control_period_lanes` over a block of one)", compiled),
         ("RK4, `rk4` over `derivatives` (Python loop)", python_rk4),
         ("`solve_ivp` RK45, default tolerances", scipy(1e-3, 1e-6)),
         ("`solve_ivp` RK45, rtol 1e-10, atol 1e-12", scipy(1e-10, 1e-12)),
@@ -220,18 +220,18 @@ def integrator_table(seconds: float) -> list[str]:
 
 def cost_table(seconds: float) -> list[str]:
     """Where an env-step's time goes, on one thread: the compiled step without resets and its parts,
-    then the resets, and the ceiling they put on two cores next to CartPoleVectorEnv."""
+    then the resets, and the ceiling they put on two cores (the compiled step on numba's threads)
+    next to CartPoleVectorEnv."""
     import math
 
     import numba
 
-    from subenv.dynamics import CONTROL_PERIOD_S, SUBSTEPS, control_period_point, model_params, pack_params, rhs_point
+    from subenv.dynamics import CONTROL_PERIOD_S, SUBSTEPS, model_params
+    from subenv.dynamics.model import pack_params, rhs_point
     from subenv.dynamics import integrate as ig
     from subenv.dynamics.hull import crossflow_point
     from subenv.dynamics.sincos import sincos_point
     from subenv.envs import transition as tr
-    from subenv.envs.handoff import SPIN_S, Crew
-    from subenv.envs.vector import _thread_pool
 
     n = 4096
     params = model_params(subenv.load_vehicle("suboff"))
@@ -244,10 +244,13 @@ def cost_table(seconds: float) -> list[str]:
 
     @numba.njit
     def periods(x: np.ndarray, prm: np.ndarray, out: np.ndarray) -> None:
-        for i in range(x.shape[0]):
-            out[i, 0], out[i, 1], out[i, 2], out[i, 3] = control_period_point(
-                x[i, 0], x[i, 1], x[i, 2], x[i, 3], 0.0, CONTROL_PERIOD_S, SUBSTEPS, 1.0, 0.0, 0.05, 0.0, 0.0,
-                prm[i], hull)
+        L = ig.LANES
+        block = np.empty(ig.LANE_ROWS * L)
+        for i in range(x.shape[0]):  # a block of one state at a time
+            ig.set_lane(block, 0, x[i, 0], x[i, 1], x[i, 2], x[i, 3], 0.0, 1.0, 0.0, 0.05, 0.0, 0.0, prm[i])
+            ig.control_period_lanes(block, 1, CONTROL_PERIOD_S, SUBSTEPS, hull)
+            for r in range(4):
+                out[i, r] = block[(ig.LANE_PITCH + r) * L]
 
     @numba.njit
     def periods_in_blocks(x: np.ndarray, prm: np.ndarray, out: np.ndarray) -> None:
@@ -255,7 +258,7 @@ def cost_table(seconds: float) -> list[str]:
         block = np.empty(ig.LANE_ROWS * L)
         for b in range(0, x.shape[0], L):
             m = min(L, x.shape[0] - b)
-            for j in range(m):  # the inputs, as step_batch fills them
+            for j in range(m):  # the inputs, as the transition fills them
                 ig.set_lane(block, j, x[b + j, 0], x[b + j, 1], x[b + j, 2], x[b + j, 3], 0.0, 1.0, 0.0, 0.05, 0.0, 0.0,
                             prm[b + j])
             ig.control_period_lanes(block, m, CONTROL_PERIOD_S, SUBSTEPS, hull)
@@ -313,39 +316,39 @@ def cost_table(seconds: float) -> list[str]:
             ends += int((terminated | truncated).sum())
         vec = env.unwrapped
         a = np.asarray(actions[0], dtype=float).reshape(n, -1)
-        report = np.empty((tr.N_REPORT, n))
+        report = np.empty((len(tr.REPORT_KEYS), n))
         active = np.ones(n, dtype=bool)
-        rows = vec._rows.copy()
+        state = vec._state.copy()
+        args = (state, vec._episode, a, active, vec._obs, vec._rngs, vec._constants, vec.config.hull, report)
 
         def step() -> None:
-            rows[:] = vec._rows  # the same states every time (no episode ends inside the timing)
-            tr.step_batch(rows, a, active, vec._obs, vec._rngs, 0, vec._cfg, vec._hull, report)
+            state[:] = vec._state  # the same states every time (no episode ends inside the timing)
+            tr.step(*args)
 
-        copy_ns = ns_per_item(lambda: rows.__setitem__(slice(None), vec._rows), n)
+        copy_ns = ns_per_item(lambda: state.__setitem__(slice(None), vec._state), n)
         kernel[env_id] = ns_per_item(step, n) - copy_ns
 
-        # The same steps on two threads, shared as the vector env shares them (chunks claimed by this
-        # thread and a polling worker): what two cores make of the kernel alone.
-        crew, pool = Crew(1), _thread_pool(2)
-        bound = (rows, vec._obs, vec._rngs, vec._cfg, vec._hull)
-
+        # The same steps shared among two of numba's threads, as the vector env shares them with threads=2:
+        # what two cores make of the kernel alone.
         def on_two_threads() -> None:
-            rows[:] = vec._rows
-            crew.step(pool, bound, a, active, report, SPIN_S)
+            state[:] = vec._state
+            tr.step_parallel(*args)
 
+        before = numba.get_num_threads()
+        numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
         two_threads[env_id] = ns_per_item(on_two_threads, n) - copy_ns
-        crew.stop()
+        numba.set_num_threads(before)
         index = np.arange(64)
         reset_ns = ns_per_item(lambda: vec._reset_envs(index, {}, report), 64)
         resets[env_id] = (ends / (200 * n), reset_ns)
         env.close()
     for env_id in SUBENV_IDS:
-        lines.append(f"| {env_id}: compiled step of one sub-environment (`step_batch`, no reset) "
+        lines.append(f"| {env_id}: compiled step of one sub-environment (`transition.step`, no reset) "
                      f"| {kernel[env_id]:.0f} |")
     per_state, per_pitch = (states, prm, out), (pitch, prm, sin_cos)
     parts = (("of which: one control period (2 RK4 steps = 8 right-hand sides) in a block of 64 states "
               "(`control_period_lanes`, SIMD code), per state", periods_in_blocks, per_state, ".0f"),
-             ("the same control period, one state at a time (`control_period_point`)", periods, per_state, ".0f"),
+             ("the same control period, one state at a time (a block of one)", periods, per_state, ".0f"),
              ("one right-hand side, one state (`rhs_point`)", rhs, per_state, ".1f"),
              ("the sine and cosine of the pitch (`sincos_point`), in a loop over an array of pitches (SIMD)", trig,
               per_pitch, ".1f"),
@@ -356,7 +359,7 @@ def cost_table(seconds: float) -> list[str]:
         lines.append(f"| {label} | {ns_per_item(lambda: fn(*args), n):{fmt}} |")
     for env_id in SUBENV_IDS:
         rate, reset_ns = resets[env_id]
-        lines.append(f"| {env_id}: one reset of 64 at once (draw, loading, row, observation) "
+        lines.append(f"| {env_id}: one reset of 64 at once (draw, loading, records, observation) "
                      f"| {reset_ns:,.0f} |")
         lines.append(f"| {env_id}: resets per env-step with random actions: {rate:.4f}, so per env-step | "
                      f"{rate * reset_ns:.0f} |")
@@ -364,15 +367,15 @@ def cost_table(seconds: float) -> list[str]:
     cartpole_rate = vector_env_rate(cartpole, seconds, 3)
     cartpole.close()
     lines.append("")
-    # Two cores share the compiled steps (measured on two threads); the resets run in Python on the
-    # calling thread (they hold the GIL): at best they overlap the other thread's steps.
+    # Two cores share the compiled steps (measured on two of numba's threads); the resets run in Python
+    # after them, on the calling thread.
     lines.append("| ceiling on 2 cores | compiled steps alone, on 2 threads: env-steps/s | x CartPoleVectorEnv "
                  "| with the resets: env-steps/s | x CartPoleVectorEnv |")
     lines.append("|---|---:|---:|---:|---:|")
     for env_id in SUBENV_IDS:
         t2_s = two_threads[env_id] * 1e-9
         r_s = resets[env_id][0] * resets[env_id][1] * 1e-9
-        alone, with_resets = 1 / t2_s, 1 / max(r_s, t2_s + r_s / 2)
+        alone, with_resets = 1 / t2_s, 1 / (t2_s + r_s)
         lines.append(f"| {env_id} | {alone:,.0f} | {alone / cartpole_rate:.2f} | {with_resets:,.0f} "
                      f"| {with_resets / cartpole_rate:.2f} |")
     lines.append(f"| CartPoleVectorEnv at N = 4096 (measured) | {cartpole_rate:,.0f} | 1 | | |")
@@ -450,7 +453,7 @@ def compile_table() -> list[str]:
     lines = ["| first call in a fresh process | empty numba cache (compiles) | cached |", "|---|---:|---:|"]
     labels = {"import": "`import subenv` (compiles nothing)",
               "single env": "`gym.make` + `reset` + `step` (single env kernels)",
-              "vector env": "`make_vec` + `reset` + `step` on 2 threads (vector env kernels, handover)",
+              "vector env": "`make_vec` + `reset` + `step` on 2 threads (the vector env's parallel kernel)",
               "derivatives": "`derivatives` (its generalized ufunc)"}
     for key, label in labels.items():
         lines.append(f"| {label} | {runs[0][key]:.2f} s | {runs[1][key]:.2f} s |")
@@ -489,6 +492,53 @@ def free_cores_probe() -> str:
     return f"two-thread speedup of a compute probe {2 * one / two:.2f}x; load average {load}"
 
 
+_BASELINE_SIZES = (1, 64, 1024, 4096)
+_TWO_THREADS_FROM = 1024
+
+
+def public_api_cells(seconds: float, sizes: tuple[int, ...]) -> dict[str, float]:
+    """The rates the comparison with another commit takes: through the public API only (``gym.make``,
+    ``gym.make_vec(..., threads=k)``), so that the same code measures both trees."""
+    cells: dict[str, float] = {}
+    for env_id in SUBENV_IDS:
+        cells[f"{env_id} single env"] = single_env_rate(gym.make(env_id).unwrapped, seconds, 1)
+        for n in sizes:
+            for threads in (1, 2) if n >= _TWO_THREADS_FROM else (1,):
+                env = gym.make_vec(env_id, num_envs=n, threads=threads)
+                cells[f"{env_id} N={n} threads={threads}"] = vector_env_rate(env, seconds, 1)
+                env.close()
+    return cells
+
+
+def baseline_table(baseline: Path, seconds: float, repeats: int, sizes: tuple[int, ...]) -> list[str]:
+    """This tree against ``baseline``: child processes alternate between the two (best of ``repeats`` each)."""
+    trees = {"now": ROOT, "previous": baseline.resolve()}
+    best: dict[str, dict[str, float]] = {name: {} for name in trees}
+    for _ in range(repeats):
+        for name, tree in trees.items():
+            env = {**os.environ, "PYTHONPATH": str(tree)}
+            out = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--cells", "--seconds", str(seconds),
+                                  "--sizes", ",".join(map(str, sizes))],
+                                 capture_output=True, text=True, check=True, env=env, cwd=tree)
+            found = json.loads(out.stdout.strip().splitlines()[-1])
+            if not found.pop("__file__").startswith(str(tree)):
+                raise RuntimeError(f"the child process did not import subenv from {tree}")
+            for key, rate in found.items():
+                best[name][key] = max(best[name].get(key, 0.0), rate)
+    now, previous = best["now"], best["previous"]
+    lines = ["| measured through the public API | previous env-steps/s | now env-steps/s | now / previous |",
+             "|---|---:|---:|---:|"]
+    for key in now:
+        lines.append(f"| {key} | {previous[key]:,.0f} | {now[key]:,.0f} | {now[key] / previous[key]:.2f} |")
+    lines += ["", "| two threads / one thread | previous | now |", "|---|---:|---:|"]
+    for env_id in SUBENV_IDS:
+        for n in sizes:
+            if n >= _TWO_THREADS_FROM:
+                one, two = f"{env_id} N={n} threads=1", f"{env_id} N={n} threads=2"
+                lines.append(f"| {env_id} N={n} | {previous[two] / previous[one]:.2f} | {now[two] / now[one]:.2f} |")
+    return lines
+
+
 def machine() -> str:
     import numba
 
@@ -510,17 +560,34 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=1.0, help="time per run (default: %(default)s)")
     parser.add_argument("--repeats", type=int, default=3, help="runs per measurement, best kept (default: %(default)s)")
     parser.add_argument("--quick", action="store_true", help="0.2 s, one run, N up to 1024, no memory/compile probes")
+    parser.add_argument("--baseline", type=Path, help="a checkout of another commit to compare with (section 6)")
+    parser.add_argument("--only-baseline", action="store_true", help="with --baseline: that section alone")
+    parser.add_argument("--cells", action="store_true", help=argparse.SUPPRESS)  # (a child of --baseline)
+    parser.add_argument("--sizes", default=",".join(map(str, _BASELINE_SIZES)), help=argparse.SUPPRESS)
     args = parser.parse_args()
     seconds, repeats = (0.2, 1) if args.quick else (args.seconds, args.repeats)
     sizes = VECTOR_SIZES[:-1] if args.quick else VECTOR_SIZES
+    if args.cells:
+        cells: dict[str, Any] = public_api_cells(args.seconds, tuple(int(n) for n in args.sizes.split(",")))
+        print(json.dumps({**cells, "__file__": subenv.__file__}))
+        return
     print(f"Machine: {machine()}")
     print(f"Before: {free_cores_probe()}\n")
-    sections = [("Single environment", lambda: single_env_table(seconds, repeats)),
-                ("Vector environment (random actions, autoreset)", lambda: vector_env_table(seconds, repeats, sizes)),
-                ("Integrator cost", lambda: integrator_table(max(seconds, 1.0))),
-                ("Where an env-step's time goes", lambda: cost_table(max(seconds, 1.0)))]
-    if not args.quick:
-        sections += [("Peak memory", lambda: memory_table(4096)), ("numba compile time", compile_table)]
+    sections: list[tuple[str, Callable[[], list[str]]]] = []
+    if args.baseline is not None:
+        baseline = args.baseline
+        sections.append((f"Against {baseline} (child processes taking turns)",
+                         lambda: baseline_table(baseline, seconds, repeats, sizes)))
+    if args.only_baseline:
+        sections = sections[:1]
+    else:
+        sections += [("Single environment", lambda: single_env_table(seconds, repeats)),
+                     ("Vector environment (random actions, autoreset)",
+                      lambda: vector_env_table(seconds, repeats, sizes)),
+                     ("Integrator cost", lambda: integrator_table(max(seconds, 1.0))),
+                     ("Where an env-step's time goes", lambda: cost_table(max(seconds, 1.0)))]
+        if not args.quick:
+            sections += [("Peak memory", lambda: memory_table(4096)), ("numba compile time", compile_table)]
     for title, table in sections:
         print(f"### {title}\n")
         print("\n".join(table()))

@@ -24,6 +24,7 @@ from subenv.analysis import THESIS_POLES, critical_speed, thesis_gain
 from subenv.thesis import THESIS_DESIGN_SPEED_MPS
 from subenv.units import mps_to_fps
 
+
 @dataclass
 class Run:
     label: str

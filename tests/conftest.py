@@ -17,6 +17,9 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 # then waits for the pool; on 2 shared cores one gain-schedule design of the LQR baselines (190 CARE
 # solves) took 1.5-3 s instead of 0.12 s.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+# At least two numba threads (read once, when numba is first imported), so that the tests that step a
+# vector environment on two threads run on a one-core machine too: results never depend on it.
+os.environ["NUMBA_NUM_THREADS"] = str(max(2, int(os.environ.get("NUMBA_NUM_THREADS", "0") or 0), os.cpu_count() or 1))
 
 _MEASURED: list[tuple[str, str]] = []
 

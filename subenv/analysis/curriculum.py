@@ -26,8 +26,8 @@ class SpeedStage:
     """One curriculum stage: a speed interval, in m/s and relative to the critical speed.
 
     ``ratio_low``/``ratio_high`` are u / u_cr (= Fn / Fn_cr); feed ``speed_mps`` to
-    ``reset(options={"speed": ...})`` or a scenario's ``speed_mps`` (with ``speed_relative=True``,
-    the ratios directly).
+    ``reset(options={"speed": ...})`` or a scenario's ``speed_mps``, or the ratios to a scenario's
+    ``speed_ratio``.
     """
 
     name: str

@@ -7,6 +7,7 @@ from typing import Final, Literal, Union
 
 import numpy as np
 
+from subenv import _validation as check
 from subenv._typing import FloatArray
 from subenv.dynamics.model import derivatives, model_params
 from subenv.vehicles.vehicle import Vehicle
@@ -16,8 +17,7 @@ __all__ = ["BOW_PLANES_ONLY", "Allocation", "LinearModel", "check_alpha", "linea
 
 def check_alpha(alpha: float) -> float:
     """Validate the bow/stern allocation alpha of dual control (eq. 2.58)."""
-    if not (isinstance(alpha, (int, float)) and np.isfinite(alpha) and -1.0 <= alpha <= 1.0):
-        raise ValueError(f"alpha={alpha!r} is invalid: must be a number in [-1, 1]")
+    check.require("alpha", alpha, check.is_number(alpha) and -1.0 <= alpha <= 1.0, "a number in [-1, 1]")
     return float(alpha)
 
 

@@ -1,33 +1,26 @@
-"""The vertical-plane dynamics: one pure, batched right-hand side and its integrator."""
+"""The vertical-plane dynamics: one pure, batched right-hand side and its integrator.
 
-from subenv.dynamics.hull import HullTable, crossflow_integrals, crossflow_point
-from subenv.dynamics.integrate import CONTROL_PERIOD_S, SUBSTEPS, control_period_point, rk4, rk4_step
-from subenv.dynamics.model import (
-    PARAM_FIELDS,
-    ModelParams,
-    derivatives,
-    dual_plane_angles,
-    model_params,
-    pack_params,
-    rhs_point,
-    stack_params,
-)
+For users: :func:`derivatives` (d/dt of the state for any batch of states, inputs and loadings),
+:func:`model_params` (a vehicle reduced to the model's numbers; :func:`stack_params` for a batch of
+loadings), :func:`rk4` (the reference integrator), :func:`dual_plane_angles` (eq. 2.58) and
+:func:`crossflow_integrals` (the hull's cross-flow drag). The compiled kernels the environments run
+(:mod:`subenv.dynamics.model`, :mod:`~subenv.dynamics.hull`, :mod:`~subenv.dynamics.integrate`) are
+in the submodules.
+"""
+
+from subenv.dynamics.hull import HullTable, crossflow_integrals
+from subenv.dynamics.integrate import CONTROL_PERIOD_S, SUBSTEPS, rk4
+from subenv.dynamics.model import ModelParams, derivatives, dual_plane_angles, model_params, stack_params
 
 __all__ = [
     "CONTROL_PERIOD_S",
-    "PARAM_FIELDS",
     "SUBSTEPS",
     "HullTable",
     "ModelParams",
-    "control_period_point",
     "crossflow_integrals",
-    "crossflow_point",
     "derivatives",
     "dual_plane_angles",
     "model_params",
-    "pack_params",
-    "rhs_point",
     "rk4",
-    "rk4_step",
     "stack_params",
 ]

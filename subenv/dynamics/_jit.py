@@ -6,8 +6,12 @@ NumPy-facing functions (:func:`subenv.dynamics.derivatives`,
 :func:`subenv.dynamics.crossflow_integrals`) are generalized ufuncs over the same compiled scalar
 functions that the environments call.
 
-- ``nogil=True``: the kernels release the GIL, so the vector environment steps slices of its
-  sub-environments on Python threads (no OpenMP runtime, which does not survive ``fork``).
+- ``nogil=True``: the kernels release the GIL, so other Python threads run meanwhile.
+- :func:`parallel_kernel` compiles a kernel with ``parallel=True`` as well: its ``numba.prange``
+  loop is shared among numba's threads. numba's TBB threading layer is the one that is safe both
+  when several threads launch kernels and after ``fork`` (numba's "safe" layer); the ``tbb``
+  package is a dependency, and :func:`threading_layer_available` makes its library loadable
+  where pip installed it (a virtual environment's ``lib/``, which the loader does not search).
 - ``cache=True``: compiled code is stored next to the sources (or in ``NUMBA_CACHE_DIR``), so
   only the first process on a machine pays the compile time (``benchmarks/speed.py`` reports it).
   numba checks a cached kernel against its own source file only, not against the files of the
@@ -24,6 +28,8 @@ functions that the environments call.
 from __future__ import annotations
 
 import hashlib
+import os
+import types
 from collections.abc import Callable
 from functools import cache
 from pathlib import Path
@@ -31,13 +37,14 @@ from typing import Any, Final, TypeVar, cast
 
 import numba
 
-__all__ = ["KERNEL_OPTIONS", "KERNEL_SOURCES", "gufunc", "inline_kernel", "kernel"]
+__all__ = ["KERNEL_OPTIONS", "KERNEL_SOURCES", "gufunc", "inline_kernel", "kernel", "parallel_kernel",
+           "threading_layer_available"]
 
 KERNEL_OPTIONS: Final[dict[str, Any]] = {"cache": True, "nogil": True, "error_model": "numpy"}
 
 _PACKAGE = Path(__file__).resolve().parents[1]
 KERNEL_SOURCES: Final = ("dynamics/_jit.py", "dynamics/hull.py", "dynamics/model.py", "dynamics/integrate.py",
-                         "dynamics/sincos.py", "envs/transition.py", "envs/handoff.py")
+                         "dynamics/sincos.py", "envs/transition.py")
 """The files the compiled kernels are written in (relative to the package): any edit recompiles them all."""
 _STAMP_PREFIX: Final = "subenv-kernels."
 
@@ -48,6 +55,65 @@ def kernel(fn: FunctionT) -> FunctionT:
     """``numba.njit`` with the package's options, compiled lazily on the first call."""
     _drop_stale_cache(fn)
     return cast(FunctionT, numba.njit(**KERNEL_OPTIONS)(fn))
+
+
+def parallel_kernel(fn: FunctionT) -> FunctionT:
+    """As :func:`kernel`, with ``parallel=True``: its ``numba.prange`` loops run on numba's threads.
+
+    ``fn`` may be compiled by :func:`kernel` as well (one source, a serial and a parallel kernel):
+    the parallel one is compiled from a twin of ``fn`` named ``<name>_parallel``, because numba
+    files a function's cached machine code under its name and signature only, so the two would
+    load each other's code from the cache. Call it only where :func:`threading_layer_available`.
+    """
+    twin = types.FunctionType(fn.__code__, fn.__globals__, f"{fn.__name__}_parallel", fn.__defaults__,
+                              fn.__closure__)
+    twin.__qualname__ = f"{fn.__qualname__}_parallel"
+    twin.__module__, twin.__doc__ = fn.__module__, fn.__doc__
+    _drop_stale_cache(twin)
+    return cast(FunctionT, numba.njit(parallel=True, **KERNEL_OPTIONS)(twin))
+
+
+@cache
+def threading_layer_available() -> bool:
+    """Whether numba's TBB threading layer can run here (loading pip's ``libtbb`` first if needed).
+
+    numba's ``tbbpool`` extension links ``libtbb.so.12`` by name; pip's ``tbb`` wheel puts that
+    library in the environment's ``lib/`` folder, which the dynamic loader does not search
+    (numba/numba#6108). Loading it by its installed path first lets the extension find it.
+    Without it (no ``tbb`` installed, or a platform without its wheels) the vector environment
+    steps on one thread.
+    """
+    try:
+        import numba.np.ufunc.tbbpool  # noqa: F401
+    except ImportError:
+        if not _load_pip_tbb():
+            return False
+        try:
+            import numba.np.ufunc.tbbpool  # noqa: F401
+        except ImportError:
+            return False
+    if os.environ.get("NUMBA_THREADING_LAYER", "default") not in ("default", "safe", "tbb"):
+        return False  # the user chose another layer for the process
+    return True
+
+
+def _load_pip_tbb() -> bool:
+    import ctypes
+    from importlib import metadata
+
+    try:
+        files = metadata.distribution("tbb").files or []
+    except metadata.PackageNotFoundError:
+        return False
+    names = ("libtbb.so.12", "libtbb.12.dylib")
+    for file in files:
+        if file.name in names:
+            try:
+                ctypes.CDLL(str(file.locate()), mode=ctypes.RTLD_GLOBAL)
+            except OSError:
+                return False
+            return True
+    return False
 
 
 def inline_kernel(fn: FunctionT) -> FunctionT:

@@ -93,24 +93,17 @@ def hull_segment(s: float, hull: FloatArray) -> int:
     """The segment i of the hull with x[i] <= s < x[i+1] (0 at or aft of the tail, the last at or
     forward of the nose, 0 for nan): ``clip(searchsorted(x, s, side="right") - 1, 0, n_seg - 1)``.
 
-    It equals the number of inner stations x[1] .. x[n_seg - 1] at or aft of ``s``, which is how the
-    integrator over a block of states finds it (:func:`subenv.dynamics.integrate.control_period_lanes`).
+    Found as the number of inner stations x[1] .. x[n_seg - 1] at or aft of ``s``: a branch-free
+    count, one vector loop over the stations, whose cost does not depend on where ``s`` lies (a
+    binary search's branches went wrong often enough, with states spread over the hull, to cost
+    the environments' step a third more). The one search over the stations: the right-hand side
+    (:func:`crossflow_point`) and the block integrator
+    (:func:`subenv.dynamics.integrate.control_period_lanes`) both call it.
     """
-    n_seg = hull.shape[1] - 1
-    # Most roots of w - x q lie off the hull (|w / q| beyond its ends), where the segment is an end
-    # one: no search.
-    if s <= hull[0, 0]:
-        return 0
-    if s >= hull[0, n_seg]:
-        return n_seg - 1
-    a, b = 1, n_seg
-    while a < b:
-        mid = (a + b) >> 1
-        if hull[0, mid] <= s:
-            a = mid + 1
-        else:
-            b = mid
-    return a - 1
+    count = 0
+    for k in range(1, hull.shape[1] - 1):
+        count += 1 if hull[0, k] <= s else 0
+    return count
 
 
 @inline_kernel

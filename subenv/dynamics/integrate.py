@@ -5,14 +5,14 @@ hold) and integrate that step with ``substeps`` classical RK4 steps. The step wa
 accuracy tests in ``tests/dynamics/test_integrator.py``, which compare against
 ``scipy.integrate.solve_ivp`` at rtol 1e-10 over 600 s trajectories.
 
-:func:`rk4` integrates any batched right-hand side ``f(t, x)``. :func:`control_period_point` is the
-same scheme, compiled, for one state of :func:`subenv.dynamics.rhs_point` over one control
-period: the environments call it. It performs the same floating-point operations in the same
-order, so it reproduces ``rk4`` over :func:`subenv.dynamics.derivatives` bit for bit
-(``tests/envs/test_env_api.py::test_step_is_one_rk4_call_of_the_shared_dynamics``).
-:func:`control_period_lanes` is it again for a block of up to :data:`LANES` states, one per
-column, so that the compiler turns each stage into SIMD code over the block; it gives the same
-bits as ``control_period_point`` state by state (``tests/dynamics/test_integrator.py``).
+:func:`rk4` integrates any batched right-hand side ``f(t, x)``: with
+:func:`subenv.dynamics.derivatives` it is the NumPy reference. :func:`control_period_lanes` is the
+same scheme, compiled, over one control period of :func:`subenv.dynamics.rhs_point` for a block of
+up to :data:`LANES` states, one per column, so that the compiler turns each stage into SIMD code
+over the block; the environments integrate every step with it, one sub-environment or many. It
+performs the same floating-point operations in the same order as ``rk4`` over ``derivatives``, so
+each state gets the same bits as the reference, whatever the block holds beside it
+(``tests/dynamics/test_integrator.py``, ``tests/envs/test_env_api.py``).
 """
 
 from __future__ import annotations
@@ -22,8 +22,8 @@ from typing import Final
 
 from subenv._typing import FloatArray
 from subenv.dynamics._jit import inline_kernel
-from subenv.dynamics.hull import crossflow_from_moments, crossflow_root, moments_on_segment
-from subenv.dynamics.model import PARAM_FIELDS, rhs_given_drag, rhs_point
+from subenv.dynamics.hull import crossflow_from_moments, crossflow_root, hull_segment, moments_on_segment
+from subenv.dynamics.model import PARAM_FIELDS, rhs_given_drag
 
 __all__ = [
     "CONTROL_PERIOD_S",
@@ -31,7 +31,6 @@ __all__ = [
     "LANE_ROWS",
     "SUBSTEPS",
     "control_period_lanes",
-    "control_period_point",
     "rk4",
     "rk4_step",
     "set_lane",
@@ -65,65 +64,11 @@ def rk4(f: Rhs, t: float, x: FloatArray, dt: float, substeps: int) -> FloatArray
     return x
 
 
-@inline_kernel
-def control_period_point(
-    theta: float,
-    w: float,
-    q: float,
-    depth: float,
-    t0: float,
-    dt: float,
-    substeps: int,
-    speed0: float,
-    speed_slope: float,
-    stern: float,
-    bow: float,
-    force: float,
-    prm: FloatArray,
-    hull: FloatArray,
-) -> tuple[float, float, float, float]:
-    """:func:`rk4` of :func:`~subenv.dynamics.rhs_point` from ``t0`` over ``dt``, for one state.
-
-    The planes and the heave ``force`` are held; the speed is ``speed0 + speed_slope (t - t0)``
-    (a linear ramp, constant when ``speed_slope`` is 0). ``prm`` and ``hull`` as for ``rhs_point``.
-    """
-    h = dt / substeps
-    half = 0.5 * h
-    sixth = h / 6.0
-    x0, x1, x2, x3 = theta, w, q, depth
-    for i in range(substeps):
-        t = t0 + i * h
-        # rk4_step, term by term: k1..k4 at (t, x), (t + h/2, x + h/2 k1), (t + h/2, x + h/2 k2),
-        # (t + h, x + h k3). (One stage loop, so that the right-hand side is compiled once.)
-        s0, s1, s2 = x0, x1, x2
-        u = speed0 + speed_slope * (t - t0)
-        a0 = a1 = a2 = a3 = b0 = b1 = b2 = b3 = c0 = c1 = c2 = c3 = 0.0
-        for stage in range(4):
-            k0, k1, k2, k3 = rhs_point(s0, s1, s2, u, stern, bow, force, 0.0, prm, hull)
-            if stage == 0:
-                a0, a1, a2, a3 = k0, k1, k2, k3
-                s0, s1, s2 = x0 + half * k0, x1 + half * k1, x2 + half * k2
-                u = speed0 + speed_slope * (t + 0.5 * h - t0)
-            elif stage == 1:
-                b0, b1, b2, b3 = k0, k1, k2, k3
-                s0, s1, s2 = x0 + half * k0, x1 + half * k1, x2 + half * k2
-            elif stage == 2:
-                c0, c1, c2, c3 = k0, k1, k2, k3
-                s0, s1, s2 = x0 + h * k0, x1 + h * k1, x2 + h * k2
-                u = speed0 + speed_slope * (t + h - t0)
-            else:
-                x0 = x0 + sixth * (a0 + 2.0 * (b0 + c0) + k0)
-                x1 = x1 + sixth * (a1 + 2.0 * (b1 + c1) + k1)
-                x2 = x2 + sixth * (a2 + 2.0 * (b2 + c2) + k2)
-                x3 = x3 + sixth * (a3 + 2.0 * (b3 + c3) + k3)
-    return x0, x1, x2, x3
-
-
 LANES: Final = 64
 """Columns of a block of :func:`control_period_lanes` (its states are integrated together)."""
 # Rows of a block, each LANES wide. The caller fills the inputs of columns 0 .. n-1:
 LANE_PITCH, LANE_HEAVE, LANE_PITCH_RATE, LANE_DEPTH = 0, 1, 2, 3  # the state: in, and out after the period
-LANE_T0, LANE_SPEED0, LANE_SPEED_SLOPE = 4, 5, 6  # as for control_period_point
+LANE_T0, LANE_SPEED0, LANE_SPEED_SLOPE = 4, 5, 6  # the period starts at t0; u = speed0 + slope (t - t0)
 LANE_STERN, LANE_BOW, LANE_FORCE = 7, 8, 9
 LANE_PARAMS: Final = 10  # the PARAM_FIELDS, one row each
 # ... and the integrator's working rows:
@@ -141,7 +86,10 @@ LANE_ROWS: Final = _SLOPES + 16
 @inline_kernel
 def set_lane(block: FloatArray, j: int, theta: float, w: float, q: float, depth: float, t0: float, speed0: float,
              speed_slope: float, stern: float, bow: float, force: float, prm: FloatArray) -> None:
-    """Put one state's inputs of :func:`control_period_point` into column ``j`` of a block."""
+    """Put one state's inputs of :func:`control_period_lanes` into column ``j`` of a block: the state
+    (theta, w, q, depth), the period's start ``t0`` [s] and speed ``speed0 + speed_slope (t - t0)``
+    [m/s], the planes and heave ``force`` held over the period, and the packed model parameters
+    ``prm`` (:func:`subenv.dynamics.pack_params`)."""
     L = LANES
     block[LANE_PITCH * L + j] = theta
     block[LANE_HEAVE * L + j] = w
@@ -164,19 +112,16 @@ def _rhs_lanes(block: FloatArray, n: int, hull: FloatArray) -> None:
 
     Each step is a loop over the columns with the same operations in every column, and every
     access is block[row * LANES + column] with a constant row: the compiler can tell the rows
-    apart and vectorize. Only the hull's columns are looked up by segment (a gather).
+    apart and vectorize. The root's hull segment is :func:`~subenv.dynamics.hull.hull_segment`'s,
+    column by column (most roots lie off the hull, where it answers without a search), and the
+    segment's coefficients are gathered from the hull table.
     """
     L = LANES
     theta, w, q = _STAGE * L, (_STAGE + 1) * L, (_STAGE + 2) * L
-    n_seg = hull.shape[1] - 1
     for j in range(n):
-        block[_ROOT * L + j] = crossflow_root(block[w + j], block[q + j], hull)
-        block[_SEGMENT * L + j] = 0.0
-    # hull_segment as a count of the inner stations at or aft of the root (the same segment).
-    for k in range(1, n_seg):
-        station = hull[0, k]
-        for j in range(n):
-            block[_SEGMENT * L + j] += 1.0 if station <= block[_ROOT * L + j] else 0.0
+        root = crossflow_root(block[w + j], block[q + j], hull)
+        block[_ROOT * L + j] = root
+        block[_SEGMENT * L + j] = hull_segment(root, hull)
     for j in range(n):
         i = int(block[_SEGMENT * L + j])
         for r in range(6):
@@ -199,19 +144,21 @@ def _rhs_lanes(block: FloatArray, n: int, hull: FloatArray) -> None:
 
 @inline_kernel
 def control_period_lanes(block: FloatArray, n: int, dt: float, substeps: int, hull: FloatArray) -> None:
-    """:func:`control_period_point` for columns 0 .. n-1 (n <= :data:`LANES`) of ``block``, in place.
+    """:func:`rk4` of :func:`~subenv.dynamics.rhs_point` over one control period ``dt`` with ``substeps``
+    steps, for columns 0 .. n-1 (n <= :data:`LANES`) of ``block``, in place.
 
-    ``block`` holds the inputs of each column in the ``LANE_*`` rows (see :data:`LANE_ROWS`); the
-    period ``dt`` and ``substeps`` are shared. Afterwards rows ``LANE_PITCH`` .. ``LANE_DEPTH``
-    hold the states at the end of the period, the same bits as ``control_period_point`` gives.
+    ``block`` holds the inputs of each column in the ``LANE_*`` rows (:func:`set_lane`); the planes
+    and the heave force are held, the speed follows each column's ramp. Afterwards rows
+    ``LANE_PITCH`` .. ``LANE_DEPTH`` hold the states at the end of the period: for each column the
+    bits of ``rk4`` over :func:`~subenv.dynamics.derivatives`.
     """
     L = LANES
     h = dt / substeps
     half = 0.5 * h
     sixth = h / 6.0
     for i in range(substeps):
-        # rk4_step, term by term, with control_period_point's times and speeds. (One stage loop, so
-        # that the right-hand side is compiled once.)
+        # rk4_step, term by term: k1..k4 at (t, x), (t + h/2, x + h/2 k1), (t + h/2, x + h/2 k2),
+        # (t + h, x + h k3). (One stage loop, so that the right-hand side is compiled once.)
         for stage in range(4):
             step = 0.0 if stage == 0 else (half if stage < 3 else h)  # the stage's state is x + step k
             offset = 0.0 if stage == 0 else (0.5 * h if stage < 3 else h)  # and its time t + offset

@@ -244,7 +244,7 @@ def derivatives(
         Forward speed u [m/s].
     stern, bow : array_like
         Applied stern and bow plane angles [rad], already within the plane limits: nothing here
-        clips them (the environments do, in :func:`subenv.envs.transition.set_planes`).
+        clips them (the environments do, in :func:`subenv.envs.transition.plane_angles`).
     params : ModelParams
         From :func:`model_params` (or :func:`stack_params` for a batch).
     force, moment : array_like, optional

@@ -179,6 +179,21 @@ class Frame:
     depths_m: tuple[float, ...] = ()
     commands_m: tuple[float, ...] = ()
 
+    @classmethod
+    def of(cls, vehicle: Any, state: Any, episode: Any,
+           history: Sequence[tuple[float, float, float]] = ()) -> Frame:
+        """The frame of a sub-environment: its vehicle, its records
+        (:data:`~subenv.envs.transition.STATE_DTYPE`, :data:`~subenv.envs.transition.EPISODE_DTYPE`)
+        and its (time, depth, ordered depth) history."""
+        times, depths, commands = zip(*history) if history else ((), (), ())
+        return cls(
+            hull_x_m=vehicle.hull.x_m, hull_breadth_m=vehicle.hull.breadth_m, length_m=vehicle.length_m,
+            pitch_rad=state["pitch_rad"], depth_m=state["depth_m"], depth_command_m=episode["depth_command_m"],
+            stern_plane_rad=state["stern_plane_rad"], bow_plane_rad=state["bow_plane_rad"],
+            speed_mps=state["speed_mps"], critical_speed_mps=episode["critical_speed_mps"], time_s=state["time_s"],
+            times_s=times, depths_m=depths, commands_m=commands,
+        )
+
     def __post_init__(self) -> None:
         sequences = ("hull_x_m", "hull_breadth_m", "times_s", "depths_m", "commands_m")
         for f in fields(self):

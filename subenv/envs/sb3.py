@@ -115,8 +115,8 @@ class SB3VecEnv(VecEnv):
         self.venv.close()
 
     def get_attr(self, attr_name: str, indices: VecEnvIndices = None) -> list[Any]:
-        """An attribute of the vector env (or of its ``single_env``), the same for every index."""
-        target = self.venv if hasattr(self.venv, attr_name) else getattr(self.venv, "single_env", None)
+        """An attribute of the vector env (or of its ``config``), the same for every index."""
+        target = self.venv if hasattr(self.venv, attr_name) else getattr(self.venv, "config", None)
         if target is None or not hasattr(target, attr_name):
             raise AttributeError(f"{type(self.venv).__name__} has no attribute {attr_name!r}")
         value = getattr(target, attr_name)

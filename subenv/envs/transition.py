@@ -1,18 +1,32 @@
-"""The dive-plane environment's transition, compiled, for one sub-environment or a batch of them.
+"""The dive-plane environment's transition, compiled, over named records of state.
 
 Both :class:`~subenv.envs.DivePlaneEnv` and :class:`~subenv.envs.DivePlaneVectorEnv` step through
-:func:`step_batch` (Gymnasium's functional-env split: a pure transition over arrays, thin ``Env``
-classes around it; the single env is a batch of one). It applies the action to the planes
-(:func:`set_planes`), integrates one control period over the shared right-hand side
-:func:`subenv.dynamics.rhs_point` (:func:`~subenv.dynamics.integrate.control_period_lanes` for
-blocks of sub-environments, :func:`~subenv.dynamics.integrate.control_period_point` for a few),
-and then (:func:`finish_step`) advances the disturbance, classifies the episode end, computes the
-reward terms and the observation (with sensor noise drawn from the sub-environment's own
-``numpy.random.Generator``, in the order the single environment always drew it).
+:func:`step` (Gymnasium's functional-env split, as in ``gymnasium/experimental/functional.py``: a
+transition over arrays, thin ``Env`` classes around it; the single env is a batch of one).
 
-Each sub-environment is one row of a float64 array (columns below); the environment's constants
-are one float64 array (``C_*`` indices). Resets stay in Python (they draw a scenario); the vector
-environment draws their random numbers here (:func:`draw_reset_numbers`).
+What a sub-environment is made of, each a NumPy structured dtype whose fields numba reads by name:
+
+- :data:`STATE_DTYPE`, what a step changes: the vehicle's state, the applied planes, the time, the
+  disturbance, the speed;
+- :data:`EPISODE_DTYPE`, what a reset draws and a step only reads: the model parameters of the
+  episode's loading, the speed profile, the ordered depth, noise, duration, critical speed;
+- :data:`CONFIG_DTYPE`, one record the environment's configuration fixes
+  (:meth:`subenv.envs.config.DivePlaneConfig.constants`);
+- the step's report, one row per :data:`REPORT_KEYS` and one column per sub-environment: the
+  ``info`` values, the reward and the episode's end, computed here and only here
+  (:mod:`subenv.envs.info` hands them out).
+
+The physics is pure functions of scalars that return values: the planes (:func:`plane_angles`),
+the speed profile (:func:`speed_at`), the episode end (:func:`episode_end`), the reward
+(:func:`reward_terms`), the observation (:func:`observation`), and one control period of the
+shared right-hand side, integrated by :func:`subenv.dynamics.integrate.control_period_lanes` for a
+block of up to :data:`~subenv.dynamics.integrate.LANES` sub-environments (one SIMD-compiled path
+for any number of them). :func:`step` only reads the records, calls them and writes the results.
+
+Random numbers come from each sub-environment's own ``numpy.random.Generator`` (numba runs NumPy's
+algorithms over the generator's own bit generator), in one order per step: the disturbance's
+normal draw, then the eight observation-noise draws. So a sub-environment's numbers depend only on
+its own seed, never on the number of sub-environments, the blocks or the threads.
 """
 
 from __future__ import annotations
@@ -24,120 +38,127 @@ import numba
 import numpy as np
 
 from subenv._typing import FloatArray
-from subenv.dynamics._jit import inline_kernel, kernel
-from subenv.dynamics.integrate import (
-    LANE_PITCH,
-    LANE_ROWS,
-    LANES,
-    control_period_lanes,
-    control_period_point,
-    set_lane,
-)
+from subenv.dynamics._jit import inline_kernel, kernel, parallel_kernel, threading_layer_available
+from subenv.dynamics.integrate import LANE_PITCH, LANE_ROWS, LANES, control_period_lanes, set_lane
 from subenv.dynamics.model import PARAM_FIELDS
 
 __all__ = [
-    "N_COLUMNS",
-    "N_CONFIG",
-    "N_REPORT",
+    "CONFIG_DTYPE",
+    "EPISODE_DTYPE",
+    "MAX_KNOTS",
+    "N_OBS",
     "REASONS",
     "REPORT_KEYS",
+    "STATE_DTYPE",
     "draw_reset_numbers",
-    "finish_step",
-    "first_non_finite",
-    "observe_batch",
-    "observe_env",
-    "set_planes",
-    "speed_at_point",
-    "step_batch",
+    "episode_end",
+    "observation",
+    "observe",
+    "plane_angles",
+    "reward_terms",
+    "speed_at",
+    "step",
+    "step_parallel",
+    "threading_layer_available",
 ]
 
-# --- columns of a sub-environment's row ------------------------------------------------------
-PITCH, HEAVE, PITCH_RATE, DEPTH = 0, 1, 2, 3  # the state (theta, w, q, Z) [rad, m/s, rad/s, m]
-PARAMS: Final = 4  # ModelParams in PARAM_FIELDS order (pack_params)
-N_PARAMS: Final = len(PARAM_FIELDS)
-STERN: Final = PARAMS + N_PARAMS  # applied plane angles [rad]
-BOW: Final = STERN + 1
-TIME: Final = BOW + 1  # [s] since reset
 MAX_KNOTS: Final = 4
-N_KNOTS: Final = TIME + 1  # speed profile: piecewise linear through (t, u) knots, held after the last
-KNOT_T: Final = N_KNOTS + 1
-KNOT_U: Final = KNOT_T + MAX_KNOTS
-COMMAND: Final = KNOT_U + MAX_KNOTS  # ordered depth [m]
-DISTURBANCE: Final = COMMAND + 1  # heave force [N]
-DISTURBANCE_STD: Final = DISTURBANCE + 1  # [N]; 0: none
-NOISE: Final = DISTURBANCE_STD + 1  # 1.0: sensor noise on
-DURATION: Final = NOISE + 1  # [s]
-CRITICAL_SPEED: Final = DURATION + 1  # [m/s] (nan: none)
-SQRT_G_ZGB: Final = CRITICAL_SPEED + 1  # sqrt(g z_GB) [m/s], the Froude number's scale (nan: z_GB <= 0)
-SPEED: Final = SQRT_G_ZGB + 1  # speed at TIME [m/s]
-ELAPSED: Final = SPEED + 1  # steps since reset
-REWARD_DEPTH: Final = ELAPSED + 1  # the reward terms of the last step
-REWARD_PITCH: Final = REWARD_DEPTH + 1
-REWARD_EFFORT: Final = REWARD_PITCH + 1
-REWARD_TERMINATION: Final = REWARD_EFFORT + 1
-REWARD: Final = REWARD_TERMINATION + 1
-REASON: Final = REWARD + 1  # index into REASONS
-TERMINATED: Final = REASON + 1  # 1.0 / 0.0
-TRUNCATED: Final = TERMINATED + 1
-N_COLUMNS: Final = TRUNCATED + 1
+"""Knots of an episode's speed profile, at most (a constant speed is one, a ramp three)."""
+N_OBS: Final = 8
+"""Observation components (:data:`subenv.envs.config.OBSERVATION_NAMES`)."""
+
+STATE_DTYPE: Final = np.dtype([
+    ("pitch_rad", np.float64),         # theta, nose-up positive
+    ("heave_mps", np.float64),         # w, body axes, down positive
+    ("pitch_rate_radps", np.float64),  # q
+    ("depth_m", np.float64),           # Z, of midship, down positive
+    ("stern_plane_rad", np.float64),   # applied (after saturation and rate limit)
+    ("bow_plane_rad", np.float64),
+    ("time_s", np.float64),            # since the reset
+    ("steps", np.int64),               # since the reset
+    ("disturbance_N", np.float64),     # heave force, held over a control period
+    ("speed_mps", np.float64),         # of the profile at time_s
+])
+"""What a step changes, per sub-environment."""
+
+EPISODE_DTYPE: Final = np.dtype([
+    ("params", np.float64, (len(PARAM_FIELDS),)),  # ModelParams of the loading, PARAM_FIELDS order
+    ("n_knots", np.int64),
+    ("knot_time_s", np.float64, (MAX_KNOTS,)),     # speed profile: piecewise linear through the
+    ("knot_speed_mps", np.float64, (MAX_KNOTS,)),  # knots, held after the last
+    ("depth_command_m", np.float64),
+    ("disturbance_std_N", np.float64),             # 0: no disturbance
+    ("sensor_noise", np.bool_),
+    ("duration_s", np.float64),
+    ("critical_speed_mps", np.float64),            # nan: none (z_GB <= 0)
+    ("froude_scale_mps", np.float64),              # sqrt(g z_GB), nan for z_GB <= 0
+])
+"""What a reset draws, per sub-environment (read-only during the episode)."""
+
+CONFIG_DTYPE: Final = np.dtype([
+    ("dt_s", np.float64),
+    ("substeps", np.int64),
+    ("dual", np.bool_),                   # one command, bow planes slaved (eq. 2.58)
+    ("alpha", np.float64),
+    ("plane_limit_rad", np.float64),
+    ("rate_limited", np.bool_),
+    ("max_move_rad", np.float64),         # per control period, with rate_limited
+    ("max_pitch_rad", np.float64),
+    ("max_depth_error_m", np.float64),
+    ("broach_depth_m", np.float64),
+    ("depth_scale_m", np.float64),
+    ("pitch_weight", np.float64),
+    ("effort_weight", np.float64),
+    ("termination_penalty", np.float64),
+    ("disturbance_decay", np.float64),    # Gauss-Markov: d' = decay d + gain N(0, std)
+    ("disturbance_gain", np.float64),
+    ("max_steps", np.float64),            # a TimeLimit (inf: none)
+    ("max_heave_mps", np.float64),        # beyond these the state has diverged
+    ("max_pitch_rate_radps", np.float64),
+    ("obs_low", np.float64, (N_OBS,)),
+    ("obs_high", np.float64, (N_OBS,)),
+    ("noise_std", np.float64, (N_OBS,)),
+])
+"""The environment's constants (one record)."""
 
 REASONS: Final = ("", "diverged", "pitch_limit", "broached", "left_depth_band")
-"""``info["termination_reason"]`` for each value of the ``REASON`` column."""
+"""``info["termination_reason"]`` for each reason code of the report."""
 _DIVERGED, _PITCH_LIMIT, _BROACHED, _LEFT_DEPTH_BAND = 1, 2, 3, 4
 
-# --- rows of a step's report, one column per sub-environment: the single env's info
-# (subenv.envs.dive_plane._info), key by key, then the step's outcome. The vector env hands each
-# row out as an array over the sub-environments.
 REPORT_KEYS: Final = ("time_s", "depth_m", "depth_command_m", "depth_error_m", "pitch_rad", "heave_mps",
                       "pitch_rate_radps", "stern_plane_rad", "bow_plane_rad", "speed_mps", "froude_number",
                       "critical_speed_mps", "critical_froude", "disturbance_N", "reward_depth", "reward_pitch",
                       "reward_effort", "reward_termination", "reason", "reward", "terminated", "truncated")
-(R_TIME, R_DEPTH, R_COMMAND, R_DEPTH_ERROR, R_PITCH, R_HEAVE, R_PITCH_RATE, R_STERN, R_BOW, R_SPEED, R_FROUDE,
- R_CRITICAL_SPEED, R_CRITICAL_FROUDE, R_DISTURBANCE, R_REWARD_DEPTH, R_REWARD_PITCH, R_REWARD_EFFORT,
- R_REWARD_TERMINATION, R_REASON, R_REWARD, R_TERMINATED, R_TRUNCATED) = range(len(REPORT_KEYS))
-N_REPORT: Final = len(REPORT_KEYS)
-
-# --- the environment's constants ---------------------------------------------------------------
-C_DT, C_SUBSTEPS, C_DUAL, C_ALPHA, C_PLANE_LIMIT, C_RATE_LIMITED, C_MAX_MOVE = 0, 1, 2, 3, 4, 5, 6
-C_MAX_PITCH, C_MAX_DEPTH_ERROR, C_BROACH_DEPTH, C_DEPTH_SCALE = 7, 8, 9, 10
-C_PITCH_WEIGHT, C_EFFORT_WEIGHT, C_TERMINATION_PENALTY = 11, 12, 13
-C_DISTURBANCE_DECAY, C_DISTURBANCE_GAIN, C_MAX_STEPS, C_MAX_HEAVE, C_MAX_PITCH_RATE = 14, 15, 16, 17, 18
-N_OBS: Final = 8
-C_OBS_LOW: Final = 19
-C_OBS_HIGH: Final = C_OBS_LOW + N_OBS
-C_NOISE_STD: Final = C_OBS_HIGH + N_OBS
-N_CONFIG: Final = C_NOISE_STD + N_OBS
-
-_LANES_FROM: Final = 8
-"""step_batch of fewer rows integrates them one at a time (the block integrator's loops cost more than
-they save on a few states; the same bits either way)."""
+"""The rows of a step's report: the ``info`` keys (``reason`` is ``termination_reason``'s code),
+then the step's reward and end."""
+(_TIME, _DEPTH, _COMMAND, _DEPTH_ERROR, _PITCH, _HEAVE, _PITCH_RATE, _STERN, _BOW, _SPEED, _FROUDE,
+ _CRITICAL_SPEED, _CRITICAL_FROUDE, _DISTURBANCE, _REWARD_DEPTH, _REWARD_PITCH, _REWARD_EFFORT,
+ _REWARD_TERMINATION, _REASON, _REWARD, _TERMINATED, _TRUNCATED) = range(len(REPORT_KEYS))
+_N_REPORT: Final = len(REPORT_KEYS)
 
 
-def episode_time_limit(max_episode_steps: int | None) -> float:
-    """The ``C_MAX_STEPS`` constant: a TimeLimit after that many steps (inf: none)."""
-    return math.inf if max_episode_steps is None else float(max_episode_steps)
-
-
+# --- the physics of a step, pure functions of scalars --------------------------------------------
 @inline_kernel
-def speed_at_point(t: float, row: FloatArray) -> float:
-    """Speed [m/s] of the row's profile at time ``t`` [s]: ``numpy.interp`` over its knots."""
-    n = int(row[N_KNOTS])
+def speed_at(t: float, n_knots: int, knot_time_s: FloatArray, knot_speed_mps: FloatArray) -> float:
+    """Speed [m/s] of a profile at time ``t`` [s]: ``numpy.interp`` over its first ``n_knots`` knots."""
+    n = n_knots
+    xs, ys = knot_time_s, knot_speed_mps
     if n == 1:
-        return row[KNOT_U]
+        return ys[0]
     # numpy.interp (numpy/_core/src/multiarray/compiled_base.c, arr_interp), operation for operation.
     if math.isnan(t):
         return t
-    if t < row[KNOT_T]:
-        return row[KNOT_U]
-    if t > row[KNOT_T + n - 1]:
-        return row[KNOT_U + n - 1]
+    if t < xs[0]:
+        return ys[0]
+    if t > xs[n - 1]:
+        return ys[n - 1]
     j = 1
-    while j < n and t >= row[KNOT_T + j]:
+    while j < n and t >= xs[j]:
         j += 1
     j -= 1
-    if j == n - 1 or row[KNOT_T + j] == t:
-        return row[KNOT_U + j]
-    x0, x1, y0, y1 = row[KNOT_T + j], row[KNOT_T + j + 1], row[KNOT_U + j], row[KNOT_U + j + 1]
+    if j == n - 1 or xs[j] == t:
+        return ys[j]
+    x0, x1, y0, y1 = xs[j], xs[j + 1], ys[j], ys[j + 1]
     slope = (y1 - y0) / (x1 - x0)
     u = slope * (t - x0) + y0
     if math.isnan(u):
@@ -148,142 +169,124 @@ def speed_at_point(t: float, row: FloatArray) -> float:
 
 
 @inline_kernel
-def observe_env(row: FloatArray, obs: np.ndarray, rngs: numba.typed.List, i: int, cfg: FloatArray) -> None:
-    """Write the observation of the row's current state into ``obs`` (float32, 8), drawing its noise
-    from the sub-environment's generator ``rngs[i]``."""
-    speed = speed_at_point(row[TIME], row)
-    row[SPEED] = speed
-    depth = row[DEPTH]
-    v0 = depth - row[COMMAND]
-    v1, v2, v3 = row[PITCH], row[HEAVE], row[PITCH_RATE]
-    v4, v5, v6, v7 = speed, row[STERN], row[BOW], depth
-    if row[NOISE] > 0.0:
+def plane_angles(stern_rad: float, bow_rad: float, action0: float, action1: float,
+                 cfg: np.void) -> tuple[float, float, float]:
+    """The applied (stern, bow) angles [rad] after an action (finite; clipped to [-1, 1]; ``action1``
+    only with independent control) from the angles before, and the effort term's mean squared command."""
+    limit = cfg.plane_limit_rad
+    a0 = min(max(action0, -1.0), 1.0)
+    stern = a0 * limit
+    if cfg.dual:
+        effort = a0 * a0
+        bow = cfg.alpha * stern  # Riedel (1993) eq. 2.58
+    else:
+        a1 = min(max(action1, -1.0), 1.0)
+        effort = (a0 * a0 + a1 * a1) / 2.0
+        bow = a1 * limit
+    if cfg.rate_limited:
+        move = cfg.max_move_rad
+        stern = stern_rad + min(max(stern - stern_rad, -move), move)
+        bow = bow_rad + min(max(bow - bow_rad, -move), move)
+    return min(max(stern, -limit), limit), min(max(bow, -limit), limit), effort
+
+
+@inline_kernel
+def episode_end(x0: float, x1: float, x2: float, x3: float, depth_command_m: float, cfg: np.void) -> int:
+    """The reason code (:data:`REASONS`) of the state (theta, w, q, Z) at the end of a step: 0 while
+    the episode goes on."""
+    if not (math.isfinite(x0) and math.isfinite(x1) and math.isfinite(x2) and math.isfinite(x3)
+            and abs(x1) <= cfg.max_heave_mps and abs(x2) <= cfg.max_pitch_rate_radps):
+        return _DIVERGED
+    if abs(x0) > cfg.max_pitch_rad:
+        return _PITCH_LIMIT
+    if x3 < cfg.broach_depth_m:
+        return _BROACHED
+    if abs(x3 - depth_command_m) > cfg.max_depth_error_m:
+        return _LEFT_DEPTH_BAND
+    return 0
+
+
+@inline_kernel
+def reward_terms(pitch_rad: float, depth_error_m: float, effort: float, terminated: bool,
+                 cfg: np.void) -> tuple[float, float, float, float]:
+    """(depth, pitch, effort, termination) terms of the reward (``DivePlaneEnv``'s Rewards section)."""
+    ratio = pitch_rad / cfg.max_pitch_rad
+    # 1 - tanh(x) as 2 / (1 + e^(2x)), the same number: libm's exp costs a third of its tanh, and the
+    # small rewards far off depth keep their relative precision.
+    r_depth = 2.0 / (1.0 + math.exp(2.0 * abs(depth_error_m) / cfg.depth_scale_m))
+    r_pitch = -cfg.pitch_weight * (ratio * ratio)
+    r_effort = -cfg.effort_weight * effort
+    r_termination = -cfg.termination_penalty if terminated else 0.0
+    return r_depth, r_pitch, r_effort, r_termination
+
+
+@inline_kernel
+def observation(s: np.void, e: np.void, rngs: numba.typed.List, i: int, cfg: np.void, obs: np.ndarray) -> None:
+    """Write the observation of state ``s`` in episode ``e`` into row ``i`` of ``obs`` (float32,
+    :data:`N_OBS` columns), drawing its noise from generator ``rngs[i]`` when the episode has sensor
+    noise."""
+    depth = s.depth_m
+    v0 = depth - e.depth_command_m
+    v1, v2, v3 = s.pitch_rad, s.heave_mps, s.pitch_rate_radps
+    v4, v5, v6, v7 = s.speed_mps, s.stern_plane_rad, s.bow_plane_rad, depth
+    if e.sensor_noise:
         # rng.normal(0, 1, size=8) * std, one depth sensor for components 0 and 7.
-        rng = rngs[i]
-        n0 = rng.normal(0.0, 1.0) * cfg[C_NOISE_STD]
-        n1 = rng.normal(0.0, 1.0) * cfg[C_NOISE_STD + 1]
-        n2 = rng.normal(0.0, 1.0) * cfg[C_NOISE_STD + 2]
-        n3 = rng.normal(0.0, 1.0) * cfg[C_NOISE_STD + 3]
-        n4 = rng.normal(0.0, 1.0) * cfg[C_NOISE_STD + 4]
-        n5 = rng.normal(0.0, 1.0) * cfg[C_NOISE_STD + 5]
-        n6 = rng.normal(0.0, 1.0) * cfg[C_NOISE_STD + 6]
-        n7 = rng.normal(0.0, 1.0) * cfg[C_NOISE_STD + 7]
+        rng = rngs[i]  # (taken only here: a typed list's item costs a reference count)
+        std = cfg.noise_std
+        n0 = rng.normal(0.0, 1.0) * std[0]
+        n1 = rng.normal(0.0, 1.0) * std[1]
+        n2 = rng.normal(0.0, 1.0) * std[2]
+        n3 = rng.normal(0.0, 1.0) * std[3]
+        n4 = rng.normal(0.0, 1.0) * std[4]
+        n5 = rng.normal(0.0, 1.0) * std[5]
+        n6 = rng.normal(0.0, 1.0) * std[6]
+        n7 = rng.normal(0.0, 1.0) * std[7]
         n0 = n7
         v0, v1, v2, v3 = v0 + n0, v1 + n1, v2 + n2, v3 + n3
         v4, v5, v6, v7 = v4 + n4, v5 + n5, v6 + n6, v7 + n7
     # Only a terminal state (or noise at zero speed) can reach the bounds.
-    lo, hi = C_OBS_LOW, C_OBS_HIGH
-    obs[0] = min(max(v0, cfg[lo]), cfg[hi])
-    obs[1] = min(max(v1, cfg[lo + 1]), cfg[hi + 1])
-    obs[2] = min(max(v2, cfg[lo + 2]), cfg[hi + 2])
-    obs[3] = min(max(v3, cfg[lo + 3]), cfg[hi + 3])
-    obs[4] = min(max(v4, cfg[lo + 4]), cfg[hi + 4])
-    obs[5] = min(max(v5, cfg[lo + 5]), cfg[hi + 5])
-    obs[6] = min(max(v6, cfg[lo + 6]), cfg[hi + 6])
-    obs[7] = min(max(v7, cfg[lo + 7]), cfg[hi + 7])
+    lo, hi = cfg.obs_low, cfg.obs_high
+    obs[i, 0] = min(max(v0, lo[0]), hi[0])
+    obs[i, 1] = min(max(v1, lo[1]), hi[1])
+    obs[i, 2] = min(max(v2, lo[2]), hi[2])
+    obs[i, 3] = min(max(v3, lo[3]), hi[3])
+    obs[i, 4] = min(max(v4, lo[4]), hi[4])
+    obs[i, 5] = min(max(v5, lo[5]), hi[5])
+    obs[i, 6] = min(max(v6, lo[6]), hi[6])
+    obs[i, 7] = min(max(v7, lo[7]), hi[7])
 
 
 @inline_kernel
-def set_planes(row: FloatArray, action: FloatArray, cfg: FloatArray) -> float:
-    """Apply an action (finite: see :func:`step_batch`) to the row's planes; returns the effort term's
-    mean squared command."""
-    limit = cfg[C_PLANE_LIMIT]
-    a0 = min(max(action[0], -1.0), 1.0)
-    stern = a0 * limit
-    if cfg[C_DUAL] > 0.0:
-        effort = a0 * a0
-        bow = cfg[C_ALPHA] * stern  # Riedel (1993) eq. 2.58
-    else:
-        a1 = min(max(action[1], -1.0), 1.0)
-        effort = (a0 * a0 + a1 * a1) / 2.0
-        bow = a1 * limit
-    if cfg[C_RATE_LIMITED] > 0.0:
-        move = cfg[C_MAX_MOVE]
-        stern = row[STERN] + min(max(stern - row[STERN], -move), move)
-        bow = row[BOW] + min(max(bow - row[BOW], -move), move)
-    row[STERN] = min(max(stern, -limit), limit)
-    row[BOW] = min(max(bow, -limit), limit)
-    return effort
+def _report(report: FloatArray, j: int, s: np.void, e: np.void, r_depth: float, r_pitch: float, r_effort: float,
+            r_termination: float, reason: int, terminated: bool, truncated: bool) -> None:
+    """Column ``j`` of a report: the ``info`` of state ``s`` in episode ``e`` and the step's outcome."""
+    depth, command, speed = s.depth_m, e.depth_command_m, s.speed_mps
+    froude_scale, ucr = e.froude_scale_mps, e.critical_speed_mps  # nan when z_GB <= 0 (then no Froude numbers)
+    report[_TIME, j] = s.time_s
+    report[_DEPTH, j] = depth
+    report[_COMMAND, j] = command
+    report[_DEPTH_ERROR, j] = depth - command
+    report[_PITCH, j] = s.pitch_rad
+    report[_HEAVE, j] = s.heave_mps
+    report[_PITCH_RATE, j] = s.pitch_rate_radps
+    report[_STERN, j] = s.stern_plane_rad
+    report[_BOW, j] = s.bow_plane_rad
+    report[_SPEED, j] = speed
+    report[_FROUDE, j] = speed / froude_scale  # Fn = u / sqrt(g z_GB)
+    report[_CRITICAL_SPEED, j] = ucr
+    report[_CRITICAL_FROUDE, j] = ucr / froude_scale
+    report[_DISTURBANCE, j] = s.disturbance_N
+    report[_REWARD_DEPTH, j] = r_depth
+    report[_REWARD_PITCH, j] = r_pitch
+    report[_REWARD_EFFORT, j] = r_effort
+    report[_REWARD_TERMINATION, j] = r_termination
+    report[_REASON, j] = reason
+    report[_REWARD, j] = r_depth + r_pitch + r_effort + r_termination
+    report[_TERMINATED, j] = 1.0 if terminated else 0.0
+    report[_TRUNCATED, j] = 1.0 if truncated else 0.0
 
 
-@inline_kernel
-def finish_step(row: FloatArray, x0: float, x1: float, x2: float, x3: float, speed_end: float, effort: float,
-                obs: np.ndarray, rngs: numba.typed.List, i: int, cfg: FloatArray) -> None:
-    """The rest of sub-environment ``i``'s step, given the state (x0..x3) at the end of the control
-    period and the speed then: disturbance, episode end, reward terms, observation."""
-    row[TIME] = row[TIME] + cfg[C_DT]
-    std = row[DISTURBANCE_STD]
-    if std > 0.0:
-        # First-order Gauss-Markov process with stationary standard deviation std.
-        row[DISTURBANCE] = cfg[C_DISTURBANCE_DECAY] * row[DISTURBANCE] + cfg[C_DISTURBANCE_GAIN] * rngs[i].normal(0.0, std)
-
-    reason = 0
-    if not (math.isfinite(x0) and math.isfinite(x1) and math.isfinite(x2) and math.isfinite(x3)
-            and abs(x1) <= cfg[C_MAX_HEAVE] and abs(x2) <= cfg[C_MAX_PITCH_RATE]):
-        reason = _DIVERGED  # keep the last valid state
-    else:
-        row[PITCH], row[HEAVE], row[PITCH_RATE], row[DEPTH] = x0, x1, x2, x3
-        if abs(x0) > cfg[C_MAX_PITCH]:
-            reason = _PITCH_LIMIT
-        elif x3 < cfg[C_BROACH_DEPTH]:
-            reason = _BROACHED
-        elif abs(x3 - row[COMMAND]) > cfg[C_MAX_DEPTH_ERROR]:
-            reason = _LEFT_DEPTH_BAND
-    terminated = reason != 0
-    truncated = not terminated and row[TIME] >= row[DURATION] - 1e-9
-    row[ELAPSED] += 1.0
-    if row[ELAPSED] >= cfg[C_MAX_STEPS]:
-        truncated = True  # as gymnasium.wrappers.TimeLimit: truncated even on a terminal step
-
-    ratio = row[PITCH] / cfg[C_MAX_PITCH]
-    # 1 - tanh(x) as 2 / (1 + e^(2x)), the same number: libm's exp costs a third of its tanh (about 20 ns
-    # less per step), and the small rewards far off depth keep their relative precision.
-    r_depth = 2.0 / (1.0 + math.exp(2.0 * abs(row[DEPTH] - row[COMMAND]) / cfg[C_DEPTH_SCALE]))
-    r_pitch = -cfg[C_PITCH_WEIGHT] * (ratio * ratio)
-    r_effort = -cfg[C_EFFORT_WEIGHT] * effort
-    r_termination = -cfg[C_TERMINATION_PENALTY] if terminated else 0.0
-    row[REWARD_DEPTH], row[REWARD_PITCH], row[REWARD_EFFORT], row[REWARD_TERMINATION] = (
-        r_depth, r_pitch, r_effort, r_termination)
-    row[REWARD] = r_depth + r_pitch + r_effort + r_termination
-    row[REASON] = reason
-    row[TERMINATED] = 1.0 if terminated else 0.0
-    row[TRUNCATED] = 1.0 if truncated else 0.0
-    if reason == _DIVERGED:
-        row[SPEED] = speed_end  # the observation stays the last valid one
-    else:
-        observe_env(row, obs, rngs, i, cfg)
-
-
-@inline_kernel
-def report_env(row: FloatArray, report: FloatArray, j: int) -> None:
-    """Write column ``j`` of ``report`` (rows ``R_*``) from a transition row, as the single env's info
-    computes it."""
-    depth, command, speed = row[DEPTH], row[COMMAND], row[SPEED]
-    froude_scale, ucr = row[SQRT_G_ZGB], row[CRITICAL_SPEED]  # nan when z_GB <= 0 (then no Froude numbers)
-    report[R_TIME, j] = row[TIME]
-    report[R_DEPTH, j] = depth
-    report[R_COMMAND, j] = command
-    report[R_DEPTH_ERROR, j] = depth - command
-    report[R_PITCH, j] = row[PITCH]
-    report[R_HEAVE, j] = row[HEAVE]
-    report[R_PITCH_RATE, j] = row[PITCH_RATE]
-    report[R_STERN, j] = row[STERN]
-    report[R_BOW, j] = row[BOW]
-    report[R_SPEED, j] = speed
-    report[R_FROUDE, j] = speed / froude_scale
-    report[R_CRITICAL_SPEED, j] = ucr
-    report[R_CRITICAL_FROUDE, j] = ucr / froude_scale
-    report[R_DISTURBANCE, j] = row[DISTURBANCE]
-    report[R_REWARD_DEPTH, j] = row[REWARD_DEPTH]
-    report[R_REWARD_PITCH, j] = row[REWARD_PITCH]
-    report[R_REWARD_EFFORT, j] = row[REWARD_EFFORT]
-    report[R_REWARD_TERMINATION, j] = row[REWARD_TERMINATION]
-    report[R_REASON, j] = row[REASON]
-    report[R_REWARD, j] = row[REWARD]
-    report[R_TERMINATED, j] = row[TERMINATED]
-    report[R_TRUNCATED, j] = row[TRUNCATED]
-
-
+# --- the kernels ------------------------------------------------------------------------------
 @inline_kernel
 def _first_non_finite(actions: FloatArray, active: np.ndarray) -> int:
     for i in range(actions.shape[0]):
@@ -294,111 +297,134 @@ def _first_non_finite(actions: FloatArray, active: np.ndarray) -> int:
     return -1
 
 
-@kernel
-def first_non_finite(actions: FloatArray, active: np.ndarray) -> int:
-    """The index of the first ``active`` row of ``actions`` with a NaN or infinite entry, or -1."""
-    return _first_non_finite(actions, active)
-
-
-@inline_kernel
-def _begin_step(row: FloatArray, action: FloatArray, cfg: FloatArray) -> tuple[float, float, float, float]:
-    """Set the planes (:func:`set_planes`); returns the effort, the time and the speeds at the start and
-    the end of the control period."""
-    effort = set_planes(row, action, cfg)
-    t0 = row[TIME]
-    return effort, t0, speed_at_point(t0, row), speed_at_point(t0 + cfg[C_DT], row)
-
-
-@kernel
-def step_batch(rows: FloatArray, actions: FloatArray, active: np.ndarray, obs: np.ndarray, rngs: numba.typed.List,
-               first: int, cfg: FloatArray, hull: FloatArray, report: FloatArray) -> int:
-    """One control period of each row with ``active`` set, and its column of ``report``
-    (:func:`report_env`, shape ``(N_REPORT, number of sub-environments)``); the single env is one row.
-
-    Each row's step: set the planes (:func:`set_planes`), integrate the control period, finish the
-    step (:func:`finish_step`). With :data:`_LANES_FROM` rows or more, the active rows go in blocks
-    of :data:`~subenv.dynamics.integrate.LANES` and each block's control period is integrated
-    together (:func:`~subenv.dynamics.integrate.control_period_lanes`, SIMD code); fewer rows are
-    integrated one at a time (:func:`~subenv.dynamics.integrate.control_period_point`). The two give
-    the same bits.
-
-    Returns -1, or the index (in ``rows``) of the first active row with a non-finite action, and
-    then steps nothing. ``rows``, ``actions``, ``active`` and ``obs`` may be a slice of the
-    sub-environments starting at ``first`` (``rngs`` and ``report`` are for all of them): slices
-    can be stepped on separate threads (the kernel releases the GIL).
-    """
+def _step(state: np.ndarray, episode: np.ndarray, actions: FloatArray, active: np.ndarray, obs: np.ndarray,
+          rngs: numba.typed.List, config: np.ndarray, hull: FloatArray, report: FloatArray) -> int:
+    """One control period of every sub-environment with ``active`` set (compiled as :func:`step` and
+    :func:`step_parallel`)."""
     bad = _first_non_finite(actions, active)
     if bad >= 0:
         return bad
-    dt = cfg[C_DT]
-    substeps = int(cfg[C_SUBSTEPS])
-    if rows.shape[0] < _LANES_FROM:
-        for i in range(rows.shape[0]):
-            if active[i]:
-                row = rows[i]
-                effort, t0, u0, u1 = _begin_step(row, actions[i], cfg)
-                x0, x1, x2, x3 = control_period_point(
-                    row[PITCH], row[HEAVE], row[PITCH_RATE], row[DEPTH], t0, dt, substeps, u0, (u1 - u0) / dt,
-                    row[STERN], row[BOW], row[DISTURBANCE], row[PARAMS:PARAMS + N_PARAMS], hull)
-                finish_step(row, x0, x1, x2, x3, u1, effort, obs[i], rngs, first + i, cfg)
-                report_env(row, report, first + i)
-        return -1
-    L = LANES
-    block = np.empty(LANE_ROWS * L)
-    block_report = np.empty((N_REPORT, L))  # (the columns of the step's report, written in rows below)
-    efforts = np.empty(L)
-    speeds_end = np.empty(L)
-    members = np.empty(L, dtype=np.int64)
-    i = 0
-    while i < rows.shape[0]:
+    n_rows = state.shape[0]
+    last_action = actions.shape[1] - 1
+    for b in numba.prange((n_rows + LANES - 1) // LANES):  # (a plain range in step: one thread)
+        cfg = config[0]  # (taken inside the loop: numba's parallel loops cannot take a record from outside)
+        dt = cfg.dt_s
+        block = np.empty(LANE_ROWS * LANES)
+        block_report = np.empty((_N_REPORT, LANES))
+        efforts = np.empty(LANES)
+        speeds_end = np.empty(LANES)
+        members = np.empty(LANES, dtype=np.int64)
         n = 0
-        while i < rows.shape[0] and n < L:
+        for i in range(b * LANES, min((b + 1) * LANES, n_rows)):
             if active[i]:
-                row = rows[i]
-                efforts[n], t0, u0, u1 = _begin_step(row, actions[i], cfg)
+                s, e = state[i], episode[i]
+                # (scalars and rows by index, not views: a view of an argument counts references on
+                # it, which the threads of step_parallel would contend for)
+                stern, bow, efforts[n] = plane_angles(s.stern_plane_rad, s.bow_plane_rad, actions[i, 0],
+                                                      actions[i, last_action], cfg)
+                s.stern_plane_rad, s.bow_plane_rad = stern, bow
+                t0 = s.time_s
+                u0 = speed_at(t0, e.n_knots, e.knot_time_s, e.knot_speed_mps)
+                u1 = speed_at(t0 + dt, e.n_knots, e.knot_time_s, e.knot_speed_mps)
                 speeds_end[n] = u1
-                set_lane(block, n, row[PITCH], row[HEAVE], row[PITCH_RATE], row[DEPTH], t0, u0, (u1 - u0) / dt,
-                         row[STERN], row[BOW], row[DISTURBANCE], row[PARAMS:PARAMS + N_PARAMS])
+                set_lane(block, n, s.pitch_rad, s.heave_mps, s.pitch_rate_radps, s.depth_m, t0, u0, (u1 - u0) / dt,
+                         stern, bow, s.disturbance_N, e.params)
                 members[n] = i
                 n += 1
-            i += 1
-        control_period_lanes(block, n, dt, substeps, hull)
+        control_period_lanes(block, n, dt, cfg.substeps, hull)
+        L = LANES
         for j in range(n):
-            k = members[j]
-            finish_step(rows[k], block[LANE_PITCH * L + j], block[(LANE_PITCH + 1) * L + j],
-                        block[(LANE_PITCH + 2) * L + j], block[(LANE_PITCH + 3) * L + j], speeds_end[j], efforts[j],
-                        obs[k], rngs, first + k, cfg)
-            report_env(rows[k], block_report, j)
+            i = members[j]
+            s, e = state[i], episode[i]
+            x0, x1 = block[LANE_PITCH * L + j], block[(LANE_PITCH + 1) * L + j]
+            x2, x3 = block[(LANE_PITCH + 2) * L + j], block[(LANE_PITCH + 3) * L + j]
+            s.time_s = s.time_s + dt
+            s.speed_mps = speeds_end[j]
+            std = e.disturbance_std_N
+            if std > 0.0:  # a first-order Gauss-Markov process with stationary standard deviation std
+                s.disturbance_N = (cfg.disturbance_decay * s.disturbance_N
+                                   + cfg.disturbance_gain * rngs[i].normal(0.0, std))
+            reason = episode_end(x0, x1, x2, x3, e.depth_command_m, cfg)
+            if reason != _DIVERGED:  # (a diverged state keeps the last valid one, and its observation)
+                s.pitch_rad, s.heave_mps, s.pitch_rate_radps, s.depth_m = x0, x1, x2, x3
+            terminated = reason != 0
+            truncated = not terminated and s.time_s >= e.duration_s - 1e-9
+            s.steps += 1
+            if s.steps >= cfg.max_steps:
+                truncated = True  # as gymnasium.wrappers.TimeLimit: truncated even on a terminal step
+            r_depth, r_pitch, r_effort, r_termination = reward_terms(
+                s.pitch_rad, s.depth_m - e.depth_command_m, efforts[j], terminated, cfg)
+            if reason != _DIVERGED:
+                observation(s, e, rngs, i, cfg, obs)
+            _report(block_report, j, s, e, r_depth, r_pitch, r_effort, r_termination, reason, terminated, truncated)
         # Key by key into the step's report (each key's row written in order, not 22 rows per env).
-        for c in range(N_REPORT):
+        for c in range(_N_REPORT):
             for j in range(n):
-                report[c, first + members[j]] = block_report[c, j]
+                report[c, members[j]] = block_report[c, j]
     return -1
 
 
-@kernel
-def draw_reset_numbers(rngs: numba.typed.List, indices: np.ndarray, units: FloatArray, disturbance_std: float,
-                       disturbances: FloatArray) -> None:
-    """The random numbers a reset takes from each sub-environment's generator, for those in ``indices``.
+step = kernel(_step)
+"""One control period of every sub-environment with ``active`` set, on the calling thread.
 
-    In the single environment's order: ``units.shape[1]`` uniform numbers in [0, 1) (as
-    ``rng.random(k)``, the scenario's draw) into row ``j`` of ``units``, then, with
-    ``disturbance_std`` > 0, the initial heave force (as ``rng.normal(0, disturbance_std)``) into
-    ``disturbances[j]`` (else 0). numba's generator methods are NumPy's algorithms over the same
-    bit generator: the same numbers (``tests/envs/test_vector_env.py``).
+Parameters
+----------
+state : ndarray of STATE_DTYPE, shape (n,)
+    Updated in place.
+episode : ndarray of EPISODE_DTYPE, shape (n,)
+actions : ndarray, shape (n, n_actions)
+    Clipped to [-1, 1]; a non-finite one stops the step before anything changes (see Returns).
+active : ndarray of bool, shape (n,)
+    The sub-environments to step; the others are left as they are.
+obs : ndarray of float32, shape (n, N_OBS)
+    The observations, written for the stepped sub-environments.
+rngs : numba.typed.List of numpy.random.Generator
+    Each sub-environment's generator.
+config : ndarray of CONFIG_DTYPE, shape (1,)
+hull : ndarray
+    :attr:`subenv.dynamics.HullTable.packed` of the vehicle.
+report : ndarray, shape (len(REPORT_KEYS), n)
+    The step's report, written for the stepped sub-environments.
+
+Returns
+-------
+int
+    -1, or the index of the first active sub-environment whose action has a NaN or infinite
+    entry: then nothing was stepped.
+"""
+
+step_parallel = parallel_kernel(_step)
+""":func:`step` with its blocks of :data:`~subenv.dynamics.integrate.LANES` sub-environments shared among
+numba's threads (``numba.set_num_threads``); the same results for any number of threads. Only where
+:func:`threading_layer_available` (numba's TBB layer: safe under ``fork`` and from several threads)."""
+
+
+@kernel
+def draw_reset_numbers(rngs: numba.typed.List, indices: np.ndarray, uniforms: FloatArray, disturbance_std_N: float,
+                       disturbances: FloatArray) -> None:
+    """The random numbers of a reset, from each sub-environment's generator, for those in ``indices``.
+
+    As :meth:`subenv.scenarios.Scenario.sample` and :func:`subenv.envs.episodes.draw_episode` take
+    them from one generator: ``uniforms.shape[1]`` numbers uniform in [0, 1) (``rng.random(k)``)
+    into row ``j`` of ``uniforms``, then, with ``disturbance_std_N`` > 0, the initial heave force
+    (``rng.normal(0, disturbance_std_N)``) into ``disturbances[j]`` (else 0).
     """
     for j in range(indices.shape[0]):
         rng = rngs[indices[j]]
-        for k in range(units.shape[1]):
-            units[j, k] = rng.random()
-        disturbances[j] = rng.normal(0.0, disturbance_std) if disturbance_std > 0.0 else 0.0
+        for k in range(uniforms.shape[1]):
+            uniforms[j, k] = rng.random()
+        disturbances[j] = rng.normal(0.0, disturbance_std_N) if disturbance_std_N > 0.0 else 0.0
 
 
 @kernel
-def observe_batch(rows: FloatArray, indices: np.ndarray, obs: np.ndarray, rngs: numba.typed.List, cfg: FloatArray,
-                  report: FloatArray) -> None:
-    """:func:`observe_env` and :func:`report_env` for the rows in ``indices`` (after their reset)."""
+def observe(state: np.ndarray, episode: np.ndarray, indices: np.ndarray, obs: np.ndarray, rngs: numba.typed.List,
+            config: np.ndarray, report: FloatArray) -> None:
+    """After a reset of the sub-environments in ``indices``: their speed, observation and report column
+    (reward terms 0, not ended)."""
+    cfg = config[0]
     for k in range(indices.shape[0]):
         i = indices[k]
-        observe_env(rows[i], obs[i], rngs, i, cfg)
-        report_env(rows[i], report, i)
+        s, e = state[i], episode[i]
+        s.speed_mps = speed_at(s.time_s, e.n_knots, e.knot_time_s, e.knot_speed_mps)
+        observation(s, e, rngs, i, cfg, obs)
+        _report(report, i, s, e, 0.0, 0.0, 0.0, 0.0, 0, False, False)

@@ -21,6 +21,8 @@ from typing import Any, Final
 import numpy as np
 from numpy.typing import ArrayLike
 
+from subenv import _validation as check
+
 __all__ = [
     "DEPTH_TOLERANCE_M",
     "HOLD_WINDOW_S",
@@ -187,11 +189,6 @@ def _vector(name: str, value: ArrayLike, n: int | None) -> np.ndarray:
     return a
 
 
-def _positive(name: str, value: float) -> None:
-    if not (isinstance(value, (int, float)) and value > 0 and math.isfinite(value)):
-        raise ValueError(f"{name}={value!r} is invalid: must be a finite number > 0")
-
-
 def _hold_window(start_s: float, end_s: float, hold_window_s: float) -> tuple[float, bool]:
     """The start of the hold window of an episode sampled from ``start_s`` to ``end_s`` (the samples
     at or after it are in the window), and whether the episode covers the window."""
@@ -329,11 +326,11 @@ def episode_metrics(
     q = _vector("pitch_rate_radps", pitch_rate_radps, n)
     stern = _vector("stern_plane_rad", stern_plane_rad, n)
     bow = _vector("bow_plane_rad", bow_plane_rad, n)
-    _positive("plane_limit_rad", plane_limit_rad)
-    _positive("depth_tolerance_m", depth_tolerance_m)
-    _positive("hold_window_s", hold_window_s)
+    check.positive("plane_limit_rad", plane_limit_rad)
+    check.positive("depth_tolerance_m", depth_tolerance_m)
+    check.positive("hold_window_s", hold_window_s)
     if episode_duration_s is not None:
-        _positive("episode_duration_s", episode_duration_s)
+        check.positive("episode_duration_s", episode_duration_s)
 
     terminated = termination_reason != ""
     abs_e = np.abs(e)

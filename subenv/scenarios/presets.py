@@ -27,8 +27,7 @@ NOMINAL = Scenario(
 LOW_SPEED = Scenario(
     name="LowSpeed",
     description="Below the critical speed (0.3-0.8 u_cr): level flight is unstable and the planes reverse.",
-    speed_mps=(0.3, 0.8),
-    speed_relative=True,
+    speed_ratio=(0.3, 0.8),
     depth_command_m=(8.0, 15.0),
     initial_depth_offset_m=(-2.0, 2.0),
     initial_pitch_rad=_SMALL_PITCH,
@@ -37,8 +36,7 @@ LOW_SPEED = Scenario(
 NEAR_CRITICAL = Scenario(
     name="NearCritical",
     description="Within 15% of the critical speed, where the planes have almost no net effect on depth.",
-    speed_mps=(0.85, 1.15),
-    speed_relative=True,
+    speed_ratio=(0.85, 1.15),
     depth_command_m=(8.0, 15.0),
     initial_depth_offset_m=(-2.0, 2.0),
     initial_pitch_rad=_SMALL_PITCH,
@@ -50,9 +48,8 @@ SPEED_TRANSIENT = Scenario(
         "Decelerates from 2-2.6 u_cr to 0.4-0.7 u_cr within the episode, through the critical speed, "
         "with a 0.3 N heave-force disturbance (below u_cr it reveals whether level flight is still stable)."
     ),
-    speed_mps=(2.0, 2.6),
-    speed_relative=True,
-    speed_ramp=SpeedRamp(final_speed_mps=(0.4, 0.7), start_s=(30.0, 90.0), duration_s=(120.0, 240.0)),
+    speed_ratio=(2.0, 2.6),
+    speed_ramp=SpeedRamp(final_speed_ratio=(0.4, 0.7), start_s=(30.0, 90.0), duration_s=(120.0, 240.0)),
     depth_command_m=(8.0, 15.0),
     initial_depth_offset_m=(-2.0, 2.0),
     initial_pitch_rad=_SMALL_PITCH,
@@ -65,8 +62,7 @@ PERISCOPE_DEPTH = Scenario(
         "Ordered depth 1.0-1.2 m, near the surface; surface suction modelled as excess buoyancy "
         "(Riedel 1993 Ch. V.C); broaching ends the episode."
     ),
-    speed_mps=(0.7, 2.0),
-    speed_relative=True,
+    speed_ratio=(0.7, 2.0),
     depth_command_m=(1.0, 1.2),
     initial_depth_offset_m=(-0.2, 0.6),
     initial_pitch_rad=(-0.02, 0.02),
@@ -76,8 +72,7 @@ PERISCOPE_DEPTH = Scenario(
 BALLAST_OFFSET = Scenario(
     name="BallastOffset",
     description="Centre of gravity 0.5-3 mm fore or aft of buoyancy (x_GB != 0, Riedel 1993 Ch. IV).",
-    speed_mps=(0.6, 2.0),
-    speed_relative=True,
+    speed_ratio=(0.6, 2.0),
     depth_command_m=(8.0, 15.0),
     initial_depth_offset_m=(-2.0, 2.0),
     initial_pitch_rad=_SMALL_PITCH,

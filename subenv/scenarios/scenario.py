@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from subenv import _validation as check
 from subenv.thesis import THESIS_DESIGN_SPEED_MPS
 
 __all__ = ["EpisodeConfig", "Interval", "Scenario", "SpeedRamp"]
@@ -27,33 +28,18 @@ Interval = tuple[float, float]
 _TINY = 1e-9  # lower bound for quantities that must be strictly positive
 
 
-def _check_interval(name: str, value: Interval, low: float = -math.inf, high: float = math.inf) -> None:
-    ok = (
-        isinstance(value, tuple)
-        and len(value) == 2
-        and all(isinstance(v, (int, float)) and math.isfinite(v) for v in value)
-        and low <= value[0] <= value[1] <= high
-    )
-    if not ok:
-        raise ValueError(
-            f"{name}={value!r} is invalid: must be a (low, high) pair of finite numbers with "
-            f"{low} <= low <= high <= {high}"
-        )
-
-
 _UNIT: Interval = (0.0, 1.0)
 """The interval whose draw is the uniform number itself (0 + 1 u == u): for a coin flip among the draws."""
 
 
 @dataclass(frozen=True)
 class _Draws:
-    """How to draw one number uniform in each of some intervals, with one ``rng.random(k)`` call.
+    """How a scenario turns uniform numbers into its draw: one number in each of some intervals.
 
-    ``rng.random(k)`` yields, in order, the doubles that ``k`` calls of ``rng.uniform(low, high)``
-    would use, and NumPy's uniform is ``low + (high - low) * next_double``
-    (``numpy/random/src/distributions/distributions.c``, ``random_uniform``): the same numbers, and
-    the generator left in the same state, at a fraction of the cost of a NumPy call per number
-    (resets are where a vector env spends its Python time). Fixed intervals draw nothing.
+    A scenario's draw takes ``k`` numbers uniform in [0, 1) with one ``rng.random(k)`` call, one per
+    interval that is not fixed, and maps number ``u`` onto its interval as ``low + (high - low) u``.
+    That is the definition: :meth:`Scenario.sample` and :meth:`Scenario.sample_batch` both apply
+    :meth:`values` to such numbers, so a batch equals one draw at a time by construction.
     """
 
     fixed: tuple[float, ...]  # every interval's value, the low end for those drawn
@@ -71,7 +57,7 @@ class _Draws:
         return self.values(rng.random(len(self.drawn)).tolist()) if self.drawn else list(self.fixed)
 
     def values(self, units: Sequence[Any]) -> list[Any]:
-        """The numbers for the uniform ``units`` in [0, 1), one per interval drawn, in order.
+        """The numbers for the ``units`` uniform in [0, 1), one per interval drawn, in order.
 
         A unit may be an array (one number per episode of a batch): its interval's value is then an
         array too, computed element for element as for one episode.
@@ -84,28 +70,41 @@ class _Draws:
 
 @dataclass(frozen=True)
 class SpeedRamp:
-    """A linear change of speed within an episode, from the initial speed to ``final_speed_mps``.
+    """A linear change of speed within an episode, from the initial speed to a final one: in m/s
+    (``final_speed_mps``) or as u / u_cr (``final_speed_ratio``), whichever the scenario uses.
 
     The ramp starts at ``start_s`` and lasts ``duration_s``; the speed is held before and after.
     """
 
-    final_speed_mps: Interval
     start_s: Interval
     duration_s: Interval
+    final_speed_mps: Interval | None = None
+    final_speed_ratio: Interval | None = None
 
     def __post_init__(self) -> None:
-        _check_interval("final_speed_mps", self.final_speed_mps, 0.0)
-        _check_interval("start_s", self.start_s, 0.0)
-        _check_interval("duration_s", self.duration_s, 0.0)
+        if (self.final_speed_mps is None) == (self.final_speed_ratio is None):
+            raise ValueError(
+                f"final_speed_mps={self.final_speed_mps!r}, final_speed_ratio={self.final_speed_ratio!r} are "
+                "invalid: give exactly one of them"
+            )
+        check.interval("final_speed_mps" if self.final_speed_mps is not None else "final_speed_ratio",
+                        self.final_speed, 0.0)
+        check.interval("start_s", self.start_s, 0.0)
+        check.interval("duration_s", self.duration_s, 0.0)
+
+    @property
+    def final_speed(self) -> Interval:
+        """The final speed's interval, in the unit given (m/s, or u / u_cr)."""
+        return self.final_speed_mps if self.final_speed_mps is not None else self.final_speed_ratio  # type: ignore[return-value]
 
 
 @dataclass(frozen=True)
 class EpisodeConfig:
     """One concrete episode: every number an environment needs to run it (SI units).
 
-    ``speed_knots`` is a piecewise-linear speed profile ((t [s], u [m/s]), ...), held constant
-    after the last knot; a single knot is a constant speed. With ``speed_relative`` the speeds
-    are multiples of the episode's critical speed, which the environment resolves. The metacentric height is
+    ``speed_knots`` is a piecewise-linear speed profile, held constant after the last knot (a single
+    knot is a constant speed): (t [s], u [m/s]) pairs, or with ``speed_relative`` (t [s], u / u_cr)
+    pairs, multiples of the episode's critical speed, which the environment resolves. The metacentric height is
     ``z_GB_m`` (None: the vehicle's) times ``z_GB_scale``; ``crossflow_drag`` None keeps the
     vehicle's C_D.
     """
@@ -123,12 +122,6 @@ class EpisodeConfig:
     disturbance_std_N: float
     duration_s: float
 
-    def speed_at(self, t: float) -> float:
-        """Speed [m/s] at time ``t`` [s]."""
-        times = [k[0] for k in self.speed_knots]
-        speeds = [k[1] for k in self.speed_knots]
-        return float(np.interp(t, times, speeds))
-
 
 @dataclass(frozen=True)
 class Scenario:
@@ -145,12 +138,13 @@ class Scenario:
         CamelCase; registered as the Gymnasium id ``subenv/<name>-v0``.
     description : str
         One line on what the scenario tests.
-    speed_mps : Interval
-        Initial forward speed [m/s], or [multiples of the critical speed] when
-        ``speed_relative`` is set.
-    speed_relative : bool
-        Speeds (initial and ramp) are u / u_cr of the episode's own loading and plane
-        allocation, so the scenario stays below, near or above critical for any vehicle.
+    speed_mps : Interval or None
+        Initial forward speed [m/s]; the thesis's design speed, 5 fps, when neither it nor
+        ``speed_ratio`` is given.
+    speed_ratio : Interval or None
+        Initial forward speed as u / u_cr of the episode's own loading and plane allocation (the
+        ramp's final speed then too: ``SpeedRamp.final_speed_ratio``), so the scenario stays
+        below, near or above critical for any vehicle. Give ``speed_mps`` or ``speed_ratio``.
     speed_ramp : SpeedRamp or None
         A deceleration (or acceleration) within the episode.
     depth_command_m : Interval
@@ -183,8 +177,8 @@ class Scenario:
 
     name: str
     description: str
-    speed_mps: Interval = (THESIS_DESIGN_SPEED_MPS, THESIS_DESIGN_SPEED_MPS)
-    speed_relative: bool = False
+    speed_mps: Interval | None = None
+    speed_ratio: Interval | None = None
     speed_ramp: SpeedRamp | None = None
     depth_command_m: Interval = (10.0, 10.0)
     initial_depth_offset_m: Interval = (-2.0, 2.0)
@@ -205,25 +199,51 @@ class Scenario:
     def __post_init__(self) -> None:
         if not (self.name and self.name.isidentifier() and self.name[0].isupper()):
             raise ValueError(f"name={self.name!r} is invalid: must be a CamelCase identifier")
-        _check_interval("speed_mps", self.speed_mps, 0.0)
-        _check_interval("depth_command_m", self.depth_command_m, 0.0)
-        _check_interval("initial_depth_offset_m", self.initial_depth_offset_m)
-        _check_interval("initial_pitch_rad", self.initial_pitch_rad, -math.pi / 2, math.pi / 2)
-        _check_interval("initial_heave_mps", self.initial_heave_mps)
-        _check_interval("initial_pitch_rate_radps", self.initial_pitch_rate_radps)
+        if self.speed_mps is not None and self.speed_ratio is not None:
+            raise ValueError(
+                f"speed_mps={self.speed_mps!r}, speed_ratio={self.speed_ratio!r} are invalid: give one of them "
+                "(m/s, or u / u_cr)"
+            )
+        if self.speed_ratio is not None:
+            check.interval("speed_ratio", self.speed_ratio, 0.0)
+        else:
+            if self.speed_mps is None:
+                object.__setattr__(self, "speed_mps", (THESIS_DESIGN_SPEED_MPS, THESIS_DESIGN_SPEED_MPS))
+            check.interval("speed_mps", self.speed_mps, 0.0)
+        ramp = self.speed_ramp
+        if ramp is not None and (ramp.final_speed_ratio is not None) != self.speed_relative:
+            raise ValueError(
+                f"speed_ramp={ramp!r} is invalid: its final speed must be given as the initial speed is, "
+                f"{'final_speed_ratio (u / u_cr)' if self.speed_relative else 'final_speed_mps (m/s)'}"
+            )
+        check.interval("depth_command_m", self.depth_command_m, 0.0)
+        check.interval("initial_depth_offset_m", self.initial_depth_offset_m)
+        check.interval("initial_pitch_rad", self.initial_pitch_rad, -math.pi / 2, math.pi / 2)
+        check.interval("initial_heave_mps", self.initial_heave_mps)
+        check.interval("initial_pitch_rate_radps", self.initial_pitch_rate_radps)
         if self.z_GB_m is not None:
-            _check_interval("z_GB_m", self.z_GB_m, _TINY)
-        _check_interval("z_GB_scale", self.z_GB_scale, _TINY)
-        _check_interval("x_GB_m", self.x_GB_m)
-        _check_interval("excess_buoyancy_fraction", self.excess_buoyancy_fraction, -1.0, 1.0)
+            check.interval("z_GB_m", self.z_GB_m, _TINY)
+        check.interval("z_GB_scale", self.z_GB_scale, _TINY)
+        check.interval("x_GB_m", self.x_GB_m)
+        check.interval("excess_buoyancy_fraction", self.excess_buoyancy_fraction, -1.0, 1.0)
         if self.crossflow_drag is not None:
-            _check_interval("crossflow_drag", self.crossflow_drag, 0.0)
+            check.interval("crossflow_drag", self.crossflow_drag, 0.0)
         if not (math.isfinite(self.disturbance_std_N) and self.disturbance_std_N >= 0):
             raise ValueError(
                 f"disturbance_std_N={self.disturbance_std_N!r} is invalid: must be a finite number >= 0"
             )
         if not (math.isfinite(self.duration_s) and self.duration_s > 0):
             raise ValueError(f"duration_s={self.duration_s!r} is invalid: must be a finite number > 0")
+
+    @property
+    def speed_relative(self) -> bool:
+        """Speeds are u / u_cr (``speed_ratio``), not m/s."""
+        return self.speed_ratio is not None
+
+    @property
+    def initial_speed(self) -> Interval:
+        """The initial speed's interval, in the scenario's unit (m/s, or u / u_cr)."""
+        return self.speed_ratio if self.speed_ratio is not None else self.speed_mps  # type: ignore[return-value]
 
     def replace(self, **changes: object) -> Scenario:
         """A copy with some fields changed (``dataclasses.replace``), validated again."""
@@ -260,44 +280,49 @@ class Scenario:
             )
         return self._episode(self._draws.draw(rng), weight_N)
 
-    def _sample_batch(self, units: np.ndarray, weight_N: float) -> EpisodeConfig:
-        """Many episodes at once, from their uniform numbers: for a vector environment's resets.
+    def sample_batch(self, uniforms: np.ndarray, weight_N: float) -> EpisodeConfig:
+        """Many episodes at once, from their uniform numbers (a vector environment's resets).
 
-        Only for a scenario whose every episode has the same loading (:attr:`_batch_ready`).
+        Only for a scenario that draws every episode with one loading (:attr:`samples_in_batches`).
 
         Parameters
         ----------
-        units : ndarray, shape (n, k)
-            Row ``i`` holds the ``k`` uniform numbers in [0, 1) that :meth:`sample` would take from
-            episode ``i``'s generator (``rng.random(k)``, ``k`` = :attr:`_units_per_draw`).
+        uniforms : ndarray, shape (n, k)
+            Row ``i`` holds the ``k`` = :attr:`uniforms_per_episode` numbers that :meth:`sample`
+            takes from episode ``i``'s generator (``rng.random(k)``).
         weight_N : float
             As for :meth:`sample`.
 
         Returns
         -------
         EpisodeConfig
-            Its drawn fields are arrays of ``n`` (row ``i`` is what :meth:`sample` gives for row ``i``'s
-            numbers, value for value); the others, the loading among them, are the scenario's values.
+            Its drawn fields are arrays of ``n``: row ``i`` is what :meth:`sample` draws with row
+            ``i``'s numbers; the others, the loading among them, are the scenario's values.
         """
-        if not self._batch_ready:
+        if not self.samples_in_batches:
             raise ValueError(f"scenario {self.name!r} cannot draw in batches: its loading changes from "
                              "episode to episode (or it is a mixture)")
-        if units.ndim != 2 or units.shape[1] != self._units_per_draw:
-            raise ValueError(f"units has shape {units.shape}: must be (n, {self._units_per_draw})")
-        return self._episode(self._draws.values(list(units.T)), weight_N)
+        uniforms = np.asarray(uniforms, dtype=float)
+        if uniforms.ndim != 2 or uniforms.shape[1] != self.uniforms_per_episode:
+            raise ValueError(f"uniforms has shape {uniforms.shape}: must be (n, {self.uniforms_per_episode})")
+        return self._episode(self._draws.values(list(uniforms.T)), weight_N)
 
-    def _episode_from_units(self, units: Sequence[float], weight_N: float) -> EpisodeConfig:
-        """The episode :meth:`sample` gives for these uniform numbers (a row of :meth:`_sample_batch`'s)."""
-        return self._episode(self._draws.values([float(u) for u in units]), weight_N)
+    def episode_from_uniforms(self, uniforms: Sequence[float], weight_N: float) -> EpisodeConfig:
+        """The episode :meth:`sample` draws with these numbers (a row of :meth:`sample_batch`'s)."""
+        if self.components:
+            raise ValueError(f"scenario {self.name!r} is a mixture: its draw is not one row of numbers")
+        if len(uniforms) != self.uniforms_per_episode:
+            raise ValueError(f"uniforms has {len(uniforms)} numbers: must have {self.uniforms_per_episode}")
+        return self._episode(self._draws.values([float(u) for u in uniforms]), weight_N)
 
     @property
-    def _units_per_draw(self) -> int:
+    def uniforms_per_episode(self) -> int:
         """How many uniform numbers a plain scenario's :meth:`sample` takes from the generator."""
         return len(self._draws.drawn)
 
     @cached_property
-    def _batch_ready(self) -> bool:
-        """Every episode has the same loading (and no mixture is drawn): :meth:`_sample_batch` applies."""
+    def samples_in_batches(self) -> bool:
+        """Every episode has the same loading and no mixture is drawn: :meth:`sample_batch` applies."""
         loading = (self.z_GB_m or (0.0, 0.0), self.z_GB_scale, self.x_GB_m, self.excess_buoyancy_fraction,
                    self.crossflow_drag or (0.0, 0.0))
         return not self.components and not self.x_GB_sign_random and all(low == high for low, high in loading)
@@ -340,8 +365,8 @@ class Scenario:
                              else (self.z_GB_scale, self.crossflow_drag))
         ramp = self.speed_ramp
         return _Draws.of((
-            self.speed_mps,
-            *((ramp.start_s, ramp.duration_s, ramp.final_speed_mps) if ramp is not None else ()),
+            self.initial_speed,
+            *((ramp.start_s, ramp.duration_s, ramp.final_speed) if ramp is not None else ()),
             self.depth_command_m, self.initial_depth_offset_m,
             self.initial_pitch_rad, self.initial_heave_mps, self.initial_pitch_rate_radps,
             *((self.z_GB_m,) if self.z_GB_m is not None else ()),

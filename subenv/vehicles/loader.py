@@ -14,6 +14,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from subenv import _validation as check
 from subenv import units
 from subenv.vehicles.vehicle import HullOffsets, HydroCoefficients, PlaneCoefficients, Vehicle
 
@@ -167,11 +168,11 @@ def vehicle_from_dict(data: Mapping[str, Any], origin: str = "<dict>") -> Vehicl
                 raise ValueError(f"{where}: missing key {section}.{key}")
             value = table[key]
             if dimension == "list":
-                if not isinstance(value, list) or not all(_is_number(v) for v in value):
+                if not isinstance(value, list) or not all(check.is_number(v) for v in value):
                     raise ValueError(f"{where}: {section}.{key}={value!r} is invalid: must be a list of numbers")
                 si[section][key] = [float(v) for v in value]
             else:
-                if not _is_number(value):
+                if not check.is_number(value):
                     raise ValueError(f"{where}: {section}.{key}={value!r} is invalid: must be a number")
                 if (section, key) in _POSITIVE and not value > 0:
                     raise ValueError(f"{where}: {section}.{key}={value!r} is invalid: must be > 0")
@@ -214,5 +215,3 @@ def vehicle_from_dict(data: Mapping[str, Any], origin: str = "<dict>") -> Vehicl
         raise ValueError(f"{where}: {exc}") from exc
 
 
-def _is_number(value: Any) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool)

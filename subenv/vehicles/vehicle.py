@@ -17,6 +17,8 @@ from typing import Any
 
 import numpy as np
 
+from subenv import _validation as check
+
 __all__ = [
     "DimensionalCoefficients",
     "HullOffsets",
@@ -24,19 +26,6 @@ __all__ = [
     "PlaneCoefficients",
     "Vehicle",
 ]
-
-
-def _require(name: str, value: float, ok: bool, allowed: str) -> None:
-    if not (isinstance(value, (int, float)) and math.isfinite(value) and ok):
-        raise ValueError(f"{name}={value!r} is invalid: must be {allowed}")
-
-
-def _require_positive(name: str, value: float) -> None:
-    _require(name, value, isinstance(value, (int, float)) and value > 0, "a finite number > 0")
-
-
-def _require_finite(name: str, value: float) -> None:
-    _require(name, value, True, "a finite number")
 
 
 @dataclass(frozen=True)
@@ -58,7 +47,7 @@ class HydroCoefficients:
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
-            _require_finite(f"hydrodynamics.{f.name}", getattr(self, f.name))
+            check.number(f"hydrodynamics.{f.name}", getattr(self, f.name))
 
 
 @dataclass(frozen=True)
@@ -73,13 +62,10 @@ class PlaneCoefficients:
 
     def __post_init__(self) -> None:
         for name in ("Z_delta_s", "M_delta_s", "Z_delta_b", "M_delta_b"):
-            _require_finite(f"planes.{name}", getattr(self, name))
-        _require(
-            "planes.limit_rad",
-            self.limit_rad,
-            isinstance(self.limit_rad, (int, float)) and 0 < self.limit_rad <= math.pi / 2,
-            "in (0, pi/2] rad",
-        )
+            check.number(f"planes.{name}", getattr(self, name))
+        limit = self.limit_rad
+        check.require("planes.limit_rad", limit, check.is_number(limit) and 0 < limit <= math.pi / 2,
+                      "in (0, pi/2] rad")
 
 
 @dataclass(frozen=True)
@@ -193,11 +179,11 @@ class Vehicle:
         for name in names:
             value = getattr(self, name)
             if name in _POSITIVE_FIELDS:
-                _require_positive(name, value)
+                check.positive(name, value)
             elif name == "crossflow_drag":
-                _require(name, value, isinstance(value, (int, float)) and value >= 0, "a finite number >= 0")
+                check.non_negative(name, value)
             else:
-                _require_finite(name, value)
+                check.number(name, value)
 
     # --- derived quantities -------------------------------------------------------------
     @property
@@ -280,15 +266,15 @@ class Vehicle:
         changes: dict[str, Any] = {}
         labels = []
         if z_GB_m is not None:
-            _require_finite("z_GB_m", z_GB_m)
+            check.number("z_GB_m", z_GB_m)
             changes["z_G_m"] = self.z_B_m + z_GB_m
             labels.append(f"z_GB={z_GB_m:g}m")
         if x_GB_m is not None:
-            _require_finite("x_GB_m", x_GB_m)
+            check.number("x_GB_m", x_GB_m)
             changes["x_G_m"] = self.x_B_m + x_GB_m
             labels.append(f"x_GB={x_GB_m:g}m")
         if excess_buoyancy_N is not None:
-            _require_finite("excess_buoyancy_N", excess_buoyancy_N)
+            check.number("excess_buoyancy_N", excess_buoyancy_N)
             changes["buoyancy_N"] = self.weight_N + excess_buoyancy_N
             labels.append(f"B-W={excess_buoyancy_N:g}N")
         if crossflow_drag is not None:

@@ -11,7 +11,14 @@ import pytest
 pytest.importorskip("stable_baselines3")
 
 from agents.config import CurriculumConfig
-from agents.curriculum import STATE_FILE, CurriculumCallback, CurriculumSchedule, read_stage, stage_scenarios, write_state
+from agents.curriculum import (
+    STATE_FILE,
+    CurriculumCallback,
+    CurriculumSchedule,
+    read_stage,
+    stage_scenarios,
+    write_state,
+)
 from subenv.analysis import critical_speed
 from subenv.analysis.curriculum import DEFAULT_STAGES
 from subenv.scenarios import get_scenario
@@ -51,9 +58,9 @@ def test_stages_are_placed_relative_to_the_critical_speed(suboff) -> None:
     scenarios = stage_scenarios(base, config, suboff)
     assert len(scenarios) == len(DEFAULT_STAGES) + 1 and scenarios[-1] is base
     top = DEFAULT_STAGES[0][2]
-    lows = [s.speed_mps[0] for s in scenarios[:-1]]
+    lows = [s.speed_ratio[0] for s in scenarios[:-1]]
     assert lows == [low for _, low, _ in DEFAULT_STAGES]  # easy (fast) to hard
-    assert all(s.speed_relative and s.speed_mps[1] == top for s in scenarios[:-1])
+    assert all(s.speed_relative and s.speed_ratio[1] == top for s in scenarios[:-1])
     assert lows[0] > 1.0 and lows[-1] < 1.0  # starts above u_cr, ends below it
     # The loadings grow to the configured maxima; the base's randomisation applies throughout.
     assert scenarios[0].x_GB_m == (0.0, 0.0) and scenarios[-2].x_GB_m == (0.0, config.max_x_GB_m)

@@ -13,9 +13,17 @@ pytest.importorskip("yaml")
 
 from agents.card import lineage, total_training_time_s
 from agents.config import ALGORITHMS, algorithm_class, load_config
-from agents.curriculum import write_state
 from agents.controller import AgentController
-from agents.policy import CHECKPOINT_DIR, CONFIG_FILE, MODEL_FILE, SELECTED_DIR, load_agent, model_folder, training_run
+from agents.curriculum import write_state
+from agents.policy import (
+    CHECKPOINT_DIR,
+    CONFIG_FILE,
+    MODEL_FILE,
+    SELECTED_DIR,
+    load_agent,
+    model_folder,
+    training_run,
+)
 from agents.train import main, train
 from subenv.evaluation import evaluate
 

@@ -17,9 +17,9 @@ def _files(directory: Path) -> set[str]:
 
 
 def test_a_new_stamp_drops_the_kernels_of_these_sources_only(tmp_path: Path) -> None:
-    ours = ["transition.step_batch-286.py311.nbi", "transition.step_batch-286.py311.1.nbc",
+    ours = ["transition.step-286.py311.nbi", "transition.step-286.py311.1.nbc",
             "hull.crossflow_point-120.py311.nbi", "guf-model._derivatives_loop-258.py311.1.nbc",
-            "integrate.control_period_point-55.py311.nbi"]
+            "integrate.control_period_lanes-55.py311.nbi"]
     others = ["solver.residual-10.py311.nbi", "transition.py", "notes.txt"]  # another package's kernel, not caches
     for name in [*ours, *others, "subenv-kernels.0123456789abcdef"]:
         (tmp_path / name).write_bytes(b"x")
@@ -27,9 +27,9 @@ def test_a_new_stamp_drops_the_kernels_of_these_sources_only(tmp_path: Path) -> 
     check(tmp_path)
     assert _files(tmp_path) == {*others, f"subenv-kernels.{_jit.sources_stamp()}"}
 
-    (tmp_path / "transition.step_batch-286.py311.nbi").write_bytes(b"compiled from these sources")
+    (tmp_path / "transition.step-286.py311.nbi").write_bytes(b"compiled from these sources")
     check(tmp_path)  # stamped for these sources: the new cache stays
-    assert "transition.step_batch-286.py311.nbi" in _files(tmp_path)
+    assert "transition.step-286.py311.nbi" in _files(tmp_path)
 
 
 def test_the_stamp_covers_every_file_with_a_cached_kernel() -> None:

@@ -101,7 +101,7 @@ def test_info_reports_the_required_quantities(env_id):
 
 def test_depth_reward_is_one_minus_tanh_of_the_scaled_error():
     env = gym.make("subenv/Nominal-v0")
-    scale = env.unwrapped.depth_scale_m
+    scale = env.unwrapped.config.depth_scale_m
     errors = []
     for offset in (0.0, 1e-9, 0.3, 2.0, 7.5, 20.0):  # from on depth to the edge of the depth band
         _, info = env.reset(seed=0, options={"depth_command": 40.0, "initial_state": {"depth": 40.0 + offset}})
@@ -306,12 +306,48 @@ def test_bad_constructor_arguments(kwargs, message):
         ({"initial_state": (0.0, math.nan, 0.0, 10.0)}, r"\['heave'\]=nan is invalid: must be finite"),
         ({"initial_state": (0.0, 0.0, 0.0, 0.1)}, r"\['depth'\]=0\.1 is invalid: must be in \(0\.254"),
         ({"initial_state": {"roll": 0.1}}, r"unknown keys \['roll'\]: allowed keys are \['pitch', 'heave'"),
+        # (a depth beyond the band of the ordered depth the draw gives: found after the draw)
+        ({"initial_state": {"depth": 100.0}}, r"\['depth'\]=100\.0 is invalid: must be in \(0\.254.*max_depth_error_m"),
     ],
 )
 def test_bad_reset_options(options, message):
-    env = subenv.DivePlaneEnv(scenario="Nominal")
-    with pytest.raises(ValueError, match=message):
-        env.reset(seed=0, options=options)
+    # The error changes nothing: the episode under way and the generator's stream go on as before.
+    env, twin = subenv.DivePlaneEnv(scenario="Nominal"), subenv.DivePlaneEnv(scenario="Nominal")
+    env.reset(seed=3)
+    twin.reset(seed=3)
+    for seed in (None, 4):
+        with pytest.raises(ValueError, match=message):
+            env.reset(seed=seed, options=options)
+    action = np.array([0.3], dtype=np.float32)
+    np.testing.assert_array_equal(env.step(action)[0], twin.step(action)[0])
+    np.testing.assert_array_equal(env.reset()[0], twin.reset()[0])
+
+
+def test_both_environments_take_one_checked_configuration():
+    from subenv.envs import DivePlaneConfig, DivePlaneVectorEnv
+
+    config = DivePlaneConfig(scenario="LowSpeed", alpha=0.5, dt=0.25, pitch_weight=0.2)
+    single, vector = subenv.DivePlaneEnv(config=config), DivePlaneVectorEnv(num_envs=3, config=config)
+    assert single.config is config and vector.config is config
+    assert single.scenario.name == "LowSpeed" and single.alpha == 0.5 and single.dt == 0.25
+    assert subenv.DivePlaneEnv(scenario="LowSpeed", alpha=0.5, dt=0.25, pitch_weight=0.2).config == config
+    obs, info = vector.reset(seed=7)
+    np.testing.assert_array_equal(obs[2], single.reset(seed=9)[0])  # sub-environment i: seed 7 + i
+    assert info["time_s"].tolist() == [0.0] * 3
+    with pytest.raises(ValueError, match=r"dt=-1\.0 is invalid: must be a finite number in \(0, 10\.0\]"):
+        config.replace(dt=-1.0)
+    with pytest.raises(ValueError, match=r"config and keyword arguments \['alpha'\] were given"):
+        DivePlaneVectorEnv(num_envs=2, config=config, alpha=0.1)
+    with pytest.raises(ValueError, match=r"config and keyword arguments \['dt'\] were given"):
+        subenv.DivePlaneEnv(config=config, dt=0.3)
+    with pytest.raises(ValueError, match=r"config=3 is invalid: must be a DivePlaneConfig"):
+        subenv.DivePlaneEnv(config=3)
+    # set_scenario replaces the configuration's scenario, checked, and keeps the rest.
+    single.set_scenario("Nominal")
+    assert single.config == config.replace(scenario="Nominal") and single.config.dt == 0.25
+    with pytest.raises(ValueError, match=r"scenario 'Nope' is not registered|unknown scenario|Nope"):
+        single.set_scenario("Nope")
+    assert single.scenario.name == "Nominal"
 
 
 def test_gym_make_with_module_prefix_in_a_fresh_process():
@@ -345,3 +381,26 @@ def test_render_human_with_a_dummy_display():
     assert env.unwrapped._window is not None and env.unwrapped._window.is_open
     env.close()
     assert env.unwrapped._window is None
+
+
+@pytest.mark.parametrize("env_id", ["subenv/Nominal-v0", "subenv/DivePlane-v0"])
+@pytest.mark.parametrize("how", ["pickle", "deepcopy"])
+def test_a_copy_continues_exactly_and_apart(env_id, how):
+    import copy
+    import pickle
+
+    env = gym.make(env_id).unwrapped
+    env.reset(seed=11)
+    for _ in range(5):
+        env.step(np.array([0.4], dtype=np.float32))
+    twin = pickle.loads(pickle.dumps(env)) if how == "pickle" else copy.deepcopy(env)
+    rng = np.random.default_rng(0)
+    for _ in range(30):
+        action = rng.uniform(-1, 1, size=1).astype(np.float32)
+        a, b = env.step(action), twin.step(action)
+        np.testing.assert_array_equal(a[0], b[0])
+        assert a[1:4] == b[1:4] and a[4] == b[4]
+    # Apart: stepping one leaves the other where it was.
+    before = twin.state
+    env.step(np.array([1.0], dtype=np.float32))
+    np.testing.assert_array_equal(twin.state, before)

@@ -99,6 +99,12 @@ def test_disturbance_force_varies_within_an_episode():
     [
         ({"speed_mps": (1.0, 0.5)}, r"speed_mps=\(1\.0, 0\.5\) is invalid: must be a \(low, high\) pair"),
         ({"speed_mps": (-1.0, 0.5)}, r"speed_mps=\(-1\.0, 0\.5\) is invalid"),
+        ({"speed_ratio": (0.5, 0.4)}, r"speed_ratio=\(0\.5, 0\.4\) is invalid"),
+        ({"speed_mps": (1.0, 1.0), "speed_ratio": (0.5, 0.5)},
+         r"speed_mps=\(1\.0, 1\.0\), speed_ratio=\(0\.5, 0\.5\) are invalid: give one of them"),
+        ({"speed_ratio": (0.5, 0.5), "speed_ramp": SpeedRamp(start_s=(1.0, 1.0), duration_s=(1.0, 1.0),
+                                                             final_speed_mps=(0.2, 0.2))},
+         r"its final speed must be given as the initial speed is, final_speed_ratio"),
         ({"duration_s": 0.0}, r"duration_s=0\.0 is invalid: must be a finite number > 0"),
         ({"z_GB_scale": (0.0, 1.0)}, r"z_GB_scale=\(0\.0, 1\.0\) is invalid"),
         ({"disturbance_std_N": -1.0}, r"disturbance_std_N=-1\.0 is invalid"),
@@ -111,27 +117,37 @@ def test_bad_scenario_definitions(kwargs, message):
         Scenario(**fields)
     with pytest.raises(ValueError, match="duration_s"):
         SpeedRamp(final_speed_mps=(0.1, 0.2), start_s=(0.0, 1.0), duration_s=(-1.0, 1.0))
+    with pytest.raises(ValueError, match="give exactly one of them"):
+        SpeedRamp(final_speed_mps=(0.1, 0.2), final_speed_ratio=(0.1, 0.2), start_s=(0.0, 1.0), duration_s=(1.0, 1.0))
 
 
 def test_a_custom_scenario_object_runs_without_registration():
-    custom = get_scenario("LowSpeed").replace(name="VeryLow", speed_mps=(0.2, 0.2), duration_s=10.0)
+    custom = get_scenario("LowSpeed").replace(name="VeryLow", speed_ratio=(0.2, 0.2), duration_s=10.0)
     env = subenv.DivePlaneEnv(scenario=custom)
     _, info = env.reset(seed=0)
     assert info["speed_mps"] == pytest.approx(0.2 * info["critical_speed_mps"])
 
 
-def test_one_call_draws_are_numpys_uniform_draws() -> None:
-    # Scenario.sample takes its uniform numbers with one rng.random(k) call instead of k calls of
-    # rng.uniform(low, high); that is only the same episode if NumPy's uniform is
-    # low + (high - low) * next_double, value for value.
-    from subenv.scenarios.scenario import _Draws
-
-    intervals = [(-2.0, 2.0), (0.0, 1e-9), (8, 15), (1.524, 1.524), (0.3, 1.15), (-1e3, 1e5), (0.0, 0.6)]
-    for seed in range(50):
-        ours, numpys = np.random.default_rng(seed), np.random.default_rng(seed)
-        expected = [float(low) if low == high else float(numpys.uniform(low, high)) for low, high in intervals]
-        assert _Draws.of(intervals).draw(ours) == expected
-        assert ours.random() == numpys.random()  # both generators are left in the same state
+def test_a_draw_is_its_uniform_numbers_mapped_onto_the_intervals() -> None:
+    # The definition of a plain scenario's draw: rng.random(k), one number per interval that is not
+    # fixed, mapped as low + (high - low) u. sample() and sample_batch() both apply it.
+    scenario = _ALL_RANDOM
+    k = scenario.uniforms_per_episode
+    for seed in range(20):
+        rng, twin = np.random.default_rng(seed), np.random.default_rng(seed)
+        uniforms = twin.random(k)
+        assert scenario.sample(rng, 1000.0) == scenario.episode_from_uniforms(uniforms, 1000.0)
+        assert rng.random() == twin.random()  # both generators are left in the same state
+    rows = np.random.default_rng(0).random((5, k))
+    batch = scenario.replace(x_GB_sign_random=False, z_GB_m=(0.007, 0.007), z_GB_scale=(1.0, 1.0),
+                             x_GB_m=(0.003, 0.003), excess_buoyancy_fraction=(0.012, 0.012), crossflow_drag=(0.5, 0.5))
+    drawn = batch.sample_batch(rows[:, : batch.uniforms_per_episode], 1000.0)
+    for i in range(5):
+        one = batch.episode_from_uniforms(rows[i, : batch.uniforms_per_episode], 1000.0)
+        assert one.depth_command_m == drawn.depth_command_m[i]
+        assert one.initial_state == tuple(float(v[i]) if isinstance(v, np.ndarray) else v for v in drawn.initial_state)
+    with pytest.raises(ValueError, match=r"uniforms has 2 numbers: must have 15"):
+        scenario.episode_from_uniforms([0.5, 0.5], 1000.0)
 
 
 _ALL_RANDOM = Scenario(

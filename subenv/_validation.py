@@ -1,0 +1,65 @@
+"""Argument checks shared by the package: each error names the parameter, its value and what is allowed.
+
+A check runs before anything changes, raises ``ValueError`` and returns the value in its plain
+Python type.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+__all__ = ["integer", "interval", "is_number", "non_negative", "number", "positive", "require"]
+
+
+def is_number(value: Any) -> bool:
+    """A real number (Python or NumPy), not a bool."""
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
+
+
+def require(name: str, value: Any, ok: bool, allowed: str) -> None:
+    """Raise ``ValueError("{name}={value!r} is invalid: must be {allowed}")`` unless ``ok``."""
+    if not ok:
+        raise ValueError(f"{name}={value!r} is invalid: must be {allowed}")
+
+
+def number(name: str, value: Any, low: float = -math.inf, high: float = math.inf) -> float:
+    """A finite number in [low, high]."""
+    ok = is_number(value) and math.isfinite(value) and low <= value <= high
+    if math.isinf(low) and math.isinf(high):
+        allowed = "a finite number"
+    else:
+        allowed = f"a finite number in [{low}, {high}]"
+    require(name, value, ok, allowed)
+    return float(value)
+
+
+def positive(name: str, value: Any, upper: float = math.inf) -> float:
+    """A finite number in (0, upper]."""
+    ok = is_number(value) and math.isfinite(value) and 0 < value <= upper
+    require(name, value, ok, f"a finite number in (0, {upper}]" if math.isfinite(upper) else "a finite number > 0")
+    return float(value)
+
+
+def non_negative(name: str, value: Any) -> float:
+    """A finite number >= 0."""
+    require(name, value, is_number(value) and math.isfinite(value) and value >= 0, "a finite number >= 0")
+    return float(value)
+
+
+def integer(name: str, value: Any, low: int, high: int | None = None) -> int:
+    """An integer (Python or NumPy, not a bool) in [low, high]."""
+    ok = (isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)) and low <= value
+          and (high is None or value <= high))
+    require(name, value, ok, f"an integer in [{low}, {high}]" if high is not None else f"an integer >= {low}")
+    return int(value)
+
+
+def interval(name: str, value: Any, low: float = -math.inf, high: float = math.inf) -> tuple[float, float]:
+    """A ``(low, high)`` pair of finite numbers within [low, high], its first at most its second."""
+    ok = (isinstance(value, tuple) and len(value) == 2 and all(is_number(v) and math.isfinite(v) for v in value)
+          and low <= value[0] <= value[1] <= high)
+    require(name, value, ok, f"a (low, high) pair of finite numbers with {low} <= low <= high <= {high}")
+    return float(value[0]), float(value[1])

@@ -1,0 +1,190 @@
+"""DivePlaneConfig: the one validated configuration of the dive-plane environments.
+
+:class:`~subenv.envs.DivePlaneEnv` and :class:`~subenv.envs.DivePlaneVectorEnv` take the same
+keyword arguments and turn them into a :class:`DivePlaneConfig`, which checks every value before
+an environment is built; the transition reads its numbers as one record
+(:meth:`DivePlaneConfig.constants`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any, Final, Literal
+
+import numpy as np
+from gymnasium import spaces
+
+from subenv import _validation as check
+from subenv.analysis.linear import check_alpha
+from subenv.dynamics.integrate import CONTROL_PERIOD_S, SUBSTEPS
+from subenv.dynamics.model import model_params
+from subenv.envs import transition as tr
+from subenv.scenarios.registry import get_scenario
+from subenv.scenarios.scenario import Scenario
+from subenv.vehicles.loader import load_vehicle
+from subenv.vehicles.vehicle import Vehicle
+
+__all__ = ["OBSERVATION_NAMES", "ControlMode", "DivePlaneConfig"]
+
+ControlMode = Literal["dual", "independent"]
+
+OBSERVATION_NAMES: Final = (
+    "depth_error_m",
+    "pitch_rad",
+    "heave_mps",
+    "pitch_rate_radps",
+    "speed_mps",
+    "stern_plane_rad",
+    "bow_plane_rad",
+    "depth_m",
+)
+"""Names (with units) of the observation components, in order."""
+
+# Standard deviations of the sensor noise, per observation component (depth error and depth share
+# one depth-sensor draw; the plane angles are not noisy).
+NOISE_STD: Final = {
+    "depth_m": 0.05,
+    "pitch_rad": 0.002,
+    "heave_mps": 0.005,
+    "pitch_rate_radps": 0.001,
+    "speed_mps": 0.02,
+}
+DISTURBANCE_TIME_CONSTANT_S: Final = 30.0
+"""Correlation time of the heave-force disturbance [s]."""
+# A state beyond these rates has left the model's validity (and float range soon after).
+MAX_HEAVE_MPS: Final = 20.0
+MAX_PITCH_RATE_RADPS: Final = 10.0
+MAX_SPEED_MPS: Final = 10.0
+MAX_DEPTH_COMMAND_M: Final = 1000.0
+OBS_MARGIN_M: Final = 10.0
+"""Room beyond the depth band for the terminal observation and noise [m]."""
+
+
+@dataclass(frozen=True)
+class DivePlaneConfig:
+    """Everything an environment is made with but its render mode, checked on construction.
+
+    The fields are the environments' keyword arguments (``DivePlaneEnv``'s Arguments section);
+    ``scenario`` and ``vehicle`` may be given by name or path and are stored resolved.
+    :meth:`replace` gives a checked copy (``set_scenario`` uses it).
+    """
+
+    scenario: Scenario | str = "Randomized"
+    vehicle: Vehicle | str | os.PathLike[str] = "suboff"
+    control: ControlMode = "dual"
+    alpha: float = 0.0
+    dt: float = CONTROL_PERIOD_S
+    substeps: int = SUBSTEPS
+    plane_rate_limit_radps: float | None = None
+    max_pitch_rad: float = 0.6
+    max_depth_error_m: float = 25.0
+    depth_scale_m: float = 2.0
+    pitch_weight: float = 0.1
+    effort_weight: float = 0.05
+    termination_penalty: float = 100.0
+
+    def __post_init__(self) -> None:
+        put = object.__setattr__
+        if isinstance(self.scenario, str):
+            put(self, "scenario", get_scenario(self.scenario))
+        elif not isinstance(self.scenario, Scenario):
+            raise ValueError(f"scenario={self.scenario!r} is invalid: must be a scenario name or a Scenario")
+        if not isinstance(self.vehicle, Vehicle):
+            put(self, "vehicle", load_vehicle(self.vehicle))
+        check.require("control", self.control, self.control in ("dual", "independent"),
+                      "one of ['dual', 'independent']")
+        put(self, "alpha", check_alpha(self.alpha))
+        if self.control == "independent" and self.alpha != 0.0:
+            raise ValueError(
+                f"alpha={self.alpha!r} is invalid with control='independent': must be 0 "
+                "(the bow planes have their own action)"
+            )
+        put(self, "dt", check.positive("dt", self.dt, upper=10.0))
+        put(self, "substeps", check.integer("substeps", self.substeps, 1, 1000))
+        if self.plane_rate_limit_radps is not None:
+            put(self, "plane_rate_limit_radps", check.positive("plane_rate_limit_radps", self.plane_rate_limit_radps))
+        put(self, "max_pitch_rad", check.positive("max_pitch_rad", self.max_pitch_rad, upper=math.pi / 2))
+        put(self, "max_depth_error_m", check.positive("max_depth_error_m", self.max_depth_error_m))
+        put(self, "depth_scale_m", check.positive("depth_scale_m", self.depth_scale_m))
+        put(self, "pitch_weight", check.non_negative("pitch_weight", self.pitch_weight))
+        put(self, "effort_weight", check.non_negative("effort_weight", self.effort_weight))
+        put(self, "termination_penalty", check.non_negative("termination_penalty", self.termination_penalty))
+
+    def replace(self, **changes: Any) -> DivePlaneConfig:
+        """A copy with some fields changed, checked again."""
+        return dataclasses.replace(self, **changes)
+
+    # --- derived -------------------------------------------------------------------------------
+    @property
+    def base_vehicle(self) -> Vehicle:
+        """The vehicle as loaded (each episode's loading is a variant of it)."""
+        assert isinstance(self.vehicle, Vehicle)
+        return self.vehicle
+
+    @property
+    def base_scenario(self) -> Scenario:
+        """The scenario the episodes are drawn from (resolved)."""
+        assert isinstance(self.scenario, Scenario)
+        return self.scenario
+
+    @property
+    def plane_limit_rad(self) -> float:
+        """The planes' saturation [rad], the vehicle's."""
+        return self.base_vehicle.planes.limit_rad
+
+    @property
+    def broach_depth_m(self) -> float:
+        """The depth at which the hull breaks the surface: half the hull's largest breadth [m]."""
+        return 0.5 * max(self.base_vehicle.hull.breadth_m)
+
+    @property
+    def n_actions(self) -> int:
+        """1 with ``control="dual"``, 2 with ``"independent"``."""
+        return 1 if self.control == "dual" else 2
+
+    @cached_property
+    def observation_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """(low, high) of the observation (float64, :data:`OBSERVATION_NAMES` order)."""
+        depth_error_bound = self.max_depth_error_m + OBS_MARGIN_M
+        limit = self.plane_limit_rad
+        low = np.array([-depth_error_bound, -math.pi, -MAX_HEAVE_MPS, -MAX_PITCH_RATE_RADPS, 0.0, -limit, -limit,
+                        -OBS_MARGIN_M])
+        high = np.array([depth_error_bound, math.pi, MAX_HEAVE_MPS, MAX_PITCH_RATE_RADPS, MAX_SPEED_MPS, limit, limit,
+                         MAX_DEPTH_COMMAND_M + self.max_depth_error_m + OBS_MARGIN_M])
+        return low, high
+
+    def action_space(self) -> spaces.Box:
+        """``Box(-1, 1, (n_actions,), float32)``."""
+        return spaces.Box(-1.0, 1.0, shape=(self.n_actions,), dtype=np.float32)
+
+    def observation_space(self) -> spaces.Box:
+        """``Box(low, high, (8,), float32)`` (:attr:`observation_bounds`)."""
+        low, high = self.observation_bounds
+        return spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
+
+    @cached_property
+    def hull(self) -> np.ndarray:
+        """The vehicle's hull table as the kernels take it (:attr:`subenv.dynamics.HullTable.packed`)."""
+        return model_params(self.base_vehicle).hull.packed
+
+    def constants(self, max_episode_steps: int | None = None) -> np.ndarray:
+        """The transition's constants: one read-only record of
+        :data:`~subenv.envs.transition.CONFIG_DTYPE` (shape (1,)); ``max_episode_steps`` truncates
+        episodes as ``gymnasium.wrappers.TimeLimit`` does (None: the scenario's duration only)."""
+        decay = math.exp(-self.dt / DISTURBANCE_TIME_CONSTANT_S)
+        low, high = self.observation_bounds
+        record = np.zeros(1, dtype=tr.CONFIG_DTYPE)
+        record[0] = (
+            self.dt, self.substeps, self.control == "dual", self.alpha, self.plane_limit_rad,
+            self.plane_rate_limit_radps is not None, (self.plane_rate_limit_radps or 0.0) * self.dt,
+            self.max_pitch_rad, self.max_depth_error_m, self.broach_depth_m, self.depth_scale_m,
+            self.pitch_weight, self.effort_weight, self.termination_penalty, decay, math.sqrt(1 - decay * decay),
+            math.inf if max_episode_steps is None else float(max_episode_steps), MAX_HEAVE_MPS,
+            MAX_PITCH_RATE_RADPS, low, high, [NOISE_STD.get(name, 0.0) for name in OBSERVATION_NAMES],
+        )
+        record.flags.writeable = False
+        return record

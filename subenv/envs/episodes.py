@@ -1,0 +1,242 @@
+"""Resets of the dive-plane environments: an episode's draw turned into the transition's records.
+
+A reset draws an :class:`~subenv.scenarios.EpisodeConfig` from the scenario with the
+sub-environment's generator (:func:`draw_episode`), then the heave force's first value, and writes
+the episode's records (:data:`~subenv.envs.transition.EPISODE_DTYPE`,
+:data:`~subenv.envs.transition.STATE_DTYPE`): :func:`write_episode`. A vector environment whose
+scenario draws every episode with one loading draws a batch of resets as arrays
+(:func:`draw_episode_batch`): the same numbers from the same generators, turned into records by the
+same :func:`write_episode`.
+
+The environments' ``reset(options=...)`` are checked here (:func:`check_options`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any, Final, NamedTuple
+
+import numpy as np
+
+from subenv import _validation as check
+from subenv.analysis.critical import critical_speed
+from subenv.dynamics.model import model_params, pack_params
+from subenv.envs import transition as tr
+from subenv.envs.config import (
+    MAX_DEPTH_COMMAND_M,
+    MAX_HEAVE_MPS,
+    MAX_PITCH_RATE_RADPS,
+    MAX_SPEED_MPS,
+    DivePlaneConfig,
+)
+from subenv.scenarios.scenario import EpisodeConfig
+from subenv.vehicles.vehicle import Vehicle
+
+__all__ = ["OPTIONS", "Loading", "Loadings", "check_options", "draw_episode", "draw_episode_batch", "write_episode"]
+
+OPTIONS: Final = ("speed", "depth_command", "initial_state")
+"""The keys of ``reset(options=...)``."""
+STATE_KEYS: Final = ("pitch", "heave", "pitch_rate", "depth")
+"""The keys of ``options["initial_state"]`` as a mapping."""
+_LOADING_CACHE_SIZE: Final = 1024  # loadings kept per environment
+
+
+class Loading(NamedTuple):
+    """An episode's vehicle and what the transition needs of it."""
+
+    vehicle: Vehicle
+    params: list[float]          # ModelParams, packed (PARAM_FIELDS order)
+    critical_speed_mps: float    # nan: none (z_GB <= 0)
+    froude_scale_mps: float      # sqrt(g z_GB); nan for z_GB <= 0
+
+
+class Loadings:
+    """The loadings of an environment's episodes, memoised (a new draw of the same loading costs nothing)."""
+
+    def __init__(self, config: DivePlaneConfig) -> None:
+        self.base = config.base_vehicle
+        self.alpha = config.alpha
+        self._found: dict[tuple[float, float, float, float | None], Loading] = {}
+
+    def of(self, draw: EpisodeConfig) -> Loading:
+        """The loading of an episode's draw."""
+        base = self.base
+        z_GB = draw.z_GB_m if draw.z_GB_m is not None else base.z_GB_m
+        key = (z_GB * draw.z_GB_scale, base.x_GB_m + draw.x_GB_m, base.excess_buoyancy_N + draw.excess_buoyancy_N,
+               draw.crossflow_drag)
+        found = self._found.get(key)
+        if found is None:
+            vehicle = base.variant(z_GB_m=key[0], x_GB_m=key[1], excess_buoyancy_N=key[2], crossflow_drag=key[3])
+            if len(self._found) >= _LOADING_CACHE_SIZE:
+                self._found.clear()
+            try:
+                ucr = critical_speed(vehicle, self.alpha)
+            except ValueError:
+                ucr = math.nan  # z_GB <= 0: no critical speed exists for this loading
+            z = vehicle.z_GB_m
+            found = self._found[key] = Loading(vehicle, pack_params(model_params(vehicle)).tolist(), ucr,
+                                               math.sqrt(vehicle.gravity_m_s2 * z) if z > 0 else math.nan)
+        return found
+
+
+def draw_episode(config: DivePlaneConfig, rng: np.random.Generator, loadings: Loadings,
+                 options: Mapping[str, Any] | None = None) -> tuple[EpisodeConfig, Loading, dict[str, Any], dict[str, Any]]:
+    """One reset from ``rng``: the scenario's draw, then the initial heave force
+    (``rng.normal(0, disturbance_std_N)`` where the draw has a disturbance).
+
+    Returns the draw, its loading, and the episode's and the state's fields (:func:`episode_fields`).
+    ``options`` must have passed :func:`check_options`.
+    """
+    draw = config.base_scenario.sample(rng, config.base_vehicle.weight_N)
+    std = draw.disturbance_std_N
+    disturbance = float(rng.normal(0.0, std)) if std > 0 else 0.0
+    loading = loadings.of(draw)
+    return (draw, loading, *episode_fields(config, draw, loading, disturbance, options))
+
+
+def draw_episode_batch(config: DivePlaneConfig, uniforms: np.ndarray, disturbances: np.ndarray,
+                       loadings: Loadings) -> tuple[EpisodeConfig, Loading, dict[str, Any], dict[str, Any]]:
+    """A batch of resets of a scenario that draws every episode with one loading
+    (:attr:`Scenario.samples_in_batches <subenv.scenarios.Scenario.samples_in_batches>`), from their
+    numbers: row ``j`` of ``uniforms`` and ``disturbances[j]`` are what :func:`draw_episode` takes from
+    episode ``j``'s generator (:func:`subenv.envs.transition.draw_reset_numbers`).
+
+    Returns as :func:`draw_episode`, with arrays (one value per episode) where the draw has them.
+    """
+    draw = config.base_scenario.sample_batch(uniforms, config.base_vehicle.weight_N)
+    loading = loadings.of(draw)
+    return (draw, loading, *episode_fields(config, draw, loading, disturbances, None))
+
+
+def episode_fields(config: DivePlaneConfig, draw: EpisodeConfig, loading: Loading, disturbance: Any,
+                   options: Mapping[str, Any] | None) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The fields of the episode's and the state's records at a reset (the state's speed is set when
+    it is observed: :func:`subenv.envs.transition.observe`).
+
+    A value is an array over the episodes where a batch's draw (or ``disturbance``) has one.
+    """
+    ucr = loading.critical_speed_mps
+    if draw.speed_relative and not math.isfinite(ucr):
+        raise ValueError(
+            f"scenario {config.base_scenario.name!r} gives speeds relative to the critical speed, but "
+            f"vehicle {loading.vehicle.name!r} (z_GB={loading.vehicle.z_GB_m!r} m) has none"
+        )
+    scale = ucr if draw.speed_relative else 1.0
+    knots = [(t, u * scale) for t, u in draw.speed_knots]
+    command = draw.depth_command_m
+    pitch, heave, rate, depth = draw.initial_state
+    if options:
+        if "speed" in options:
+            knots = [(0.0, options["speed"])]
+        if "depth_command" in options:
+            # Keep the drawn initial offset from the ordered depth, unless it would broach.
+            offset = depth - command
+            command = float(options["depth_command"])
+            depth = command + offset
+            if not depth > config.broach_depth_m:
+                depth = command
+        if "initial_state" in options:
+            pitch, heave, rate, depth = _initial_state(config, options["initial_state"], (pitch, heave, rate, depth),
+                                                       command)
+    if len(knots) > tr.MAX_KNOTS:
+        raise ValueError(f"the speed profile has {len(knots)} knots; the environment takes at most {tr.MAX_KNOTS}")
+    knot_time = [0.0] * tr.MAX_KNOTS
+    knot_speed = [0.0] * tr.MAX_KNOTS
+    for k, (t, u) in enumerate(knots):
+        knot_time[k], knot_speed[k] = t, u
+    episode = {
+        "params": loading.params, "n_knots": len(knots), "knot_time_s": knot_time, "knot_speed_mps": knot_speed,
+        "depth_command_m": command, "disturbance_std_N": draw.disturbance_std_N, "sensor_noise": draw.sensor_noise,
+        "duration_s": draw.duration_s, "critical_speed_mps": ucr, "froude_scale_mps": loading.froude_scale_mps,
+    }
+    state = {
+        "pitch_rad": pitch, "heave_mps": heave, "pitch_rate_radps": rate, "depth_m": depth,
+        "stern_plane_rad": 0.0, "bow_plane_rad": 0.0, "time_s": 0.0, "steps": 0, "disturbance_N": disturbance,
+        "speed_mps": math.nan,
+    }
+    return episode, state
+
+
+def write_episode(records: np.ndarray, index: int | np.ndarray, fields: Mapping[str, Any]) -> None:
+    """Write ``fields`` (:func:`episode_fields`) into ``records[index]``; ``index`` an int, or an array of
+    indices with a field's value one per index or shared."""
+    names = records.dtype.names
+    if isinstance(index, (int, np.integer)):
+        records[index] = tuple(fields[name] for name in names)  # (one assignment: a reset's Python cost)
+        return
+    for name in names:
+        value = fields[name]
+        if isinstance(value, list) and any(isinstance(v, np.ndarray) for v in value):
+            for k, v in enumerate(value):  # knots: some drawn per episode
+                records[name][index, k] = v
+        else:
+            records[name][index] = value
+
+
+def check_options(config: DivePlaneConfig, options: Mapping[str, Any] | None) -> dict[str, Any]:
+    """``reset(options=...)`` checked before anything is drawn (only ``initial_state``'s depth is
+    checked against the ordered depth once that is known)."""
+    if not options:
+        return {}
+    unknown = set(options) - set(OPTIONS)
+    if unknown:
+        raise ValueError(f"reset options {sorted(unknown)} are unknown: allowed options are {list(OPTIONS)}")
+    checked = dict(options)
+    if "speed" in options:
+        checked["speed"] = check.positive("options['speed']", options["speed"], upper=MAX_SPEED_MPS)
+    if "depth_command" in options:
+        value = options["depth_command"]
+        check.require("options['depth_command']", value,
+                      check.is_number(value) and math.isfinite(value)
+                      and config.broach_depth_m < value <= MAX_DEPTH_COMMAND_M,
+                      f"a number in ({config.broach_depth_m:.4g}, {MAX_DEPTH_COMMAND_M:g}] m (below the hull radius)")
+    if "initial_state" in options:
+        _initial_state(config, options["initial_state"], (0.0, 0.0, 0.0, math.nan), math.nan)
+    return checked
+
+
+def _initial_state(config: DivePlaneConfig, value: Any, drawn: tuple[float, float, float, float],
+                   command: float) -> tuple[float, float, float, float]:
+    """``options["initial_state"]`` over the drawn state; the depth is checked where ``command`` is known."""
+    if isinstance(value, Mapping):
+        unknown = set(value) - set(STATE_KEYS)
+        if unknown:
+            raise ValueError(
+                f"options['initial_state'] has unknown keys {sorted(unknown)}: allowed keys are {list(STATE_KEYS)}"
+            )
+        state = [value.get(k, d) for k, d in zip(STATE_KEYS, drawn)]
+    elif isinstance(value, (Sequence, np.ndarray)) and not isinstance(value, str) and len(value) == 4:
+        state = list(value)
+    else:
+        raise ValueError(
+            f"options['initial_state']={value!r} is invalid: must be (pitch, heave, pitch_rate, depth) "
+            f"or a mapping with keys {list(STATE_KEYS)}"
+        )
+    try:
+        state = [float(v) for v in state]
+    except (TypeError, ValueError):
+        raise ValueError(f"options['initial_state']={value!r} is invalid: must hold numbers") from None
+    for key, v in zip(STATE_KEYS, state):
+        if key == "depth" and math.isnan(command) and math.isnan(v):
+            continue  # (the drawn depth, not known yet)
+        if not math.isfinite(v):
+            raise ValueError(f"options['initial_state'][{key!r}]={v!r} is invalid: must be finite")
+    pitch, heave, rate, depth = state
+    limit = config.max_pitch_rad
+    check.require("options['initial_state']['pitch']", pitch, abs(pitch) < limit,
+                  f"in (-{limit}, {limit}) rad (max_pitch_rad)")
+    check.require("options['initial_state']['heave']", heave, abs(heave) <= MAX_HEAVE_MPS,
+                  f"in [-{MAX_HEAVE_MPS}, {MAX_HEAVE_MPS}] m/s")
+    check.require("options['initial_state']['pitch_rate']", rate, abs(rate) <= MAX_PITCH_RATE_RADPS,
+                  f"in [-{MAX_PITCH_RATE_RADPS}, {MAX_PITCH_RATE_RADPS}] rad/s")
+    low = config.broach_depth_m
+    if math.isnan(command):
+        if not math.isnan(depth):
+            check.require("options['initial_state']['depth']", depth, low < depth,
+                          f"in ({low:.4g}, ...] m (below the hull radius)")
+        return pitch, heave, rate, depth
+    high = command + config.max_depth_error_m
+    check.require("options['initial_state']['depth']", depth, low < depth <= high,
+                  f"in ({low:.4g}, {high:.4g}] m (below the hull radius, within max_depth_error_m of the ordered depth)")
+    return pitch, heave, rate, depth
