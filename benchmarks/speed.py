@@ -176,7 +176,9 @@ def integrator_table(seconds: float) -> list[str]:
         for k in range(periods):  # a block of one state, as the single environment steps
             ig.set_lane(block, 0, a, b, c, d, k * CONTROL_PERIOD_S, speed, 0.0, plane, 0.0, 0.0, prm)
             ig.control_period_lanes(block, 1, CONTROL_PERIOD_S, SUBSTEPS, hull)
-            a, b, c, d = (block[(ig.LANE_PITCH + r) * ig.LANES] for r in range(4))
+            L = ig.LANES
+            a, b, c, d = block[ig.LANE_PITCH * L], block[(ig.LANE_PITCH + 1) * L], block[(ig.LANE_PITCH + 2) * L], \
+                block[(ig.LANE_PITCH + 3) * L]
         return np.array([a, b, c, d])
 
     def python_rk4(x: np.ndarray, periods: int) -> np.ndarray:

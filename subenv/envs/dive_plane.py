@@ -205,18 +205,21 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         previous = (self._np_random, self._np_random_seed)
         super().reset(seed=seed)
         rng = self.np_random
-        saved = rng.bit_generator.state
+        # An option can still prove out of range once the episode is drawn (an initial depth beyond the
+        # band of the ordered depth drawn): then the generator is put back as it was.
+        saved = rng.bit_generator.state if checked else None
         try:
             draw, loading, episode, state = draw_episode(self.config, rng, self._loadings, checked)
-        except ValueError:  # an option the draw shows to be out of range: leave the generator as it was
-            rng.bit_generator.state = saved
+        except ValueError:
+            if saved is not None:
+                rng.bit_generator.state = saved
             self._np_random, self._np_random_seed = previous
             raise
         self.vehicle, self.episode = loading.vehicle, draw
         write_episode(self._episode, 0, episode)
         write_episode(self._state, 0, state)
         tr.observe(self._state, self._episode, _FIRST, self._obs, self._bound_rngs(), self._constants, self._report)
-        self._history = [(0.0, self._state[0]["depth_m"], self._episode[0]["depth_command_m"])]
+        self._history = [(0.0, state["depth_m"], episode["depth_command_m"])]
         if self.render_mode == "human":
             self.render()
         return self._obs_row.copy(), step_info(self._report.ravel().tolist())

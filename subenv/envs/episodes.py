@@ -46,7 +46,7 @@ class Loading(NamedTuple):
     """An episode's vehicle and what the transition needs of it."""
 
     vehicle: Vehicle
-    params: list[float]          # ModelParams, packed (PARAM_FIELDS order)
+    params: np.ndarray           # ModelParams, packed (PARAM_FIELDS order), read-only
     critical_speed_mps: float    # nan: none (z_GB <= 0)
     froude_scale_mps: float      # sqrt(g z_GB); nan for z_GB <= 0
 
@@ -75,7 +75,9 @@ class Loadings:
             except ValueError:
                 ucr = math.nan  # z_GB <= 0: no critical speed exists for this loading
             z = vehicle.z_GB_m
-            found = self._found[key] = Loading(vehicle, pack_params(model_params(vehicle)).tolist(), ucr,
+            params = pack_params(model_params(vehicle))
+            params.flags.writeable = False
+            found = self._found[key] = Loading(vehicle, params, ucr,
                                                math.sqrt(vehicle.gravity_m_s2 * z) if z > 0 else math.nan)
         return found
 
@@ -141,10 +143,13 @@ def episode_fields(config: DivePlaneConfig, draw: EpisodeConfig, loading: Loadin
                                                        command)
     if len(knots) > tr.MAX_KNOTS:
         raise ValueError(f"the speed profile has {len(knots)} knots; the environment takes at most {tr.MAX_KNOTS}")
-    knot_time = [0.0] * tr.MAX_KNOTS
-    knot_speed = [0.0] * tr.MAX_KNOTS
+    knot_time: Any = [0.0] * tr.MAX_KNOTS
+    knot_speed: Any = [0.0] * tr.MAX_KNOTS
     for k, (t, u) in enumerate(knots):
         knot_time[k], knot_speed[k] = t, u
+    if isinstance(draw.depth_command_m, np.ndarray):  # a batch: a row of knots per episode
+        knot_time = np.column_stack(np.broadcast_arrays(*knot_time))
+        knot_speed = np.column_stack(np.broadcast_arrays(*knot_speed))
     episode = {
         "params": loading.params, "n_knots": len(knots), "knot_time_s": knot_time, "knot_speed_mps": knot_speed,
         "depth_command_m": command, "disturbance_std_N": draw.disturbance_std_N, "sensor_noise": draw.sensor_noise,
@@ -163,15 +168,12 @@ def write_episode(records: np.ndarray, index: int | np.ndarray, fields: Mapping[
     indices with a field's value one per index or shared."""
     names = records.dtype.names
     if isinstance(index, (int, np.integer)):
-        records[index] = tuple(fields[name] for name in names)  # (one assignment: a reset's Python cost)
+        records[index] = tuple([fields[name] for name in names])  # (one assignment: a reset's Python cost)
         return
+    block = np.empty(len(index), dtype=records.dtype)  # filled field by field, then stored at once
     for name in names:
-        value = fields[name]
-        if isinstance(value, list) and any(isinstance(v, np.ndarray) for v in value):
-            for k, v in enumerate(value):  # knots: some drawn per episode
-                records[name][index, k] = v
-        else:
-            records[name][index] = value
+        block[name] = fields[name]
+    records[index] = block
 
 
 def check_options(config: DivePlaneConfig, options: Mapping[str, Any] | None) -> dict[str, Any]:
