@@ -498,29 +498,31 @@ _BASELINE_SIZES = (1, 64, 1024, 4096)
 _TWO_THREADS_FROM = 1024
 
 
-def public_api_cells(seconds: float, sizes: tuple[int, ...]) -> dict[str, float]:
+def public_api_cells(seconds: float, sizes: tuple[int, ...], repeats: int = 5) -> dict[str, float]:
     """The rates the comparison with another commit takes: through the public API only (``gym.make``,
-    ``gym.make_vec(..., threads=k)``), so that the same code measures both trees."""
-    cells: dict[str, float] = {}
+    ``gym.make_vec(..., threads=k)``), so that the same code measures both trees. Every cell is
+    made first and then measured ``repeats`` times in turns (best kept), so that a slow spell of the
+    machine costs one run of several cells, not every run of one."""
+    cells: dict[str, Callable[[], float]] = {}
     for env_id in SUBENV_IDS:
-        cells[f"{env_id} single env"] = single_env_rate(gym.make(env_id).unwrapped, seconds, 1)
+        cells[f"{env_id} single env"] = functools.partial(single_env_rate, gym.make(env_id).unwrapped, seconds, 1)
         for n in sizes:
             for threads in (1, 2) if n >= _TWO_THREADS_FROM else (1,):
                 env = gym.make_vec(env_id, num_envs=n, threads=threads)
-                cells[f"{env_id} N={n} threads={threads}"] = vector_env_rate(env, seconds, 1)
-                env.close()
-    return cells
+                cells[f"{env_id} N={n} threads={threads}"] = functools.partial(vector_env_rate, env, seconds, 1)
+    return round_robin(cells, repeats)
 
 
 def baseline_table(baseline: Path, seconds: float, repeats: int, sizes: tuple[int, ...]) -> list[str]:
-    """This tree against ``baseline``: child processes alternate between the two (best of ``repeats`` each)."""
+    """This tree against ``baseline``: child processes alternate between the two, ``repeats`` each, and each
+    measures every cell three times in turns; the best of all is kept."""
     trees = {"now": ROOT, "previous": baseline.resolve()}
     best: dict[str, dict[str, float]] = {name: {} for name in trees}
     for _ in range(repeats):
         for name, tree in trees.items():
             env = {**os.environ, "PYTHONPATH": str(tree)}
             out = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--cells", "--seconds", str(seconds),
-                                  "--sizes", ",".join(map(str, sizes))],
+                                  "--repeats", "3", "--sizes", ",".join(map(str, sizes))],
                                  capture_output=True, text=True, check=True, env=env, cwd=tree)
             found = json.loads(out.stdout.strip().splitlines()[-1])
             if not found.pop("__file__").startswith(str(tree)):
@@ -570,7 +572,8 @@ def main() -> None:
     seconds, repeats = (0.2, 1) if args.quick else (args.seconds, args.repeats)
     sizes = VECTOR_SIZES[:-1] if args.quick else VECTOR_SIZES
     if args.cells:
-        cells: dict[str, Any] = public_api_cells(args.seconds, tuple(int(n) for n in args.sizes.split(",")))
+        cells: dict[str, Any] = public_api_cells(args.seconds, tuple(int(n) for n in args.sizes.split(",")),
+                                                 args.repeats)
         print(json.dumps({**cells, "__file__": subenv.__file__}))
         return
     print(f"Machine: {machine()}")
