@@ -58,6 +58,7 @@ __all__ = [
     "reward_terms",
     "speed_at",
     "step",
+    "step_block",
     "step_parallel",
     "threading_layer_available",
 ]
@@ -297,70 +298,79 @@ def _first_non_finite(actions: FloatArray, active: np.ndarray) -> int:
     return -1
 
 
+@kernel
+def step_block(state: np.ndarray, episode: np.ndarray, actions: FloatArray, active: np.ndarray, obs: np.ndarray,
+               rngs: numba.typed.List, config: np.ndarray, hull: FloatArray, report: FloatArray, b: int) -> None:
+    """One control period of the active sub-environments of block ``b`` (rows ``b * LANES`` up to
+    ``(b + 1) * LANES``), integrated together; arguments as :func:`step`'s. Compiled once, as its own
+    function, and called by both :func:`step` and :func:`step_parallel`."""
+    n_rows = state.shape[0]
+    last_action = actions.shape[1] - 1
+    cfg = config[0]
+    dt = cfg.dt_s
+    block = np.empty(LANE_ROWS * LANES)
+    block_report = np.empty((_N_REPORT, LANES))
+    efforts = np.empty(LANES)
+    speeds_end = np.empty(LANES)
+    members = np.empty(LANES, dtype=np.int64)
+    n = 0
+    for i in range(b * LANES, min((b + 1) * LANES, n_rows)):
+        if active[i]:
+            s, e = state[i], episode[i]
+            stern, bow, efforts[n] = plane_angles(s.stern_plane_rad, s.bow_plane_rad, actions[i, 0],
+                                                  actions[i, last_action], cfg)
+            s.stern_plane_rad, s.bow_plane_rad = stern, bow
+            t0 = s.time_s
+            u0 = speed_at(t0, e.n_knots, e.knot_time_s, e.knot_speed_mps)
+            u1 = speed_at(t0 + dt, e.n_knots, e.knot_time_s, e.knot_speed_mps)
+            speeds_end[n] = u1
+            set_lane(block, n, s.pitch_rad, s.heave_mps, s.pitch_rate_radps, s.depth_m, t0, u0, (u1 - u0) / dt,
+                     stern, bow, s.disturbance_N, e.params)
+            members[n] = i
+            n += 1
+    control_period_lanes(block, n, dt, cfg.substeps, hull)
+    L = LANES
+    for j in range(n):
+        i = members[j]
+        s, e = state[i], episode[i]
+        x0, x1 = block[LANE_PITCH * L + j], block[(LANE_PITCH + 1) * L + j]
+        x2, x3 = block[(LANE_PITCH + 2) * L + j], block[(LANE_PITCH + 3) * L + j]
+        s.time_s = s.time_s + dt
+        s.speed_mps = speeds_end[j]
+        std = e.disturbance_std_N
+        if std > 0.0:  # a first-order Gauss-Markov process with stationary standard deviation std
+            s.disturbance_N = (cfg.disturbance_decay * s.disturbance_N
+                               + cfg.disturbance_gain * rngs[i].normal(0.0, std))
+        reason = episode_end(x0, x1, x2, x3, e.depth_command_m, cfg)
+        if reason != _DIVERGED:  # (a diverged state keeps the last valid one, and its observation)
+            s.pitch_rad, s.heave_mps, s.pitch_rate_radps, s.depth_m = x0, x1, x2, x3
+        terminated = reason != 0
+        truncated = not terminated and s.time_s >= e.duration_s - 1e-9
+        s.steps += 1
+        if s.steps >= cfg.max_steps:
+            truncated = True  # as gymnasium.wrappers.TimeLimit: truncated even on a terminal step
+        r_depth, r_pitch, r_effort, r_termination = reward_terms(
+            s.pitch_rad, s.depth_m - e.depth_command_m, efforts[j], terminated, cfg)
+        if reason != _DIVERGED:
+            observation(s, e, rngs, i, cfg, obs)
+        _report(block_report, j, s, e, r_depth, r_pitch, r_effort, r_termination, reason, terminated, truncated)
+    # Key by key into the step's report (each key's row written in order, not 22 rows per env).
+    for c in range(_N_REPORT):
+        for j in range(n):
+            report[c, members[j]] = block_report[c, j]
+
+
 def _step(state: np.ndarray, episode: np.ndarray, actions: FloatArray, active: np.ndarray, obs: np.ndarray,
           rngs: numba.typed.List, config: np.ndarray, hull: FloatArray, report: FloatArray) -> int:
-    """One control period of every sub-environment with ``active`` set (compiled as :func:`step` and
-    :func:`step_parallel`)."""
+    """The blocks of :func:`step_block`, one after the other (:func:`step`) or shared among threads
+    (:func:`step_parallel`)."""
     bad = _first_non_finite(actions, active)
     if bad >= 0:
         return bad
-    n_rows = state.shape[0]
-    last_action = actions.shape[1] - 1
-    for b in numba.prange((n_rows + LANES - 1) // LANES):  # (a plain range in step: one thread)
-        cfg = config[0]  # (taken inside the loop: numba's parallel loops cannot take a record from outside)
-        dt = cfg.dt_s
-        block = np.empty(LANE_ROWS * LANES)
-        block_report = np.empty((_N_REPORT, LANES))
-        efforts = np.empty(LANES)
-        speeds_end = np.empty(LANES)
-        members = np.empty(LANES, dtype=np.int64)
-        n = 0
-        for i in range(b * LANES, min((b + 1) * LANES, n_rows)):
-            if active[i]:
-                s, e = state[i], episode[i]
-                # (scalars and rows by index, not views: a view of an argument counts references on
-                # it, which the threads of step_parallel would contend for)
-                stern, bow, efforts[n] = plane_angles(s.stern_plane_rad, s.bow_plane_rad, actions[i, 0],
-                                                      actions[i, last_action], cfg)
-                s.stern_plane_rad, s.bow_plane_rad = stern, bow
-                t0 = s.time_s
-                u0 = speed_at(t0, e.n_knots, e.knot_time_s, e.knot_speed_mps)
-                u1 = speed_at(t0 + dt, e.n_knots, e.knot_time_s, e.knot_speed_mps)
-                speeds_end[n] = u1
-                set_lane(block, n, s.pitch_rad, s.heave_mps, s.pitch_rate_radps, s.depth_m, t0, u0, (u1 - u0) / dt,
-                         stern, bow, s.disturbance_N, e.params)
-                members[n] = i
-                n += 1
-        control_period_lanes(block, n, dt, cfg.substeps, hull)
-        L = LANES
-        for j in range(n):
-            i = members[j]
-            s, e = state[i], episode[i]
-            x0, x1 = block[LANE_PITCH * L + j], block[(LANE_PITCH + 1) * L + j]
-            x2, x3 = block[(LANE_PITCH + 2) * L + j], block[(LANE_PITCH + 3) * L + j]
-            s.time_s = s.time_s + dt
-            s.speed_mps = speeds_end[j]
-            std = e.disturbance_std_N
-            if std > 0.0:  # a first-order Gauss-Markov process with stationary standard deviation std
-                s.disturbance_N = (cfg.disturbance_decay * s.disturbance_N
-                                   + cfg.disturbance_gain * rngs[i].normal(0.0, std))
-            reason = episode_end(x0, x1, x2, x3, e.depth_command_m, cfg)
-            if reason != _DIVERGED:  # (a diverged state keeps the last valid one, and its observation)
-                s.pitch_rad, s.heave_mps, s.pitch_rate_radps, s.depth_m = x0, x1, x2, x3
-            terminated = reason != 0
-            truncated = not terminated and s.time_s >= e.duration_s - 1e-9
-            s.steps += 1
-            if s.steps >= cfg.max_steps:
-                truncated = True  # as gymnasium.wrappers.TimeLimit: truncated even on a terminal step
-            r_depth, r_pitch, r_effort, r_termination = reward_terms(
-                s.pitch_rad, s.depth_m - e.depth_command_m, efforts[j], terminated, cfg)
-            if reason != _DIVERGED:
-                observation(s, e, rngs, i, cfg, obs)
-            _report(block_report, j, s, e, r_depth, r_pitch, r_effort, r_termination, reason, terminated, truncated)
-        # Key by key into the step's report (each key's row written in order, not 22 rows per env).
-        for c in range(_N_REPORT):
-            for j in range(n):
-                report[c, members[j]] = block_report[c, j]
+    for b in numba.prange((state.shape[0] + LANES - 1) // LANES):  # (a plain range in step: one thread)
+        # (an int64 block index in both kernels: a parallel loop counts in uint64, and a second
+        # signature would compile the block's code again)
+        step_block(state, episode, actions, active, obs, rngs, config, hull, report, np.int64(b))
     return -1
 
 
