@@ -145,11 +145,14 @@ def episode_fields(config: DivePlaneConfig, draw: EpisodeConfig, loading: Loadin
         raise ValueError(f"the speed profile has {len(knots)} knots; the environment takes at most {tr.MAX_KNOTS}")
     knot_time: Any = [0.0] * tr.MAX_KNOTS
     knot_speed: Any = [0.0] * tr.MAX_KNOTS
-    for k, (t, u) in enumerate(knots):
-        knot_time[k], knot_speed[k] = t, u
     if isinstance(draw.depth_command_m, np.ndarray):  # a batch: a row of knots per episode
-        knot_time = np.column_stack(np.broadcast_arrays(*knot_time))
-        knot_speed = np.column_stack(np.broadcast_arrays(*knot_speed))
+        knot_time = np.zeros((len(draw.depth_command_m), tr.MAX_KNOTS))
+        knot_speed = np.zeros_like(knot_time)
+    for k, (t, u) in enumerate(knots):
+        if isinstance(knot_time, list):
+            knot_time[k], knot_speed[k] = t, u
+        else:
+            knot_time[:, k], knot_speed[:, k] = t, u
     episode = {
         "params": loading.params, "n_knots": len(knots), "knot_time_s": knot_time, "knot_speed_mps": knot_speed,
         "depth_command_m": command, "disturbance_std_N": draw.disturbance_std_N, "sensor_noise": draw.sensor_noise,
@@ -170,10 +173,8 @@ def write_episode(records: np.ndarray, index: int | np.ndarray, fields: Mapping[
     if isinstance(index, (int, np.integer)):
         records[index] = tuple([fields[name] for name in names])  # (one assignment: a reset's Python cost)
         return
-    block = np.empty(len(index), dtype=records.dtype)  # filled field by field, then stored at once
     for name in names:
-        block[name] = fields[name]
-    records[index] = block
+        records[name][index] = fields[name]
 
 
 def check_options(config: DivePlaneConfig, options: Mapping[str, Any] | None) -> dict[str, Any]:

@@ -222,17 +222,16 @@ def reward_terms(pitch_rad: float, depth_error_m: float, effort: float, terminat
 
 
 @inline_kernel
-def observation(s: np.void, e: np.void, rngs: numba.typed.List, i: int, cfg: np.void, obs: np.ndarray) -> None:
+def observation(s: np.void, e: np.void, rng: np.random.Generator, i: int, cfg: np.void, obs: np.ndarray) -> None:
     """Write the observation of state ``s`` in episode ``e`` into row ``i`` of ``obs`` (float32,
-    :data:`N_OBS` columns), drawing its noise from generator ``rngs[i]`` when the episode has sensor
-    noise."""
+    :data:`N_OBS` columns), drawing its noise from ``rng`` (the sub-environment's generator) when the
+    episode has sensor noise."""
     depth = s.depth_m
     v0 = depth - e.depth_command_m
     v1, v2, v3 = s.pitch_rad, s.heave_mps, s.pitch_rate_radps
     v4, v5, v6, v7 = s.speed_mps, s.stern_plane_rad, s.bow_plane_rad, depth
     if e.sensor_noise:
         # rng.normal(0, 1, size=8) * std, one depth sensor for components 0 and 7.
-        rng = rngs[i]  # (taken only here: a typed list's item costs a reference count)
         std = cfg.noise_std
         n0 = rng.normal(0.0, 1.0) * std[0]
         n1 = rng.normal(0.0, 1.0) * std[1]
@@ -338,9 +337,12 @@ def step_block(state: np.ndarray, episode: np.ndarray, actions: FloatArray, acti
         s.time_s = s.time_s + dt
         s.speed_mps = speeds_end[j]
         std = e.disturbance_std_N
+        # The generator is taken from the list once per step: every item taken costs a reference count,
+        # and two per step halved what a second thread adds where the episodes draw numbers.
+        rng = rngs[i]
         if std > 0.0:  # a first-order Gauss-Markov process with stationary standard deviation std
             s.disturbance_N = (cfg.disturbance_decay * s.disturbance_N
-                               + cfg.disturbance_gain * rngs[i].normal(0.0, std))
+                               + cfg.disturbance_gain * rng.normal(0.0, std))
         reason = episode_end(x0, x1, x2, x3, e.depth_command_m, cfg)
         if reason != _DIVERGED:  # (a diverged state keeps the last valid one, and its observation)
             s.pitch_rad, s.heave_mps, s.pitch_rate_radps, s.depth_m = x0, x1, x2, x3
@@ -352,7 +354,7 @@ def step_block(state: np.ndarray, episode: np.ndarray, actions: FloatArray, acti
         r_depth, r_pitch, r_effort, r_termination = reward_terms(
             s.pitch_rad, s.depth_m - e.depth_command_m, efforts[j], terminated, cfg)
         if reason != _DIVERGED:
-            observation(s, e, rngs, i, cfg, obs)
+            observation(s, e, rng, i, cfg, obs)
         _report(block_report, j, s, e, r_depth, r_pitch, r_effort, r_termination, reason, terminated, truncated)
     # Key by key into the step's report (each key's row written in order, not 22 rows per env).
     for c in range(_N_REPORT):
@@ -436,5 +438,5 @@ def observe(state: np.ndarray, episode: np.ndarray, indices: np.ndarray, obs: np
         i = indices[k]
         s, e = state[i], episode[i]
         s.speed_mps = speed_at(s.time_s, e.n_knots, e.knot_time_s, e.knot_speed_mps)
-        observation(s, e, rngs, i, cfg, obs)
+        observation(s, e, rngs[i], i, cfg, obs)
         _report(report, i, s, e, 0.0, 0.0, 0.0, 0.0, 0, False, False)
