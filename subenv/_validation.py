@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["integer", "interval", "is_number", "non_negative", "number", "positive", "require"]
+__all__ = ["integer", "interval", "is_number", "non_negative", "number", "positive", "real_array", "require"]
 
 
 def is_number(value: Any) -> bool:
@@ -63,3 +63,15 @@ def interval(name: str, value: Any, low: float = -math.inf, high: float = math.i
           and low <= value[0] <= value[1] <= high)
     require(name, value, ok, f"a (low, high) pair of finite numbers with {low} <= low <= high <= {high}")
     return float(value[0]), float(value[1])
+
+
+def real_array(name: str, value: Any) -> np.ndarray:
+    """``value`` as a float64 array of real numbers (Python or NumPy; not bools, complex numbers,
+    strings or a ragged sequence)."""
+    try:
+        array = np.asarray(value)
+    except (ValueError, TypeError):  # a ragged sequence
+        raise ValueError(f"{name}={value!r} is invalid: must be an array of real numbers of one shape") from None
+    if array.dtype.kind not in "iuf":
+        raise ValueError(f"{name}={value!r} is invalid: must hold real numbers (it holds {array.dtype})")
+    return array.astype(np.float64, copy=False)

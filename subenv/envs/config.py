@@ -62,6 +62,14 @@ MAX_SPEED_MPS: Final = 10.0
 MAX_DEPTH_COMMAND_M: Final = 1000.0
 OBS_MARGIN_M: Final = 10.0
 """Room beyond the depth band for the terminal observation and noise [m]."""
+MIN_PITCH_LIMIT_RAD: Final = 0.01
+"""The smallest ``max_pitch_rad`` (0.57 deg): the pitch term divides by it, and any terminal pitch
+over it stays a finite reward with the largest weight."""
+MAX_WEIGHT: Final = 1e6
+"""The largest reward weight and termination penalty: every reward term stays finite (the pitch term
+is at most ``MAX_WEIGHT * (pi / MIN_PITCH_LIMIT_RAD)^2`` in size, and more only at a terminal pitch
+beyond pi)."""
+MAX_PLANE_RATE_RADPS: Final = 1000.0
 
 
 @dataclass(frozen=True)
@@ -106,13 +114,14 @@ class DivePlaneConfig:
         put(self, "dt", check.positive("dt", self.dt, upper=10.0))
         put(self, "substeps", check.integer("substeps", self.substeps, 1, 1000))
         if self.plane_rate_limit_radps is not None:
-            put(self, "plane_rate_limit_radps", check.positive("plane_rate_limit_radps", self.plane_rate_limit_radps))
-        put(self, "max_pitch_rad", check.positive("max_pitch_rad", self.max_pitch_rad, upper=math.pi / 2))
-        put(self, "max_depth_error_m", check.positive("max_depth_error_m", self.max_depth_error_m))
-        put(self, "depth_scale_m", check.positive("depth_scale_m", self.depth_scale_m))
-        put(self, "pitch_weight", check.non_negative("pitch_weight", self.pitch_weight))
-        put(self, "effort_weight", check.non_negative("effort_weight", self.effort_weight))
-        put(self, "termination_penalty", check.non_negative("termination_penalty", self.termination_penalty))
+            put(self, "plane_rate_limit_radps",
+                check.positive("plane_rate_limit_radps", self.plane_rate_limit_radps, upper=MAX_PLANE_RATE_RADPS))
+        put(self, "max_pitch_rad", check.number("max_pitch_rad", self.max_pitch_rad, MIN_PITCH_LIMIT_RAD, math.pi / 2))
+        put(self, "max_depth_error_m",
+            check.positive("max_depth_error_m", self.max_depth_error_m, upper=MAX_DEPTH_COMMAND_M))
+        put(self, "depth_scale_m", check.positive("depth_scale_m", self.depth_scale_m, upper=MAX_DEPTH_COMMAND_M))
+        for name in ("pitch_weight", "effort_weight", "termination_penalty"):
+            put(self, name, check.number(name, getattr(self, name), 0.0, MAX_WEIGHT))
 
     def replace(self, **changes: Any) -> DivePlaneConfig:
         """A copy with some fields changed, checked again."""

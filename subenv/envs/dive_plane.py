@@ -11,7 +11,9 @@ import gymnasium as gym
 import numpy as np
 from numba import typed
 
+from subenv import _validation as check
 from subenv.envs import transition as tr
+from subenv.envs._interrupts import interrupts_deferred
 from subenv.envs.config import OBSERVATION_NAMES, ControlMode, DivePlaneConfig
 from subenv.envs.episodes import Loadings, check_options, draw_episode, write_episode
 from subenv.envs.info import step_info
@@ -110,9 +112,16 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
     - ``control``: ``"dual"`` (one command, eq. 2.58) or ``"independent"`` (two).
     - ``alpha``: bow/stern allocation in [-1, 1] for ``"dual"``; must be 0 with
       ``"independent"``, whose reported critical speed is that of the stern planes.
-    - ``dt``: control period [s]; each step integrates ``substeps`` RK4 steps with the planes
-      held. The default 0.5 s with 2 substeps keeps the integration error below 1 mm and 1e-5 rad
-      over 600 s against ``solve_ivp`` at rtol 1e-10 (``tests/dynamics/test_integrator.py``).
+    - ``dt``: control period [s], in (0, 10]; each step integrates ``substeps`` (1 to 1000) RK4
+      steps with the planes held. The default 0.5 s with 2 substeps keeps the integration error
+      below 1 mm and 1e-5 rad over 600 s against ``solve_ivp`` at rtol 1e-10
+      (``tests/dynamics/test_integrator.py``).
+    - ``plane_rate_limit_radps``: None (planes move at once) or the planes' largest rate, in
+      (0, 1000] rad/s.
+    - ``max_pitch_rad`` in [0.01, pi/2], ``max_depth_error_m`` in (0, 1000] m: the Episode End
+      limits. ``depth_scale_m`` in (0, 1000] m, ``pitch_weight``, ``effort_weight`` and
+      ``termination_penalty`` in [0, 1e6]: the Rewards' terms. Within these bounds every reward
+      and observation is finite; a value outside them raises ``ValueError``.
     - ``config``: instead of the arguments above, a :class:`~subenv.envs.DivePlaneConfig` (the
       object they are checked into; ``env.config``).
 
@@ -227,7 +236,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
     def step(self, action: np.ndarray) -> tuple[np.ndarray, SupportsFloat, bool, bool, dict[str, Any]]:
         if self.episode is None:
             raise gym.error.ResetNeeded("Cannot call step() before reset()")
-        a = np.ascontiguousarray(action, dtype=np.float64).reshape(1, -1)
+        a = np.ascontiguousarray(check.real_array("action", action)).reshape(1, -1)
         if a.shape[1:] != self._action_shape:
             raise ValueError(
                 f"action has shape {np.shape(action)}: must have shape {self._action_shape} "
@@ -354,7 +363,8 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         """A numba typed list holding ``self.np_random`` (rebuilt when the generator changes)."""
         rng = self.np_random
         if self._rngs_source is not rng:
-            self._rngs = typed.List([rng])
+            with interrupts_deferred():
+                self._rngs = typed.List([rng])
             self._rngs_source = rng
         return self._rngs
 

@@ -216,10 +216,9 @@ def _initial_state(config: DivePlaneConfig, value: Any, drawn: tuple[float, floa
             f"options['initial_state']={value!r} is invalid: must be (pitch, heave, pitch_rate, depth) "
             f"or a mapping with keys {list(STATE_KEYS)}"
         )
-    try:
-        state = [float(v) for v in state]
-    except (TypeError, ValueError):
-        raise ValueError(f"options['initial_state']={value!r} is invalid: must hold numbers") from None
+    if not all(check.is_number(v) for v in state):
+        raise ValueError(f"options['initial_state']={value!r} is invalid: must hold real numbers")
+    state = [float(v) for v in state]
     for key, v in zip(STATE_KEYS, state):
         if key == "depth" and math.isnan(command) and math.isnan(v):
             continue  # (the drawn depth, not known yet)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any, Final, cast
+from typing import Any, Final
 
 import numba
 import numpy as np
@@ -14,6 +14,7 @@ from numba import typed
 
 from subenv import _validation as check
 from subenv.envs import transition as tr
+from subenv.envs._interrupts import interrupts_deferred
 from subenv.envs.config import DivePlaneConfig
 from subenv.envs.episodes import (
     Loadings,
@@ -64,7 +65,9 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         ``info["final_info"]``) or ``DISABLED`` (reset ended sub-environments with
         ``reset(options={"reset_mask": mask})``). Stored in ``metadata["autoreset_mode"]``.
     render_mode : {None, "rgb_array"}
-        ``render()`` returns a one-element tuple with the first sub-environment's frame.
+        ``render()`` returns a tuple with one frame per sub-environment (as Gymnasium's
+        ``CartPoleVectorEnv``), so that Gymnasium's vector ``RecordVideo`` and ``HumanRendering``
+        tile them.
     threads : int, optional
         Share the compiled step among this many of numba's threads (``numba.prange`` over blocks
         of 64 sub-environments, on numba's TBB threading layer, which is safe under ``fork`` and
@@ -123,8 +126,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
             ) from None
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
-                f"render_mode={render_mode!r} is invalid: must be None or one of {self.metadata['render_modes']} "
-                "(the vector environment renders its first sub-environment)"
+                f"render_mode={render_mode!r} is invalid: must be None or one of {self.metadata['render_modes']}"
             )
         most = numba.config.NUMBA_NUM_THREADS if tr.threading_layer_available() else 1
         if threads is None:
@@ -180,7 +182,9 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         self._unbuilt = np.zeros(n, dtype=bool)
         self._unbuilt_scenario = np.full(n, None, dtype=object)
         self._unbuilt_uniforms = np.empty((n, 0))
-        self._history: list[tuple[float, float, float]] = []  # of the first sub-environment, for render()
+        # (time, depth, ordered depth) of each sub-environment's episode so far, for render()
+        self._histories: list[list[tuple[float, float, float]]] = [[] for _ in range(n)] if render_mode else []
+        self._interrupted = False  # a step or reset was left midway (KeyboardInterrupt): reset() before stepping
 
     # --- Gymnasium API ----------------------------------------------------------------------
     def reset(
@@ -193,36 +197,69 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         Other ``options`` are :class:`~subenv.envs.DivePlaneEnv`'s, applied to every reset one.
         """
         n = self.num_envs
-        if seed is None:
-            seeds: list[int | None] = [None] * n
-        elif isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
-            seeds = [int(seed) + i for i in range(n)]
-        else:
-            seeds = list(cast(Sequence[Any], seed))
-            if len(seeds) != n:
-                raise ValueError(f"seed has {len(seeds)} entries: a list of seeds must have num_envs={n} entries")
+        seeds = _seeds(seed, n)
         options = dict(options or {})
         mask = options.pop("reset_mask", None)
         if mask is None:
             mask = self._everyone
-        elif not (isinstance(mask, np.ndarray) and mask.dtype == np.bool_ and mask.shape == (n,) and mask.any()):
-            raise ValueError(
-                f"options['reset_mask']={mask!r} is invalid: must be a bool array of shape ({n},) with a True value"
-            )
+        else:  # SyncVectorEnv's checks, with its exception types
+            if not isinstance(mask, np.ndarray):
+                raise TypeError(f"options['reset_mask']={mask!r} is invalid: must be a numpy array, got {type(mask)}")
+            if mask.shape != (n,):
+                raise ValueError(f"options['reset_mask'] has shape {mask.shape}: must have shape ({n},)")
+            if mask.dtype != np.bool_:
+                raise TypeError(f"options['reset_mask'] has dtype {mask.dtype}: must have dtype bool")
+            if not mask.any():
+                raise ValueError("options['reset_mask'] is all False: must have at least one True value")
+            if self._interrupted:
+                raise RuntimeError("a step or reset was interrupted: reset every sub-environment (no reset_mask)")
         checked = check_options(self.config, options)
         indices = np.flatnonzero(mask)
-        for i in indices:
-            if seeds[i] is not None or self._generators[i] is None:
+        # A Ctrl-C arriving during the reset is delivered when it is complete (numba's typed list
+        # is rebuilt here: see subenv.envs._interrupts); an error leaves it as it was.
+        with interrupts_deferred():
+            saved = self._saved() if checked else None
+            self._interrupted = True  # until this reset is complete
+            try:
+                result = self._reset(indices, seeds, checked, mask)
+            except ValueError:  # an option out of range for an episode drawn (initial depth and order)
+                if saved is not None:
+                    self._restore(saved)
+                raise
+            self._interrupted = False
+        return result
+
+    def _reset(self, indices: np.ndarray, seeds: list[int | None], options: dict[str, Any],
+               mask: np.ndarray) -> tuple[np.ndarray, dict[str, Any]]:
+        seeded = [i for i in indices.tolist() if seeds[i] is not None or self._generators[i] is None]
+        if seeded:
+            for i in seeded:
                 self._generators[i], self._seeds[i] = seeding.np_random(seeds[i])
-                if self._rngs is not None:
-                    self._rngs[i] = self._generators[i]
-        if self._rngs is None:
-            self._rngs = typed.List(self._generators)
-        report = np.zeros((len(tr.REPORT_KEYS), n))
-        self._reset_envs(indices, checked, report)
+            self._bind_generators()
+        report = np.zeros((len(tr.REPORT_KEYS), self.num_envs))
+        self._reset_envs(indices, options, report)
         self._done[indices] = False
         self._any_done = bool(self._done.any())
         return self._obs.copy(), step_infos(report, None if mask is self._everyone else mask, self._no_reasons)
+
+    def _saved(self) -> dict[str, Any]:
+        """What a reset changes (kept while its options are checked against the episodes drawn)."""
+        return {"generators": list(self._generators), "seeds": list(self._seeds), "rngs": self._rngs,
+                "states": [g.bit_generator.state if g is not None else None for g in self._generators],
+                "records": (self._state.copy(), self._episode.copy(), self._obs.copy()),
+                "flags": (self._done.copy(), self._any_done, self._started.copy(), self._unbuilt.copy()),
+                "lists": (list(self.vehicles), list(self._episodes)), "interrupted": self._interrupted}
+
+    def _restore(self, saved: dict[str, Any]) -> None:
+        self._generators, self._seeds, self._rngs = saved["generators"], saved["seeds"], saved["rngs"]
+        for g, state in zip(self._generators, saved["states"]):
+            if g is not None:
+                g.bit_generator.state = state
+        self._state[:], self._episode[:], self._obs[:] = saved["records"]
+        done, self._any_done, started, unbuilt = saved["flags"]
+        self._done[:], self._started[:], self._unbuilt[:] = done, started, unbuilt
+        self.vehicles, self._episodes = saved["lists"]
+        self._interrupted = saved["interrupted"]
 
     def step(
         self, actions: np.ndarray
@@ -231,6 +268,11 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
             if not self._started.all():
                 raise _reset_needed(np.flatnonzero(~self._started))
             self._ready = True
+        if self._interrupted:
+            raise RuntimeError(
+                "a step or reset of this vector environment was interrupted (e.g. by KeyboardInterrupt) and its "
+                "sub-environments may be midway: call reset() before stepping again"
+            )
         actions = self._check_actions(actions)
         mode = self.autoreset_mode
         active = self._everyone
@@ -244,20 +286,28 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
             resetting = np.flatnonzero(self._done)  # NEXT_STEP: these reset instead of stepping
             active = ~self._done
         report = np.empty((len(tr.REPORT_KEYS), self.num_envs))  # one row per info key, filled by the kernels
+        # From here until the step returns the sub-environments are midway: an exception raised in
+        # between (a KeyboardInterrupt arrives between any two bytecodes) leaves the environment
+        # refusing to step until reset() (the compiled step itself runs to its end: no signal stops it).
+        self._interrupted = True
         bad = self._step_active(actions, active, report)
         if bad >= 0:
+            self._interrupted = False  # (nothing was stepped)
             raise ValueError(f"actions[{bad}]={actions[bad].tolist()!r} is invalid: must be finite (no NaN or inf)")
         if resetting is not None:
             self._reset_envs(resetting, {}, report)  # reported as reward 0, not terminated, not truncated
-        if self.render_mode is not None and active[0]:
-            self._history.append((report[_TIME, 0], report[_DEPTH, 0], report[_COMMAND, 0]))
+        if self.render_mode is not None:
+            for i in np.flatnonzero(active).tolist():
+                self._histories[i].append((report[_TIME, i], report[_DEPTH, i], report[_COMMAND, i]))
         rewards = report[_REWARD].copy()
         terminated, truncated = report[_TERMINATED:_TRUNCATED + 1] > 0.0
         done = terminated | truncated
         self._any_done = np.count_nonzero(done) > 0
         self._done = done
         if mode is not AutoresetMode.SAME_STEP or not self._any_done:
-            return self._obs.copy(), rewards, terminated, truncated, step_infos(report, None, self._no_reasons)
+            result = self._obs.copy(), rewards, terminated, truncated, step_infos(report, None, self._no_reasons)
+            self._interrupted = False
+            return result
         final_obs = np.full(self.num_envs, None, dtype=object)
         ended = np.flatnonzero(done)
         for i in ended:
@@ -269,10 +319,11 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         self._any_done = False
         infos = step_infos(report, None, self._no_reasons)
         infos.update(final)
+        self._interrupted = False
         return self._obs.copy(), rewards, terminated, truncated, infos
 
     def render(self) -> tuple[np.ndarray, ...] | None:
-        """A one-element tuple with the first sub-environment's frame (``render_mode="rgb_array"``)."""
+        """One frame per sub-environment (``render_mode="rgb_array"``), as Gymnasium's ``CartPoleVectorEnv``."""
         if self.render_mode is None:
             from gymnasium import logger
 
@@ -284,7 +335,9 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
             return None
         from subenv.envs.rendering import Frame, render_rgb
 
-        return (render_rgb(Frame.of(self.config.base_vehicle, self._state[0], self._episode[0], self._history)),)
+        vehicle = self.config.base_vehicle
+        return tuple(render_rgb(Frame.of(vehicle, self._state[i], self._episode[i], self._histories[i]))
+                     for i in range(self.num_envs))
 
     def set_scenario(self, scenario: str | Scenario) -> None:
         """Draw every sub-environment's following episodes from ``scenario``
@@ -334,9 +387,18 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
         if any(g is not None for g in self._generators):
-            self._rngs = typed.List([g if g is not None else np.random.default_rng() for g in self._generators])
+            self._bind_generators()
 
     # --- helpers ----------------------------------------------------------------------------
+    def _bind_generators(self) -> None:
+        """The compiled step's view of the generators: a numba typed list, built whole and then
+        swapped in (an interrupted build leaves the last one); a never-reset sub-environment holds a
+        placeholder its steps never draw from."""
+        placeholder = np.random.default_rng(0)
+        with interrupts_deferred():
+            rngs = typed.List([g if g is not None else placeholder for g in self._generators])
+        self._rngs = rngs
+
     def _step_active(self, actions: np.ndarray, active: np.ndarray, report: np.ndarray) -> int:
         """The compiled step of the ``active`` sub-environments, on :attr:`threads` of numba's threads
         (:func:`subenv.envs.transition.step`: -1, or the first with a non-finite action)."""
@@ -353,7 +415,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
 
     def _check_actions(self, actions: Any) -> np.ndarray:
         n, shape = self.num_envs, tuple(self.single_action_space.shape or ())
-        a = np.asarray(actions, dtype=np.float64)
+        a = check.real_array("actions", actions)
         if a.shape != (n, *shape):
             if shape == (1,) and a.shape == (n,):
                 a = a.reshape(n, 1)
@@ -380,8 +442,9 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         tr.observe(self._state, self._episode, index, self._obs, self._rngs, self._constants, report)
         if not self._ready:
             self._started[index] = True
-        if self.render_mode is not None and 0 in index:
-            self._history = [(0.0, self._state[0]["depth_m"], self._episode[0]["depth_command_m"])]
+        if self.render_mode is not None:
+            for i in index.tolist():
+                self._histories[i] = [(0.0, self._state[i]["depth_m"], self._episode[i]["depth_command_m"])]
 
     def _draw_batch(self, index: np.ndarray) -> None:
         """Draw the episodes of ``index`` as arrays (a scenario with one loading, no options): each
@@ -406,6 +469,26 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         self._unbuilt_uniforms[index, :k] = uniforms
         self._unbuilt_scenario[index] = scenario
         self._unbuilt[index] = True
+
+
+def _seeds(seed: Any, n: int) -> list[int | None]:
+    """Each sub-environment's seed from ``reset(seed=...)``, checked before any is used."""
+    def is_seed(value: Any) -> bool:
+        return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)) and value >= 0
+
+    allowed = f"None, an integer >= 0 or a sequence of num_envs={n} such integers (or None)"
+    if seed is None:
+        return [None] * n
+    if is_seed(seed):
+        return [int(seed) + i for i in range(n)]
+    check.require("seed", seed, isinstance(seed, (Sequence, np.ndarray)) and not isinstance(seed, (str, bytes)),
+                  allowed)
+    seeds = list(seed)
+    if len(seeds) != n:
+        raise ValueError(f"seed has {len(seeds)} entries: a sequence of seeds must have num_envs={n} entries")
+    for i, value in enumerate(seeds):
+        check.require(f"seed[{i}]", value, value is None or is_seed(value), "None or an integer >= 0")
+    return [None if value is None else int(value) for value in seeds]
 
 
 def _reset_needed(indices: np.ndarray) -> Exception:

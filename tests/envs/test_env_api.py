@@ -264,7 +264,7 @@ def test_termination_reasons():
 def test_a_diverging_integration_ends_the_episode_with_finite_observations():
     # A 10 s step at 8 m/s is far outside RK4's stability region: the state blows up.
     env = subenv.DivePlaneEnv(scenario="Nominal", dt=10.0, substeps=1, max_pitch_rad=math.pi / 2,
-                              max_depth_error_m=1e6)
+                              max_depth_error_m=1000.0)
     env.reset(seed=0, options={"speed": 8.0, "initial_state": (0.3, 0.5, 0.1, 500.0), "depth_command": 500.0})
     obs, *_, info = _run_until_done(env, np.array([1.0], dtype=np.float32))
     assert info["termination_reason"] == "diverged"
@@ -283,9 +283,9 @@ def test_a_diverging_integration_ends_the_episode_with_finite_observations():
         ({"dt": math.nan}, r"dt=nan is invalid"),
         ({"substeps": 0}, r"substeps=0 is invalid: must be an integer in \[1, 1000\]"),
         ({"plane_rate_limit_radps": -1.0}, r"plane_rate_limit_radps=-1\.0 is invalid"),
-        ({"max_pitch_rad": 2.0}, r"max_pitch_rad=2\.0 is invalid: must be a finite number in \(0, 1\.57"),
+        ({"max_pitch_rad": 2.0}, r"max_pitch_rad=2\.0 is invalid: must be a finite number in \[0\.01, 1\.57"),
         ({"max_depth_error_m": 0}, r"max_depth_error_m=0 is invalid"),
-        ({"effort_weight": -1.0}, r"effort_weight=-1\.0 is invalid: must be a finite number >= 0"),
+        ({"effort_weight": -1.0}, r"effort_weight=-1\.0 is invalid: must be a finite number in \[0\.0, 1000000\.0\]"),
         ({"render_mode": "ansi"}, r"render_mode='ansi' is invalid: must be None or one of \['human', 'rgb_array'\]"),
     ],
 )

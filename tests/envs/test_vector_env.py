@@ -82,7 +82,7 @@ def test_reproduces_sync_vector_env_through_time_limits_and_other_configurations
     run_both("subenv/LowSpeed-v0", mode, steps=150, alpha=0.5, dt=0.25, substeps=1, max_pitch_rad=0.3)
     # 10 s steps at 2-2.6 u_cr leave RK4's stability region: "diverged" ends, last valid observation kept.
     assert run_both("subenv/SpeedTransient-v0", mode, steps=60, dt=10.0, substeps=1, max_pitch_rad=math.pi / 2,
-                    max_depth_error_m=1e6) > 10
+                    max_depth_error_m=1000.0) > 10
 
 
 def test_a_single_env_matches_the_first_row_and_seeds_are_offset_per_env():
@@ -317,7 +317,7 @@ def test_bad_actions_raise_before_any_sub_environment_steps():
         independent.step(np.zeros(2))
 
 
-def test_render_rgb_array_shows_the_first_sub_environment():
+def test_render_rgb_array_shows_every_sub_environment():
     native = gym.make_vec("subenv/PeriscopeDepth-v0", num_envs=3, render_mode="rgb_array")
     single = gym.make("subenv/PeriscopeDepth-v0", render_mode="rgb_array")
     native.reset(seed=4)
@@ -325,9 +325,9 @@ def test_render_rgb_array_shows_the_first_sub_environment():
     for _ in range(15):
         native.step(np.full((3, 1), 0.5, dtype=np.float32))
         single.step(np.array([0.5], dtype=np.float32))
-    (frame,) = native.render()
-    assert frame.shape == (480, 720, 3) and frame.dtype == np.uint8
-    np.testing.assert_array_equal(frame, single.render())
+    frames = native.render()
+    assert len(frames) == 3 and all(f.shape == (480, 720, 3) and f.dtype == np.uint8 for f in frames)
+    np.testing.assert_array_equal(frames[0], single.render())
     with pytest.warns(UserWarning, match="without specifying any render mode"):
         assert gym.make_vec("subenv/Nominal-v0", num_envs=2).render() is None
 
