@@ -266,19 +266,19 @@ class Vehicle:
         changes: dict[str, Any] = {}
         labels = []
         if z_GB_m is not None:
-            check.number("z_GB_m", z_GB_m)
+            z_GB_m = check.number("z_GB_m", z_GB_m)
             changes["z_G_m"] = self.z_B_m + z_GB_m
             labels.append(f"z_GB={z_GB_m:g}m")
         if x_GB_m is not None:
-            check.number("x_GB_m", x_GB_m)
+            x_GB_m = check.number("x_GB_m", x_GB_m)
             changes["x_G_m"] = self.x_B_m + x_GB_m
             labels.append(f"x_GB={x_GB_m:g}m")
         if excess_buoyancy_N is not None:
-            check.number("excess_buoyancy_N", excess_buoyancy_N)
+            excess_buoyancy_N = check.number("excess_buoyancy_N", excess_buoyancy_N)
             changes["buoyancy_N"] = self.weight_N + excess_buoyancy_N
             labels.append(f"B-W={excess_buoyancy_N:g}N")
         if crossflow_drag is not None:
-            changes["crossflow_drag"] = crossflow_drag
+            crossflow_drag = changes["crossflow_drag"] = check.non_negative("crossflow_drag", crossflow_drag)
             labels.append(f"C_D={crossflow_drag:g}")
         if not changes and name is None:
             return self

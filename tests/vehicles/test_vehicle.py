@@ -183,3 +183,24 @@ def test_variant_checks_what_it_changes(suboff):
         suboff.variant(excess_buoyancy_N=-2 * suboff.weight_N)
     with pytest.raises(ValueError, match=r"crossflow_drag=-0\.1 is invalid: must be a finite number >= 0"):
         suboff.variant(crossflow_drag=-0.1)
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        ({"crossflow_drag": "0.3"}, r"crossflow_drag='0\.3' is invalid: must be a finite number >= 0"),
+        ({"z_GB_m": 10**400}, r"z_GB_m=<an integer of 1329 bits> is invalid: must be a finite number"),
+        ({"x_GB_m": -(10**400)}, r"x_GB_m=<an integer of 1329 bits> is invalid: must be a finite number"),
+        ({"z_GB_m": True}, r"z_GB_m=True is invalid: must be a finite number"),
+        ({"excess_buoyancy_N": np.True_}, r"excess_buoyancy_N=np\.True_ is invalid: must be a finite number"),
+    ],
+)
+def test_variant_rejects_non_reals_and_huge_values_with_value_error(suboff, changes, message):
+    with pytest.raises(ValueError, match=message):
+        suboff.variant(**changes)
+
+
+def test_variant_accepts_numpy_reals(suboff):
+    v = suboff.variant(z_GB_m=np.float32(0.05), crossflow_drag=np.float64(0.2), x_GB_m=np.int64(0))
+    assert (v.z_GB_m, v.crossflow_drag, v.x_GB_m) == (pytest.approx(0.05), 0.2, 0.0)
+    assert type(v.crossflow_drag) is float and type(v.z_G_m) is float
