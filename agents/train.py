@@ -50,6 +50,7 @@ from agents.policy import (
     MODEL_FILE,
     VECNORMALIZE_FILE,
     load_agent,
+    mark_run,
     model_folder,
     save_model,
     save_statistics,
@@ -197,6 +198,8 @@ def train(
         else:
             with _hyperparameters_checked(config):
                 model = algo_class(config.policy, venv, seed=seed, verbose=0, device="cpu", **model_kwargs(config))
+        if isinstance(venv, VecNormalize):
+            mark_run(model, venv)  # every model and statistics file of this run carries its id
         formats = ["csv"] + (["stdout"] if verbose else []) + (["tensorboard"] if find_spec("tensorboard") else [])
         model.set_logger(configure(str(run_dir), formats))
 
