@@ -45,6 +45,7 @@ __all__ = [
     "load_config",
     "model_kwargs",
     "parse_overrides",
+    "read_yaml_file",
 ]
 
 HYPERPARAMS_DIR: Final = Path(__file__).parent / "hyperparams"
@@ -252,20 +253,18 @@ def load_config(
         key (the message names it and the known ones); a value of the wrong kind.
     """
     import gymnasium as gym
-    import yaml
 
     import subenv  # noqa: F401  (registers the ids)
 
     _check_algo(algo)
-    if env_id not in gym.registry:
-        known = sorted(k for k in gym.registry if k.startswith("subenv/"))
-        raise ValueError(f"env_id={env_id!r} is not registered: subenv's ids are {known}")
+    known = sorted(k for k, spec in gym.registry.items() if spec.namespace == "subenv")
+    if env_id not in known:  # another library's id (CartPole-v1) would fail deep inside the training stack
+        raise ValueError(f"env_id={env_id!r} is not registered by subenv: must be one of {known}")
     path = Path(path) if path is not None else HYPERPARAMS_DIR / f"{algo}.yml"
     try:
-        text = path.read_text()
+        document = read_yaml_file(path)
     except FileNotFoundError:
         raise ValueError(f"hyperparameter file {str(path)!r} does not exist") from None
-    document = yaml.safe_load(text)
     if not isinstance(document, dict):
         raise ValueError(f"{path}: must be a mapping of environment ids to hyperparameters")
     key = entry_key or (env_id if env_id in document else DEFAULT_KEY)
@@ -400,8 +399,36 @@ def parse_overrides(items: list[str]) -> dict[str, Any]:
         key, sep, text = item.partition(":")
         if not sep or not key:
             raise ValueError(f"--hyperparams {item!r} is invalid: must be key:value")
-        out[key.strip()] = yaml.safe_load(text)
+        try:
+            out[key.strip()] = yaml.safe_load(text)
+        except yaml.YAMLError as exc:
+            problem = _yaml_problem(exc)
+            raise ValueError(f"--hyperparams {item!r} is invalid: the value must be YAML ({problem})") from None
     return out
+
+
+def read_yaml_file(path: Path) -> Any:
+    """``yaml.safe_load`` of the file at ``path``; a one-line ValueError naming it if it is not UTF-8 YAML.
+
+    Raises ``FileNotFoundError`` (and the other ``OSError``) as reading does.
+    """
+    import yaml
+
+    try:
+        return yaml.safe_load(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{str(path)!r} is not UTF-8 text (byte {exc.object[exc.start]:#04x} at position "
+                         f"{exc.start}): must be a YAML file") from None
+    except yaml.YAMLError as exc:
+        raise ValueError(f"{str(path)!r} is not valid YAML: {_yaml_problem(exc)}") from None
+
+
+def _yaml_problem(exc: Exception) -> str:
+    """PyYAML's error in one line: the problem and where (its own message spans several, quoting the text)."""
+    mark = getattr(exc, "problem_mark", None)
+    problem = getattr(exc, "problem", None) or str(exc)
+    where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+    return " ".join(f"{problem}{where}".split())
 
 
 def model_kwargs(config: AgentConfig) -> dict[str, Any]:

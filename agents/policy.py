@@ -16,6 +16,8 @@ from __future__ import annotations
 import io
 import pickle
 import re
+import uuid
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final
@@ -23,12 +25,12 @@ from typing import Any, Final
 import numpy as np
 from gymnasium import spaces
 
-from agents.config import AgentConfig, load_config
+from agents.config import AgentConfig, load_config, read_yaml_file
 from subenv.evaluation.results import atomic_write_bytes
 
-__all__ = ["CHECKPOINT_DIR", "CONFIG_FILE", "MODEL_FILE", "SELECTED_DIR", "VECNORMALIZE_FILE", "NumpyActor",
-           "TrainedAgent", "load_agent", "model_folder", "save_model", "save_statistics", "statistics_file",
-           "training_run"]
+__all__ = ["CHECKPOINT_DIR", "CONFIG_FILE", "MODEL_FILE", "RUN_ID_ATTRIBUTE", "SELECTED_DIR", "VECNORMALIZE_FILE",
+           "NumpyActor", "TrainedAgent", "load_agent", "mark_run", "model_folder", "save_model", "save_statistics",
+           "statistics_file", "training_run"]
 
 MODEL_FILE: Final = "model.zip"
 VECNORMALIZE_FILE: Final = "vecnormalize.pkl"
@@ -38,6 +40,8 @@ CHECKPOINT_DIR: Final = "checkpoints"
 """A run's sub-folder of SB3 checkpoints, ``rl_model_<N>_steps.zip``."""
 SELECTED_DIR: Final = "selected"
 """A run's sub-folder with the policy that did best on validation episodes (:mod:`agents.selection`)."""
+RUN_ID_ATTRIBUTE: Final = "subenv_run_id"
+"""The attribute, saved with a run's models and statistics, that ties them together (:func:`mark_run`)."""
 _CHECKPOINT = re.compile(r"^(?P<prefix>.+)_(?P<steps>\d+)_steps\.zip$")
 
 
@@ -214,7 +218,14 @@ def load_agent(path: str | Path, env: Any = None, device: str = "cpu") -> Traine
     FileNotFoundError
         No model, or no config, where ``path`` says.
     ValueError
-        ``env`` has other spaces than the agent; the normalisation statistics do not fit the model.
+        ``env`` has other spaces than the agent; a model, config or statistics file that cannot be read
+        (the message names it); the statistics do not fit the model, or are another run's.
+
+    Warns
+    -----
+    UserWarning
+        The model or its statistics were saved without a run id (before :func:`mark_run`), so
+        that they belong together cannot be checked.
     """
     from agents.config import algorithm_class
 
@@ -224,23 +235,72 @@ def load_agent(path: str | Path, env: Any = None, device: str = "cpu") -> Traine
         raise FileNotFoundError(f"no trained model at {str(path)!r} (expected a folder with {MODEL_FILE} or a .zip file)")
     run_dir = model_folder(model_file)
     config = read_config(run_dir / CONFIG_FILE)
-    model = algorithm_class(config.algo).load(model_file, device=device)
+    try:
+        model = algorithm_class(config.algo).load(model_file, device=device)
+    except Exception as exc:  # SB3 fails in its own ways: AssertionError, TypeError, ValueError, zipfile errors
+        raise ValueError(
+            f"{str(model_file)!r} cannot be loaded ({type(exc).__name__}: {_one_line(exc)}): must be a complete "
+            f"{config.algo.upper()} model saved by Stable-Baselines3, the algorithm {str(run_dir / CONFIG_FILE)!r} names"
+        ) from exc
     stats_file = statistics_file(model_file, run_dir)
     stats = None
     if config.normalize is not None and config.normalize.norm_obs:
         if not stats_file.is_file():
             raise FileNotFoundError(f"{str(model_file)!r} was trained with normalised observations, but its "
                                     f"statistics {str(stats_file)!r} are missing")
-        with stats_file.open("rb") as f:
-            stats = pickle.load(f)  # noqa: S301 - our own VecNormalize file, as SB3's VecNormalize.load does
+        stats = _read_statistics(stats_file)
         shape = np.shape(stats.obs_rms.mean)
         if shape != model.observation_space.shape:
             raise ValueError(f"{str(stats_file)!r} has statistics of shape {shape}; the model observes "
                              f"{model.observation_space.shape}")
+        _check_same_run(model, model_file, stats, stats_file)
     agent = TrainedAgent.from_model(model_file, model, config, stats)
     if env is not None:
         agent.check_spaces(env)
     return agent
+
+
+def _read_statistics(path: Path) -> Any:
+    """The ``VecNormalize`` pickled at ``path`` (as SB3's ``VecNormalize.load`` reads it, without an env)."""
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    try:
+        with path.open("rb") as f:
+            stats = pickle.load(f)  # noqa: S301 - our own VecNormalize file, as SB3's VecNormalize.load does
+    except Exception as exc:  # a truncated or foreign pickle fails with any of a dozen exception types
+        raise ValueError(f"{str(path)!r} cannot be read ({type(exc).__name__}: {_one_line(exc)}): must be "
+                         "VecNormalize statistics saved with the model") from exc
+    if not isinstance(stats, VecNormalize):
+        raise ValueError(f"{str(path)!r} holds a {type(stats).__name__}: must be VecNormalize statistics")
+    return stats
+
+
+def mark_run(model: Any, venv: Any) -> str:
+    """Give ``model`` and its ``VecNormalize`` ``venv`` a new run id, saved with each (SB3 saves a model's
+    attributes, pickle the statistics'), so that :func:`load_agent` refuses another run's statistics.
+
+    Every model and statistics file a run writes (final, checkpoints, ``best_model.zip``, ``selected/``)
+    then carries it. Returns the id.
+    """
+    run_id = uuid.uuid4().hex
+    setattr(model, RUN_ID_ATTRIBUTE, run_id)
+    setattr(venv, RUN_ID_ATTRIBUTE, run_id)
+    return run_id
+
+
+def _check_same_run(model: Any, model_file: Path, stats: Any, stats_file: Path) -> None:
+    # vars(): an unpickled VecNormalize has no wrapped env, and its __getattr__ would look there.
+    ours, theirs = vars(model).get(RUN_ID_ATTRIBUTE), vars(stats).get(RUN_ID_ATTRIBUTE)
+    if ours is None or theirs is None:
+        warnings.warn(f"{str(model_file)!r} or its statistics {str(stats_file)!r} were saved without a run id "
+                      "(by an older version): that they belong together cannot be checked", UserWarning, stacklevel=3)
+    elif ours != theirs:
+        raise ValueError(f"{str(stats_file)!r} holds the statistics of run {theirs}: must be those of the run of "
+                         f"{str(model_file)!r} ({ours}); a model needs the statistics it was trained with")
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split())
 
 
 def model_folder(model_file: Path) -> Path:
@@ -284,11 +344,9 @@ def save_statistics(venv: Any, path: Path) -> None:
 
 def read_config(path: Path) -> AgentConfig:
     """The :class:`AgentConfig` a run wrote (``config.yml``: ``algo``, ``env_id`` and one entry)."""
-    import yaml
-
     if not path.is_file():
         raise FileNotFoundError(f"{str(path)!r} is missing: it says which algorithm and settings the model was trained with")
-    document = yaml.safe_load(path.read_text())
+    document = read_yaml_file(path)
     try:
         algo, env_id = document["algo"], document["env_id"]
     except (TypeError, KeyError):

@@ -33,6 +33,8 @@ import platform
 import shutil
 import sys
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 from importlib import metadata
 from importlib.util import find_spec
@@ -48,6 +50,7 @@ from agents.policy import (
     MODEL_FILE,
     VECNORMALIZE_FILE,
     load_agent,
+    mark_run,
     model_folder,
     save_model,
     save_statistics,
@@ -158,6 +161,8 @@ def train(
     run_dir = Path(run_dir) if run_dir is not None else _next_run_dir(Path(log_folder), config)
     if run_dir.exists():
         raise FileExistsError(f"run folder {str(run_dir)!r} exists: choose another (or delete it)")
+    # The outermost folder this run creates (the run folder, or <log-folder>/<algo>/... if new).
+    created = next(p for p in reversed((run_dir, *run_dir.parents)) if not p.exists())
     run_dir.mkdir(parents=True)
     try:
         atomic_write_text(run_dir / CONFIG_FILE, yaml.safe_dump(
@@ -179,7 +184,8 @@ def train(
             # goes on from where the step count stands (SB3: progress = 1 - steps / total steps).
             kwargs = model_kwargs(config)
             policy_kwargs = kwargs.pop("policy_kwargs", {})
-            model = algo_class.load(previous.path, env=venv, device="cpu", seed=seed, **kwargs)
+            with _hyperparameters_checked(config):
+                model = algo_class.load(previous.path, env=venv, device="cpu", seed=seed, **kwargs)
             changed = {k: v for k, v in policy_kwargs.items() if model.policy_kwargs.get(k) != v}
             if changed:
                 raise ValueError(f"policy_kwargs {changed} differ from the trained agent's {model.policy_kwargs}: "
@@ -190,7 +196,10 @@ def train(
                 model.set_env(venv)
             stage = read_stage(training_run(previous.path), model.num_timesteps)
         else:
-            model = algo_class(config.policy, venv, seed=seed, verbose=0, device="cpu", **model_kwargs(config))
+            with _hyperparameters_checked(config):
+                model = algo_class(config.policy, venv, seed=seed, verbose=0, device="cpu", **model_kwargs(config))
+        if isinstance(venv, VecNormalize):
+            mark_run(model, venv)  # every model and statistics file of this run carries its id
         formats = ["csv"] + (["stdout"] if verbose else []) + (["tensorboard"] if find_spec("tensorboard") else [])
         model.set_logger(configure(str(run_dir), formats))
 
@@ -219,8 +228,14 @@ def train(
             callbacks.append(CheckpointCallback(max(save_freq // n_envs, 1), str(run_dir / CHECKPOINT_DIR),
                                                 save_vecnormalize=True))
     except BaseException:
-        # Nothing trained yet: leave no half-made run folder behind (it would block the same --run-dir).
+        # Nothing trained yet: leave no half-made run folder behind (it would block the same --run-dir),
+        # nor the folders made for it (<log-folder>/<algo>/) while they are empty (another run may use one).
         shutil.rmtree(run_dir, ignore_errors=True)
+        with suppress(OSError):
+            for folder in run_dir.parents:
+                if folder == created.parent:
+                    break
+                folder.rmdir()
         raise
     start = time.perf_counter()
     model.learn(config.n_timesteps, callback=CallbackList(callbacks), progress_bar=progress,
@@ -244,6 +259,16 @@ def train(
     venv.close()
     eval_env.close()
     return TrainResult(run_dir, int(model.num_timesteps), wall, advances, final_stage)
+
+
+@contextmanager
+def _hyperparameters_checked(config: AgentConfig) -> Iterator[None]:
+    """SB3's checks of its constructor's arguments (mostly ``assert``) as a ValueError naming the algorithm."""
+    try:
+        yield
+    except (AssertionError, ValueError, TypeError) as exc:
+        raise ValueError(f"{config.algo.upper()} refused the hyperparameters {config.algo_kwargs}: "
+                         f"{' '.join(str(exc).split())}") from exc
 
 
 def _next_run_dir(log_folder: Path, config: AgentConfig) -> Path:

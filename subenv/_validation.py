@@ -1,17 +1,20 @@
 """Argument checks shared by the package: each error names the parameter, its value and what is allowed.
 
 A check runs before anything changes, raises ``ValueError`` and returns the value in its plain
-Python type.
+Python type. Reals are Python and NumPy reals, never bools or strings; integers are Python and NumPy
+integers; a value too large for a float (``10**400``) is refused with ``ValueError`` like any other.
 """
 
 from __future__ import annotations
 
 import math
+import sys
 from typing import Any
 
 import numpy as np
 
-__all__ = ["integer", "interval", "is_number", "non_negative", "number", "positive", "real_array", "require"]
+__all__ = ["integer", "interval", "is_finite", "is_number", "non_negative", "number", "positive", "real_array",
+           "require"]
 
 
 def is_number(value: Any) -> bool:
@@ -19,15 +22,32 @@ def is_number(value: Any) -> bool:
     return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
 
 
+def is_finite(value: Any) -> bool:
+    """A real number (see :func:`is_number`) that is neither infinite, nan nor too large for a float."""
+    if not is_number(value):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:  # an int beyond the float range, such as 10**400
+        return False
+
+
 def require(name: str, value: Any, ok: bool, allowed: str) -> None:
     """Raise ``ValueError("{name}={value!r} is invalid: must be {allowed}")`` unless ``ok``."""
     if not ok:
-        raise ValueError(f"{name}={value!r} is invalid: must be {allowed}")
+        raise ValueError(f"{name}={_shown(value)} is invalid: must be {allowed}")
+
+
+def _shown(value: Any) -> str:
+    """``repr(value)``; an integer beyond the float range by its size (its repr may be thousands of digits)."""
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) > sys.float_info.max:
+        return f"<an integer of {value.bit_length()} bits>"
+    return repr(value)
 
 
 def number(name: str, value: Any, low: float = -math.inf, high: float = math.inf) -> float:
     """A finite number in [low, high]."""
-    ok = is_number(value) and math.isfinite(value) and low <= value <= high
+    ok = is_finite(value) and low <= value <= high
     if math.isinf(low) and math.isinf(high):
         allowed = "a finite number"
     else:
@@ -38,14 +58,14 @@ def number(name: str, value: Any, low: float = -math.inf, high: float = math.inf
 
 def positive(name: str, value: Any, upper: float = math.inf) -> float:
     """A finite number in (0, upper]."""
-    ok = is_number(value) and math.isfinite(value) and 0 < value <= upper
+    ok = is_finite(value) and 0 < value <= upper
     require(name, value, ok, f"a finite number in (0, {upper}]" if math.isfinite(upper) else "a finite number > 0")
     return float(value)
 
 
 def non_negative(name: str, value: Any) -> float:
     """A finite number >= 0."""
-    require(name, value, is_number(value) and math.isfinite(value) and value >= 0, "a finite number >= 0")
+    require(name, value, is_finite(value) and value >= 0, "a finite number >= 0")
     return float(value)
 
 
@@ -59,7 +79,7 @@ def integer(name: str, value: Any, low: int, high: int | None = None) -> int:
 
 def interval(name: str, value: Any, low: float = -math.inf, high: float = math.inf) -> tuple[float, float]:
     """A ``(low, high)`` pair of finite numbers within [low, high], its first at most its second."""
-    ok = (isinstance(value, tuple) and len(value) == 2 and all(is_number(v) and math.isfinite(v) for v in value)
+    ok = (isinstance(value, tuple) and len(value) == 2 and all(is_finite(v) for v in value)
           and low <= value[0] <= value[1] <= high)
     require(name, value, ok, f"a (low, high) pair of finite numbers with {low} <= low <= high <= {high}")
     return float(value[0]), float(value[1])

@@ -107,8 +107,10 @@ def load_vehicle(name_or_path: str | os.PathLike[str]) -> Vehicle:
     Raises
     ------
     ValueError
-        Unknown name, missing or unknown key, or a value outside its allowed range; the message
-        names the field, the value and what is allowed.
+        Unknown name; a path that is not a regular file or not UTF-8 TOML; a missing or unknown
+        key; a value outside its allowed range; a vehicle that is not physically admissible (a mass
+        matrix with added mass that is not positive definite, a hull without area, a plane without
+        effect). The message names the file, the field, the value and what is allowed.
     FileNotFoundError
         A path that does not exist.
     """
@@ -127,9 +129,19 @@ def _read(name_or_path: str | os.PathLike[str]) -> tuple[str, str]:
         return resources.files(_DATA_PACKAGE).joinpath(f"{name}.toml").read_text("utf-8"), name
     path = Path(name)
     if path.suffix == ".toml" or path.exists() or os.sep in name:
-        if not path.is_file():
+        if not path.exists():
             raise FileNotFoundError(f"vehicle file {str(path)!r} does not exist")
-        return path.read_text("utf-8"), str(path)
+        if not path.is_file():
+            raise ValueError(f"vehicle file {str(path)!r} is not a regular file (a directory or a device): "
+                             "must be a TOML file")
+        raw = path.read_bytes()
+        try:
+            return raw.decode("utf-8"), str(path)
+        except UnicodeDecodeError as exc:
+            raise ValueError(
+                f"vehicle file {str(path)!r} is not UTF-8 text (byte {raw[exc.start]:#04x} at position "
+                f"{exc.start}): must be a TOML file, which is UTF-8"
+            ) from None
     raise ValueError(
         f"vehicle={name!r} is unknown: must be one of {shipped} or the path of a .toml vehicle file"
     )
@@ -148,7 +160,7 @@ def vehicle_from_dict(data: Mapping[str, Any], origin: str = "<dict>") -> Vehicl
             f"{sorted(set(_TOP_LEVEL) | set(_SCHEMA))}"
         )
     unit_system = data["units"]
-    if unit_system not in _TO_SI:
+    if not (isinstance(unit_system, str) and unit_system in _TO_SI):
         raise ValueError(f"{where}: units={unit_system!r} is invalid: must be one of {sorted(_TO_SI)}")
     factors = _TO_SI[unit_system]
 
@@ -183,7 +195,7 @@ def vehicle_from_dict(data: Mapping[str, Any], origin: str = "<dict>") -> Vehicl
     crossflow_drag = hydro.pop("crossflow_drag")
     length = body["length"]
     # Station convention of the thesis's offsets: x = (10 - station) L / 20, forward positive.
-    x_m = tuple((10.0 - s) * length / 20.0 for s in hull["stations"])
+    x_m = tuple((10.0 - s) / 20.0 * length for s in hull["stations"])  # (L / 20 first overflows a huge L)
     breadth_m = tuple(hull["max_diameter"] * r for r in hull["radius_ratio"])
     try:
         return Vehicle(

@@ -62,7 +62,10 @@ class PlaneCoefficients:
 
     def __post_init__(self) -> None:
         for name in ("Z_delta_s", "M_delta_s", "Z_delta_b", "M_delta_b"):
-            check.number(f"planes.{name}", getattr(self, name))
+            value = check.number(f"planes.{name}", getattr(self, name))
+            # Each plane pair acts behind or ahead of the centre, so it makes a heave force and a pitch
+            # moment; a zero derivative leaves a plane without effect (and eq. 3.9 without a critical speed).
+            check.require(f"planes.{name}", value, value != 0, "a non-zero number (a plane with effect)")
         limit = self.limit_rad
         check.require("planes.limit_rad", limit, check.is_number(limit) and 0 < limit <= math.pi / 2,
                       "in (0, pi/2] rad")
@@ -98,12 +101,14 @@ class HullOffsets:
             )
         if np.any(b < 0):
             raise ValueError(f"hull offsets: breadth_m has a negative value {b.min()!r}; must be >= 0")
+        area = self.area_m2
+        if not (math.isfinite(area) and area > 0):  # all-zero breadths: no drag and no centroid
+            raise ValueError(f"hull offsets: planform area={area!r} m^2 is invalid: must be > 0 and finite")
 
     @property
     def area_m2(self) -> float:
         """Planform area int b(x) dx, exact for the piecewise-linear hull [m^2]."""
-        x = np.asarray(self.x_m)
-        return float(-np.trapezoid(self.breadth_m, x))
+        return float(np.trapezoid(self.breadth_m[::-1], self.x_m[::-1]))  # tail to nose: x increasing
 
     @property
     def centroid_x_m(self) -> float:
@@ -139,8 +144,15 @@ class DimensionalCoefficients:
     M_delta_b: float
 
 
-_POSITIVE_FIELDS = ("length_m", "weight_N", "buoyancy_N", "inertia_y_kg_m2", "water_density_kg_m3", "gravity_m_s2")
-_CHECKED_FIELDS = (*_POSITIVE_FIELDS, "x_G_m", "z_G_m", "x_B_m", "z_B_m", "crossflow_drag")
+_POSITIVE_FIELDS = ("weight_N", "buoyancy_N", "inertia_y_kg_m2", "gravity_m_s2")
+# The two quantities that scale every hydrodynamic derivative (rho/2 L^2 .. L^5), bounded to physical
+# ranges: any water, fresh to the densest brine, with a wide margin; any hull from a 1 cm model to longer
+# than any vessel afloat. Outside them the derivatives, or their products in the analysis, leave the
+# floating-point range (water_density = 1e-300 made eq. 3.9 underflow; length = 1e308 overflowed).
+_RANGES = {"water_density_kg_m3": (500.0, 2000.0), "length_m": (0.01, 1000.0)}
+# Checked fields that enter the mass matrix (the hydrodynamic derivatives do too, but never change).
+_MASS_MATRIX_FIELDS = frozenset({*_RANGES, "weight_N", "gravity_m_s2", "inertia_y_kg_m2", "x_G_m"})
+_CHECKED_FIELDS = (*_RANGES, *_POSITIVE_FIELDS, "x_G_m", "z_G_m", "x_B_m", "z_B_m", "crossflow_drag")
 
 
 @dataclass(frozen=True)
@@ -175,15 +187,35 @@ class Vehicle:
         self._check(_CHECKED_FIELDS)
 
     def _check(self, names: Iterable[str]) -> None:
-        """Validate the fields ``names`` (of :data:`_CHECKED_FIELDS`)."""
+        """Validate the fields ``names`` (of :data:`_CHECKED_FIELDS`), then the mass matrix if they enter it."""
+        names = tuple(names)
         for name in names:
             value = getattr(self, name)
-            if name in _POSITIVE_FIELDS:
+            if name in _RANGES:
+                check.number(name, value, *_RANGES[name])
+            elif name in _POSITIVE_FIELDS:
                 check.positive(name, value)
             elif name == "crossflow_drag":
                 check.non_negative(name, value)
             else:
                 check.number(name, value)
+        if not _MASS_MATRIX_FIELDS.isdisjoint(names):
+            self._check_mass_matrix()
+
+    def _check_mass_matrix(self) -> None:
+        """The mass matrix must be positive definite: kinetic energy > 0 for every motion (w, q)."""
+        (m11, m12), (m21, m22) = self.mass_matrix
+        # Sylvester's criterion on the symmetric part (a non-symmetric M is positive definite when it is).
+        symmetric = 0.5 * (m12 + m21)
+        if m11 > 0 and m11 * m22 - symmetric * symmetric > 0:  # (a product overflows to inf, ** raises)
+            return
+        h = self.hydro
+        raise ValueError(
+            f"hydrodynamics.Z_wdot={h.Z_wdot!r}, Z_qdot={h.Z_qdot!r}, M_wdot={h.M_wdot!r}, M_qdot={h.M_qdot!r} "
+            f"with mass_kg={self.mass_kg!r}, inertia_y_kg_m2={self.inertia_y_kg_m2!r} and x_G_m={self.x_G_m!r} "
+            f"give the vertical-plane mass matrix [[{m11:.6g}, {m12:.6g}], [{m21:.6g}, {m22:.6g}]] (SI): "
+            "it must be positive definite (the body and the water it moves have positive kinetic energy)"
+        )
 
     # --- derived quantities -------------------------------------------------------------
     @property
@@ -229,6 +261,17 @@ class Vehicle:
         )
 
     @property
+    def mass_matrix(self) -> tuple[tuple[float, float], tuple[float, float]]:
+        """Rigid-body plus added mass of the heave and pitch equations, the matrix of (wdot, qdot).
+
+        Riedel (1993) eqs 2.38-2.39: ``[[m - Z_wdot, -(Z_qdot + m x_G)], [-(M_wdot + m x_G), I_y - M_qdot]]``,
+        in ``[[kg, kg m], [kg m, kg m^2]]``. Positive definite for every vehicle (checked when made).
+        """
+        c, m = self.coefficients, self.mass_kg
+        return ((m - c.Z_wdot, -(c.Z_qdot + m * self.x_G_m)),
+                (-(c.M_wdot + m * self.x_G_m), self.inertia_y_kg_m2 - c.M_qdot))
+
+    @property
     def hull_area_m2(self) -> float:
         """Hull planform area A [m^2]."""
         return self.hull.area_m2
@@ -266,19 +309,19 @@ class Vehicle:
         changes: dict[str, Any] = {}
         labels = []
         if z_GB_m is not None:
-            check.number("z_GB_m", z_GB_m)
+            z_GB_m = check.number("z_GB_m", z_GB_m)
             changes["z_G_m"] = self.z_B_m + z_GB_m
             labels.append(f"z_GB={z_GB_m:g}m")
         if x_GB_m is not None:
-            check.number("x_GB_m", x_GB_m)
+            x_GB_m = check.number("x_GB_m", x_GB_m)
             changes["x_G_m"] = self.x_B_m + x_GB_m
             labels.append(f"x_GB={x_GB_m:g}m")
         if excess_buoyancy_N is not None:
-            check.number("excess_buoyancy_N", excess_buoyancy_N)
+            excess_buoyancy_N = check.number("excess_buoyancy_N", excess_buoyancy_N)
             changes["buoyancy_N"] = self.weight_N + excess_buoyancy_N
             labels.append(f"B-W={excess_buoyancy_N:g}N")
         if crossflow_drag is not None:
-            changes["crossflow_drag"] = crossflow_drag
+            crossflow_drag = changes["crossflow_drag"] = check.non_negative("crossflow_drag", crossflow_drag)
             labels.append(f"C_D={crossflow_drag:g}")
         if not changes and name is None:
             return self

@@ -2,11 +2,21 @@
 
 from __future__ import annotations
 
+import pickle
+import re
+import shutil
+import warnings
+from pathlib import Path
+
+import numpy as np
 import pytest
 
 pytest.importorskip("stable_baselines3")
 
+from agents import shipped_models
 from agents.evaluate import main as evaluate_main
+from agents.policy import RUN_ID_ATTRIBUTE, load_agent
+from agents.train import main as train_main
 from subenv.cli import main as subenv_main
 
 _SMALL = ["-n", "512", "--eval-freq", "0", "--save-freq", "0", "-q", "--no-progress",
@@ -17,6 +27,9 @@ def test_subenv_train_then_agents_evaluate(tmp_path, capsys) -> None:  # type: i
     run = tmp_path / "run"
     assert subenv_main(["train", "--algo", "ppo", "--env", "subenv/LowSpeed-v0", "--run-dir", str(run), *_SMALL]) == 0
     assert (run / "model.zip").is_file() and (run / "vecnormalize.pkl").is_file()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the model and its statistics carry the run's id
+        assert vars(load_agent(run).model)[RUN_ID_ATTRIBUTE] == vars(pickle.loads((run / "vecnormalize.pkl").read_bytes()))[RUN_ID_ATTRIBUTE]
     out = tmp_path / "eval"
     assert evaluate_main([f"mine={run}", "--suite", "tiny", "--episodes", "1", "--out", str(out), "--no-plots"]) == 0
     printed = capsys.readouterr().out
@@ -26,3 +39,91 @@ def test_subenv_train_then_agents_evaluate(tmp_path, capsys) -> None:  # type: i
         evaluate_main([str(tmp_path / "missing"), "--suite", "tiny", "--out", str(tmp_path / "e2")])
     with pytest.raises(SystemExit, match="exists"):
         evaluate_main([str(run), "--suite", "tiny", "--episodes", "1", "--out", str(out), "--no-plots"])
+
+
+# --- broken folders and bad input: one-line errors naming the file (issue 18, finding 7) -----------
+
+def _copy_of_shipped(tmp_path: Path, name: str = "ppo") -> Path:
+    folder = tmp_path / f"copy_of_{name}"
+    shutil.copytree(shipped_models()[name], folder)
+    return folder
+
+
+def _truncate(path: Path, fraction: float) -> None:
+    data = path.read_bytes()
+    path.write_bytes(data[: int(fraction * len(data))])
+
+
+_BREAKAGES = {
+    "sac model in a ppo folder": (lambda f: shutil.copy(shipped_models()["sac"] / "model.zip", f / "model.zip"),
+                                  r"model\.zip' cannot be loaded \(TypeError: .*\): must be a complete PPO model"),
+    "model cut at 30%": (lambda f: _truncate(f / "model.zip", 0.3), r"model\.zip' cannot be loaded \(AssertionError"),
+    "model cut at 90%": (lambda f: _truncate(f / "model.zip", 0.9), r"model\.zip' cannot be loaded"),
+    "config not YAML": (lambda f: (f / "config.yml").write_text("algo: ppo\nenv_id: [\n"),
+                        r"config\.yml' is not valid YAML: .* at line 3, column 1"),
+    "config in latin-1": (lambda f: (f / "config.yml").write_bytes(b"algo: ppo  # \xe9\n"),
+                          r"config\.yml' is not UTF-8 text \(byte 0xe9"),
+    "statistics cut": (lambda f: _truncate(f / "vecnormalize.pkl", 0.5),
+                       r"vecnormalize\.pkl' cannot be read \(UnpicklingError"),
+    "statistics of another model": (lambda f: shutil.copy(shipped_models()["sac"] / "vecnormalize.pkl", f / "vecnormalize.pkl"),
+                                    r"vecnormalize\.pkl' holds the statistics of run [0-9a-f]+: must be those of the run"),
+}
+
+
+@pytest.mark.parametrize("breakage", sorted(_BREAKAGES))
+def test_a_broken_model_folder_is_named_in_one_line(tmp_path, breakage) -> None:  # type: ignore[no-untyped-def]
+    folder = _copy_of_shipped(tmp_path)
+    sac = shipped_models()["sac"]
+    assert np.shape(load_agent(sac).obs_mean) == np.shape(load_agent(folder).obs_mean)  # the same shape: not enough
+    damage, message = _BREAKAGES[breakage]
+    damage(folder)
+    with pytest.raises(SystemExit) as exc:
+        evaluate_main([str(folder), "--suite", "tiny", "--episodes", "1", "--out", str(tmp_path / "e"), "--no-plots"])
+    text = str(exc.value)
+    assert re.search(r"agents\.evaluate: '" + re.escape(str(folder)) + "/" + message, text), text
+    assert "\n" not in text
+    assert not (tmp_path / "e").exists()
+
+
+def test_statistics_saved_without_a_run_id_load_with_a_warning(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    folder = _copy_of_shipped(tmp_path)
+    stats_file = folder / "vecnormalize.pkl"
+    stats = pickle.loads(stats_file.read_bytes())
+    del vars(stats)[RUN_ID_ATTRIBUTE]  # as older versions saved them
+    for key, value in (("venv", None), ("class_attributes", {}), ("returns", None)):
+        vars(stats).setdefault(key, value)  # what VecNormalize.__getstate__ removes again
+    stats_file.write_bytes(pickle.dumps(stats))
+    with pytest.warns(UserWarning, match=r"saved without a run id .*cannot be checked"):
+        agent = load_agent(folder)
+    assert agent.obs_mean is not None
+
+
+@pytest.mark.parametrize("name", sorted(shipped_models()))
+def test_shipped_models_and_statistics_carry_one_run_id(name) -> None:  # type: ignore[no-untyped-def]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        agent = load_agent(shipped_models()[name])
+    assert len(vars(agent.model)[RUN_ID_ATTRIBUTE]) == 32
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["-conf", "BAD_YAML"], r"'.*bad\.yml' is not valid YAML: .* at line 2, column 1"),
+        (["-params", "n_steps:["], r"--hyperparams 'n_steps:\[' is invalid: the value must be YAML \(.*\)"),
+        (["-params", "n_envs:2", "n_steps:-5"], r"PPO refused the hyperparameters \{.*'n_steps': -5.*\}: .*n_steps=-5"),
+        (["--env", "CartPole-v1"], r"env_id='CartPole-v1' is not registered by subenv: must be one of \['subenv/"),
+    ],
+)
+def test_train_refuses_bad_input_in_one_line_and_leaves_no_folder(tmp_path, args, message) -> None:  # type: ignore[no-untyped-def]
+    bad = tmp_path / "bad.yml"
+    bad.write_text("a: [\n")
+    logs = tmp_path / "logs"
+    args = [str(bad) if a == "BAD_YAML" else a for a in args]
+    with pytest.raises(SystemExit) as exc:
+        train_main(["--algo", "ppo", "-f", str(logs), "-n", "512", "--eval-freq", "0", "--save-freq", "0", "-q",
+                    "--no-progress", *args])
+    text = str(exc.value)
+    assert re.search(r"^agents\.train: " + message, text), text
+    assert "\n" not in text
+    assert not logs.exists()  # not even an empty logs/ppo/

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
+import re
 import sys
 from importlib import resources
 from pathlib import Path
@@ -183,3 +185,111 @@ def test_variant_checks_what_it_changes(suboff):
         suboff.variant(excess_buoyancy_N=-2 * suboff.weight_N)
     with pytest.raises(ValueError, match=r"crossflow_drag=-0\.1 is invalid: must be a finite number >= 0"):
         suboff.variant(crossflow_drag=-0.1)
+
+
+# --- physical admissibility and hostile files (issue 18, finding 6) ---------------------------------
+
+def _nd2(raw: dict) -> float:
+    """rho/2 L^3 in the file's units: the factor that makes Z_wdot an added mass."""
+    return 0.5 * raw["environment"]["water_density"] * raw["rigid_body"]["length"] ** 3
+
+
+def _mass_slug(raw: dict) -> float:
+    return raw["rigid_body"]["weight"] / raw["environment"]["gravity"]
+
+
+@pytest.mark.parametrize("Z_wdot", ["singular", 3.0])
+def test_mass_matrix_must_be_positive_definite(Z_wdot):
+    # Z_wdot = m / (rho/2 L^3) makes m - Z_wdot zero (a singular matrix); 3.0 makes it negative.
+    raw = _suboff_file()
+    value = _mass_slug(raw) / _nd2(raw) if Z_wdot == "singular" else Z_wdot
+    with pytest.raises(ValueError, match=r"vehicle file <dict>: .*hydrodynamics\.Z_wdot=.*mass matrix.*"
+                                         r"must be positive definite"):
+        vehicle_from_dict(_broken("hydrodynamics", "Z_wdot", value))
+
+
+def test_suboff_mass_matrix_is_rigid_body_plus_added_mass(suboff):
+    c = suboff.coefficients
+    (m11, m12), (m21, m22) = suboff.mass_matrix
+    assert m11 == pytest.approx(suboff.mass_kg - c.Z_wdot, rel=1e-15)
+    assert m22 == pytest.approx(suboff.inertia_y_kg_m2 - c.M_qdot, rel=1e-15)
+    assert (m12, m21) == (-c.Z_qdot, -c.M_wdot)  # x_G = 0
+    assert m11 > suboff.mass_kg and m22 > suboff.inertia_y_kg_m2  # added mass adds to the body's
+
+
+def test_variant_moving_G_checks_the_mass_matrix(suboff):
+    # m x_G enters the off-diagonal terms: a ballast offset of many hull lengths makes the matrix indefinite.
+    with pytest.raises(ValueError, match=r"x_G_m=.*mass matrix.*must be positive definite"):
+        suboff.variant(x_GB_m=10 * suboff.length_m)
+
+
+@pytest.mark.parametrize(
+    ("section", "key", "value", "message"),
+    [
+        (None, "units", ["si"], r"units=\['si'\] is invalid: must be one of \['si', 'us_customary'\]"),
+        ("rigid_body", "length", 1e308, r"length_m=3\.048e\+307 is invalid: must be a finite number in \[0\.01, 1000\.0\]"),
+        ("environment", "water_density", 1e-300, r"water_density_kg_m3=5\.15.*e-298 is invalid: must be a finite number in \[500\.0, 2000\.0\]"),
+        ("planes", "Z_delta_s", 0.0, r"planes\.Z_delta_s=0\.0 is invalid: must be a non-zero"),
+        ("planes", "M_delta_b", 0, r"planes\.M_delta_b=0\.0 is invalid: must be a non-zero"),
+        ("hull", "radius_ratio", [0.0] * 25, r"hull offsets: planform area=0\.0 m\^2 is invalid: must be > 0"),
+        ("hydrodynamics", "Z_w", True, r"hydrodynamics\.Z_w=True is invalid: must be a number"),
+    ],
+)
+def test_inadmissible_vehicle_data_names_the_parameter(section, key, value, message):
+    with pytest.raises(ValueError, match=r"vehicle file <dict>: " + message):
+        vehicle_from_dict(_broken(section, key, value))
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (b"\xff\xfe\x00\x01", r"vehicle file '.*bad\.toml' is not UTF-8 text \(byte 0xff at position 0\)"),
+        ('name = "Sub\u00e9"\n'.encode("latin-1"), r"vehicle file '.*bad\.toml' is not UTF-8 text \(byte 0xe9"),
+    ],
+)
+def test_a_file_that_is_not_utf8_is_named(tmp_path: Path, content, message):
+    path = tmp_path / "bad.toml"
+    path.write_bytes(content)
+    with pytest.raises(ValueError, match=message):
+        load_vehicle(path)
+
+
+@pytest.mark.parametrize("kind", ["directory", "device"])
+def test_a_path_that_is_not_a_file_is_not_reported_missing(tmp_path: Path, kind):
+    path = tmp_path if kind == "directory" else Path(os.devnull)
+    with pytest.raises(ValueError, match=rf"vehicle file {re.escape(repr(str(path)))} is not a regular file"):
+        load_vehicle(path)
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        ({"crossflow_drag": "0.3"}, r"crossflow_drag='0\.3' is invalid: must be a finite number >= 0"),
+        ({"z_GB_m": 10**400}, r"z_GB_m=<an integer of 1329 bits> is invalid: must be a finite number"),
+        ({"x_GB_m": -(10**400)}, r"x_GB_m=<an integer of 1329 bits> is invalid: must be a finite number"),
+        ({"z_GB_m": True}, r"z_GB_m=True is invalid: must be a finite number"),
+        ({"excess_buoyancy_N": np.True_}, r"excess_buoyancy_N=np\.True_ is invalid: must be a finite number"),
+    ],
+)
+def test_variant_rejects_non_reals_and_huge_values_with_value_error(suboff, changes, message):
+    with pytest.raises(ValueError, match=message):
+        suboff.variant(**changes)
+
+
+def test_variant_accepts_numpy_reals(suboff):
+    v = suboff.variant(z_GB_m=np.float32(0.05), crossflow_drag=np.float64(0.2), x_GB_m=np.int64(0))
+    assert (v.z_GB_m, v.crossflow_drag, v.x_GB_m) == (pytest.approx(0.05), 0.2, 0.0)
+    assert type(v.crossflow_drag) is float and type(v.z_G_m) is float
+
+
+def test_make_refuses_a_singular_vehicle_file_naming_it(tmp_path: Path):
+    import gymnasium as gym
+
+    import subenv  # noqa: F401  (registers the ids)
+
+    raw = _suboff_file()
+    text = resources.files("subenv.vehicles.data").joinpath("suboff.toml").read_text()
+    path = tmp_path / "singular.toml"
+    path.write_text(text.replace("Z_wdot = -1.4529e-2", f"Z_wdot = {_mass_slug(raw) / _nd2(raw)!r}"))
+    with pytest.raises(ValueError, match=rf"vehicle file {re.escape(str(path))}: hydrodynamics\.Z_wdot=.*positive definite"):
+        gym.make("subenv/DivePlane-v0", vehicle=str(path))
