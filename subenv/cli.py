@@ -113,13 +113,17 @@ def demo(args: argparse.Namespace) -> int:
 
 def analyze(args: argparse.Namespace) -> int:
     from subenv.analysis.report import write_report
+    from subenv.atomic import OutputDirError
     from subenv.vehicles import load_vehicle
 
-    vehicle = load_vehicle(args.vehicle)
+    try:
+        vehicle = load_vehicle(args.vehicle)
+    except (ValueError, OSError) as exc:
+        raise SystemExit(f"subenv analyze: --vehicle {args.vehicle!r}: {exc}") from None
     try:
         out = write_report(args.out, vehicle, overwrite=args.force)
-    except FileExistsError as exc:
-        raise SystemExit(f"subenv analyze: {exc}") from None
+    except (FileExistsError, OutputDirError) as exc:
+        raise SystemExit(f"subenv analyze: --out: {exc}") from None
     print((out / "report.md").read_text().split("## Figures")[0].rstrip())
     print(f"\nreport written to {out}/report.md with {len(list(out.glob('*.png')))} figures")
     return 0
@@ -142,6 +146,7 @@ def _load_plugins(names: Sequence[str], explicit: bool) -> None:
 
 
 def evaluate(args: argparse.Namespace) -> int:
+    from subenv.atomic import OutputDirError
     from subenv.evaluation import DEFAULT_SEED, DEFAULT_SUITE, controller_names, run_comparison, suite_names
 
     _load_plugins(args.plugins.split(",") if args.plugins else DEFAULT_PLUGINS, explicit=bool(args.plugins))
@@ -160,7 +165,9 @@ def evaluate(args: argparse.Namespace) -> int:
             seed=DEFAULT_SEED if args.seed is None else args.seed,
             progress=not args.no_progress and sys.stderr.isatty(), plots=not args.no_plots,
         )
-    except (ValueError, FileExistsError) as exc:
+    except (FileExistsError, OutputDirError) as exc:
+        raise SystemExit(f"subenv evaluate: --out: {exc}") from None
+    except ValueError as exc:
         raise SystemExit(f"subenv evaluate: {exc}") from None
     print(comparison.leaderboard)
     print(f"\n{len(comparison.results)} episodes in {comparison.elapsed_s:.1f} s; results in {comparison.out_dir}/")
@@ -195,7 +202,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     p_analyze = sub.add_parser("analyze", help="write the reproduction report of Riedel (1993)")
     p_analyze.add_argument("--out", default="results/analysis", help="report folder (default: %(default)s)")
     p_analyze.add_argument("--vehicle", default="suboff", help="vehicle name or file (default: %(default)s)")
-    p_analyze.add_argument("--force", action="store_true", help="replace the folder if it exists")
+    p_analyze.add_argument("--force", action="store_true",
+                           help="replace the folder if it holds an earlier report (it has the marker file)")
     p_eval = sub.add_parser("evaluate", help="compare controllers on a suite of scenarios (the main job)")
     p_eval.add_argument("--controllers", help="comma-separated controller names (default: all registered)")
     p_eval.add_argument("--suite", help="suite name or comma-separated scenario names (default: 'default')")
@@ -203,7 +211,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     p_eval.add_argument("--seed", type=int, help="base seed; episode i uses seed + i (default: the suite's, 10000)")
     p_eval.add_argument("--out", help="results folder, must not exist unless --force "
                                       "(default: results/evaluation/<date-time>)")
-    p_eval.add_argument("--force", action="store_true", help="replace the results folder if it exists")
+    p_eval.add_argument("--force", action="store_true",
+                        help="replace the results folder if it holds earlier results (it has the marker file)")
     p_eval.add_argument("--no-plots", action="store_true", help="write tables only")
     p_eval.add_argument("--no-progress", action="store_true",
                         help="no progress bar (it is shown only when stderr is a terminal)")

@@ -184,7 +184,8 @@ def test_comparison_end_to_end_on_the_tiny_suite(tmp_path: Path, capsys):
     assert "8/8" in capsys.readouterr().err  # the progress bar counted every episode
 
     assert sorted(p.name for p in out.iterdir()) == [
-        "leaderboard.md", "plots", "results.csv", "run.json", "summary.csv", "summary.md"]
+        ".subenv-output", "leaderboard.md", "plots", "results.csv", "run.json", "summary.csv", "summary.md"]
+    assert (out / ".subenv-output").read_text() == "subenv evaluate\n"  # what overwrite=True asks of a folder
     assert sorted(p.name for p in (out / "plots").iterdir()) == [
         "metrics_vs_speed.png", "trajectories_LowSpeed.png", "trajectories_Nominal.png"]
     assert all(p.read_bytes().startswith(b"\x89PNG") for p in (out / "plots").iterdir())
@@ -212,7 +213,7 @@ def test_comparison_end_to_end_on_the_tiny_suite(tmp_path: Path, capsys):
                            plots=False)
     assert len(again.results) == 2
     assert sorted(p.name for p in out.iterdir()) == [
-        "leaderboard.md", "results.csv", "run.json", "summary.csv", "summary.md"]
+        ".subenv-output", "leaderboard.md", "results.csv", "run.json", "summary.csv", "summary.md"]
 
 
 def test_bad_input_is_refused_before_any_episode_runs(tmp_path: Path):
