@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import csv
 import errno
 import os
 import shutil
@@ -158,3 +159,36 @@ def test_analyze_with_a_singular_vehicle_is_a_one_line_error(tmp_path: Path, no_
     path.write_text(singular)
     with pytest.raises(SystemExit, match=r"^subenv analyze: --vehicle '.*singular.toml': "):
         main(["analyze", "--vehicle", str(path), "--out", str(tmp_path / "report")])
+
+
+@pytest.mark.parametrize(
+    ("option", "value"),
+    [("--suite", "Nominal,"), ("--suite", ",Nominal"), ("--suite", "Nominal,,LowSpeed"), ("--suite", ""),
+     ("--controllers", ""), ("--controllers", "thesis,"), ("--plugins", ""), ("--out", ""), ("--out", " ")],
+)
+def test_evaluate_refuses_empty_names_and_an_empty_out(tmp_path: Path, monkeypatch, capsys, no_work, option,
+                                                        value):
+    monkeypatch.chdir(tmp_path)  # where the default --out would be written
+    arguments = {"--suite": "tiny", "--controllers": "thesis", "--out": str(tmp_path / "eval"), option: value}
+    with pytest.raises(SystemExit) as error:
+        main(["evaluate", "--episodes", "1", "--no-progress", *(x for pair in arguments.items() for x in pair)])
+    assert error.value.code == 2
+    assert f"argument {option}: invalid value {value!r}: must be" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("command", [["demo", "--no-plot"], ["analyze"]], ids=["demo", "analyze"])
+def test_an_empty_out_is_refused_by_every_command(capsys, no_work, command):
+    with pytest.raises(SystemExit):
+        main([*command, "--out", ""])
+    assert "argument --out: invalid value '': must be a path, not empty" in capsys.readouterr().err
+
+
+def test_evaluate_takes_scenario_names_for_the_suite(tmp_path: Path, capsys):
+    out = tmp_path / "eval"
+    assert main(["evaluate", "--suite", "Nominal", "--episodes", "1", "--controllers", "thesis", "--no-plots",
+                 "--out", str(out), "--no-progress"]) == 0
+    assert {row["scenario"] for row in csv.DictReader((out / "results.csv").open())} == {"Nominal"}
+    with pytest.raises(SystemExit, match=r"suite='Fastest' is unknown: must be a suite name \(one of \['default'.*"
+                                         r"or a scenario name \(one of \['Nominal'"):
+        main(["evaluate", "--suite", "Fastest", "--out", str(tmp_path / "y"), "--no-progress"])

@@ -28,7 +28,7 @@ from subenv.evaluation import (
     run_episode,
     suite_names,
 )
-from subenv.evaluation.rollout import make_env, resolve_controllers
+from subenv.evaluation.rollout import make_env, resolve_controllers, resolve_suite
 from subenv.scenarios import scenario_names
 from subenv.vehicles import Vehicle
 
@@ -140,6 +140,16 @@ def test_registered_suites_name_registered_scenarios():
         "Nominal", "LowSpeed", "NearCritical", "SpeedTransient", "PeriscopeDepth", "BallastOffset")
     tiny = get_suite("tiny")
     assert len(tiny.scenarios) == 2 and tiny.episodes <= 2
+
+
+def test_a_suite_is_a_suite_name_a_scenario_name_or_a_list_of_scenarios():
+    assert resolve_suite("reversal") == get_suite("reversal")
+    assert resolve_suite("Nominal").scenarios == ("Nominal",)  # what `--suite Nominal` passes
+    assert resolve_suite("subenv/LowSpeed-v0").scenarios == ("LowSpeed",)
+    assert resolve_suite(["Nominal", "LowSpeed"]).scenarios == ("Nominal", "LowSpeed")
+    with pytest.raises(ValueError, match=r"suite='Fastest' is unknown: must be a suite name \(one of \['default'.*\]\) "
+                                         r"or a scenario name \(one of \['Nominal'"):
+        resolve_suite("Fastest")
 
 
 @pytest.mark.parametrize(
