@@ -113,13 +113,17 @@ def demo(args: argparse.Namespace) -> int:
 
 def analyze(args: argparse.Namespace) -> int:
     from subenv.analysis.report import write_report
+    from subenv.atomic import OutputDirError
     from subenv.vehicles import load_vehicle
 
-    vehicle = load_vehicle(args.vehicle)
+    try:
+        vehicle = load_vehicle(args.vehicle)
+    except (ValueError, OSError) as exc:
+        raise SystemExit(f"subenv analyze: --vehicle {args.vehicle!r}: {exc}") from None
     try:
         out = write_report(args.out, vehicle, overwrite=args.force)
-    except FileExistsError as exc:
-        raise SystemExit(f"subenv analyze: {exc}") from None
+    except (FileExistsError, OutputDirError) as exc:
+        raise SystemExit(f"subenv analyze: --out: {exc}") from None
     print((out / "report.md").read_text().split("## Figures")[0].rstrip())
     print(f"\nreport written to {out}/report.md with {len(list(out.glob('*.png')))} figures")
     return 0
@@ -142,25 +146,27 @@ def _load_plugins(names: Sequence[str], explicit: bool) -> None:
 
 
 def evaluate(args: argparse.Namespace) -> int:
+    from subenv.atomic import OutputDirError
     from subenv.evaluation import DEFAULT_SEED, DEFAULT_SUITE, controller_names, run_comparison, suite_names
 
-    _load_plugins(args.plugins.split(",") if args.plugins else DEFAULT_PLUGINS, explicit=bool(args.plugins))
+    _load_plugins(args.plugins or DEFAULT_PLUGINS, explicit=args.plugins is not None)
     if args.list:
         print("controllers:", ", ".join(controller_names()) or "(none registered)")
         print("suites:", ", ".join(suite_names()))
         return 0
     if not controller_names():
         raise SystemExit("subenv evaluate: no controllers are registered (see --plugins)")
-    controllers = args.controllers.split(",") if args.controllers else None
-    suite = args.suite.split(",") if args.suite and "," in args.suite else (args.suite or DEFAULT_SUITE)
+    suite = DEFAULT_SUITE if args.suite is None else args.suite[0] if len(args.suite) == 1 else args.suite
     out = args.out or f"results/evaluation/{time.strftime('%Y%m%d-%H%M%S')}"
     try:
         comparison = run_comparison(
-            controllers, suite, args.episodes, out, overwrite=args.force,
+            args.controllers, suite, args.episodes, out, overwrite=args.force,
             seed=DEFAULT_SEED if args.seed is None else args.seed,
             progress=not args.no_progress and sys.stderr.isatty(), plots=not args.no_plots,
         )
-    except (ValueError, FileExistsError) as exc:
+    except (FileExistsError, OutputDirError) as exc:
+        raise SystemExit(f"subenv evaluate: --out: {exc}") from None
+    except ValueError as exc:
         raise SystemExit(f"subenv evaluate: {exc}") from None
     print(comparison.leaderboard)
     print(f"\n{len(comparison.results)} episodes in {comparison.elapsed_s:.1f} s; results in {comparison.out_dir}/")
@@ -179,6 +185,22 @@ def train(argv: Sequence[str]) -> int:
     return int(module.main(list(argv)))
 
 
+def _path(text: str) -> str:
+    """An ``--out`` value: any path but the empty one (which would mean the current folder)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"invalid value {text!r}: must be a path, not empty")
+    return text
+
+
+def _names(text: str) -> list[str]:
+    """A comma-separated list of names; an empty one (``""``, ``"a,"``, ``"a,,b"``) is refused."""
+    names = [name.strip() for name in text.split(",")]
+    if not all(names):
+        raise argparse.ArgumentTypeError(
+            f"invalid value {text!r}: must be comma-separated names, none of them empty")
+    return names
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="subenv", description=__doc__.split("\n\n")[0])
     sub = parser.add_subparsers(dest="command")
@@ -189,25 +211,27 @@ def main(argv: Sequence[str] | None = None) -> int:
     p_demo.add_argument("--low-speed", type=float, default=0.45,
                         help="the speed below critical to fly, m/s (default: %(default)s)")
     p_demo.add_argument("--seed", type=int, default=0, help="reset seed (default: %(default)s)")
-    p_demo.add_argument("--out", default="results/demo.png", help="plot file (default: %(default)s)")
+    p_demo.add_argument("--out", type=_path, default="results/demo.png", help="plot file (default: %(default)s)")
     p_demo.add_argument("--no-plot", action="store_true", help="print the summary only")
     sub.add_parser("list", help="list the environment ids and scenarios")
     p_analyze = sub.add_parser("analyze", help="write the reproduction report of Riedel (1993)")
-    p_analyze.add_argument("--out", default="results/analysis", help="report folder (default: %(default)s)")
+    p_analyze.add_argument("--out", type=_path, default="results/analysis", help="report folder (default: %(default)s)")
     p_analyze.add_argument("--vehicle", default="suboff", help="vehicle name or file (default: %(default)s)")
-    p_analyze.add_argument("--force", action="store_true", help="replace the folder if it exists")
+    p_analyze.add_argument("--force", action="store_true",
+                           help="replace the folder if it holds an earlier report (it has the marker file)")
     p_eval = sub.add_parser("evaluate", help="compare controllers on a suite of scenarios (the main job)")
-    p_eval.add_argument("--controllers", help="comma-separated controller names (default: all registered)")
-    p_eval.add_argument("--suite", help="suite name or comma-separated scenario names (default: 'default')")
+    p_eval.add_argument("--controllers", type=_names, help="comma-separated controller names (default: all registered)")
+    p_eval.add_argument("--suite", type=_names, help="suite name or comma-separated scenario names (default: 'default')")
     p_eval.add_argument("--episodes", type=int, help="episodes per scenario and controller (default: the suite's)")
     p_eval.add_argument("--seed", type=int, help="base seed; episode i uses seed + i (default: the suite's, 10000)")
-    p_eval.add_argument("--out", help="results folder, must not exist unless --force "
+    p_eval.add_argument("--out", type=_path, help="results folder, must not exist unless --force "
                                       "(default: results/evaluation/<date-time>)")
-    p_eval.add_argument("--force", action="store_true", help="replace the results folder if it exists")
+    p_eval.add_argument("--force", action="store_true",
+                        help="replace the results folder if it holds earlier results (it has the marker file)")
     p_eval.add_argument("--no-plots", action="store_true", help="write tables only")
     p_eval.add_argument("--no-progress", action="store_true",
                         help="no progress bar (it is shown only when stderr is a terminal)")
-    p_eval.add_argument("--plugins", help=f"comma-separated packages that register controllers "
+    p_eval.add_argument("--plugins", type=_names, help=f"comma-separated packages that register controllers "
                                           f"(default: {','.join(DEFAULT_PLUGINS)})")
     p_eval.add_argument("--list", action="store_true", help="list the controllers and suites, and exit")
     sub.add_parser("train", add_help=False,

@@ -7,8 +7,6 @@ functions; the thesis's values appear only in the "thesis value" column.
 from __future__ import annotations
 
 import math
-import shutil
-import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -32,11 +30,12 @@ from subenv.analysis.design import (
 from subenv.analysis.equilibria import DragMoment, Equilibrium, HullIntegral, equilibria, symmetric_pitchfork
 from subenv.analysis.linear import BOW_PLANES_ONLY, Allocation, plane_derivatives
 from subenv.analysis.reversal import level_flight_trim
+from subenv.atomic import atomic_output_dir
 from subenv.units import FOOT_M, mps_to_fps
 from subenv.vehicles.loader import load_vehicle
 from subenv.vehicles.vehicle import Vehicle
 
-__all__ = ["ReportRow", "critical_speed_three_ways", "reproduce_numbers", "write_report"]
+__all__ = ["REPORT_KIND", "ReportRow", "critical_speed_three_ways", "reproduce_numbers", "write_report"]
 
 # Inputs the thesis used for its figures (not results): x_GB/L of Figs 4-1, 4-6, 4-11 and the
 # Froude numbers of the paths of Fig. 4-13.
@@ -399,29 +398,33 @@ def _table(rows: list[ReportRow]) -> str:
     return "\n".join(lines)
 
 
+REPORT_KIND = "subenv analyze"
+"""What a report folder's marker file says (:data:`subenv.atomic.MARKER_FILE`): ``overwrite``
+replaces only a folder that says so."""
+
+
 def write_report(out_dir: str | Path, vehicle: Vehicle | None = None, overwrite: bool = False) -> Path:
     """Write ``report.md`` and the PNG figures into ``out_dir``, completely or not at all.
 
-    The folder is assembled in a temporary directory beside it and renamed into place.
+    The folder is assembled beside ``out_dir`` and put in place atomically
+    (:func:`subenv.atomic.atomic_output_dir`), after ``out_dir`` was checked and the temporary
+    folder created, before any computation.
 
     Raises
     ------
     FileExistsError
-        ``out_dir`` exists and ``overwrite`` is False.
+        ``out_dir`` exists and ``overwrite`` is False, or it is not an earlier report.
+    OutputDirError
+        ``out_dir`` cannot be created (a file in the way, no permission); a ValueError.
     """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    out = Path(out_dir)
-    if out.exists() and not overwrite:
-        raise FileExistsError(f"output folder {str(out)!r} exists; pass overwrite=True (--force) to replace it")
     vehicle = vehicle or load_vehicle("suboff")
     started = time.perf_counter()
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
-    try:
+    with atomic_output_dir(out_dir, overwrite=overwrite, kind=REPORT_KIND) as folder:
         rows = reproduce_numbers(vehicle)
         captions = []
         for name, draw in _figures(vehicle).items():
@@ -429,7 +432,7 @@ def write_report(out_dir: str | Path, vehicle: Vehicle | None = None, overwrite:
             caption = draw(fig)
             fig.suptitle(caption.split(":")[0])
             fig.tight_layout()
-            fig.savefig(tmp / f"{name}.png", dpi=100)
+            fig.savefig(folder / f"{name}.png", dpi=100)
             plt.close(fig)
             captions.append((name, caption))
         elapsed = time.perf_counter() - started
@@ -454,11 +457,5 @@ def write_report(out_dir: str | Path, vehicle: Vehicle | None = None, overwrite:
         for name, caption in captions:
             text += [f"![{name}]({name}.png)", "", caption, ""]
         text += [f"Generated in {elapsed:.1f} s."]
-        (tmp / "report.md").write_text("\n".join(text) + "\n")
-        if out.exists():
-            shutil.rmtree(out)
-        tmp.rename(out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    return out
+        (folder / "report.md").write_text("\n".join(text) + "\n")
+    return Path(out_dir)

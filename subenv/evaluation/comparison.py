@@ -1,8 +1,8 @@
 """The comparison behind ``subenv evaluate``: run a suite, aggregate, write the results folder.
 
 :func:`run_comparison` checks every input before the first episode (unknown controller, suite or
-scenario names, an existing output folder, a missing matplotlib), then rolls out, aggregates and
-writes::
+scenario names, an existing output folder or one that cannot be created, a missing matplotlib), then
+rolls out, aggregates and writes::
 
     <out_dir>/
         leaderboard.md      success rate per controller and scenario, 95% Wilson intervals
@@ -13,11 +13,14 @@ writes::
         plots/trajectories_<Scenario>.png   every controller on the scenario's first episode
         plots/metrics_vs_speed.png          success rate and IAE against speed, u_cr marked
 
-The folder appears complete or not at all (assembled in a temporary sibling, then renamed).
+The folder appears complete or not at all, and replaces an earlier one atomically
+(:func:`subenv.atomic.atomic_output_dir`); it holds a marker file saying it is a result of
+``subenv evaluate``, and ``overwrite`` replaces only such a folder.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -34,7 +37,6 @@ from subenv.evaluation.results import (
     CONFIDENCE_LEVEL,
     atomic_output_dir,
     atomic_write_text,
-    check_output_dir,
     episode_table,
     leaderboard_markdown,
     summarize,
@@ -45,9 +47,13 @@ from subenv.evaluation.rollout import EpisodeResult, evaluate, resolve_controlle
 from subenv.evaluation.suites import DEFAULT_SEED, DEFAULT_SUITE, Suite
 from subenv.vehicles.vehicle import Vehicle
 
-__all__ = ["DEFAULT_OUT_DIR", "Comparison", "run_comparison", "write_comparison"]
+__all__ = ["DEFAULT_OUT_DIR", "RESULTS_KIND", "Comparison", "run_comparison", "write_comparison"]
 
 DEFAULT_OUT_DIR = "results/evaluation"
+
+RESULTS_KIND = "subenv evaluate"
+"""What a results folder's marker file says (:data:`subenv.atomic.MARKER_FILE`): ``overwrite``
+replaces only a folder that says so."""
 
 
 @dataclass(frozen=True)
@@ -110,7 +116,8 @@ def run_comparison(
     out_dir : path, optional
         The results folder; None writes nothing.
     overwrite : bool
-        Replace ``out_dir`` if it exists (otherwise FileExistsError, raised before any episode).
+        Replace ``out_dir`` if it is an earlier results folder (otherwise FileExistsError, raised
+        before any episode).
     seed : int
         Base seed; episode i of every scenario is ``reset(seed=seed + i)`` for every controller.
     progress : bool
@@ -126,7 +133,9 @@ def run_comparison(
         Unknown controller, suite or scenario (the message lists the known names); bad
         ``episodes`` or ``seed``.
     FileExistsError
-        ``out_dir`` exists and ``overwrite`` is false.
+        ``out_dir`` exists and ``overwrite`` is false, or it is not an earlier results folder.
+    OutputDirError
+        ``out_dir`` cannot be created (a file in the way, no permission); a ValueError.
     ImportError
         ``plots`` without matplotlib installed.
     """
@@ -135,25 +144,27 @@ def run_comparison(
     n = the_suite.episodes if episodes is None else episodes
     if not (isinstance(n, int) and not isinstance(n, bool) and n >= 1):
         raise ValueError(f"episodes={episodes!r} is invalid: must be an integer >= 1")
-    if out_dir is not None:
-        check_output_dir(out_dir, overwrite)
-        if plots:
-            from subenv.evaluation.plots import require_matplotlib
+    if out_dir is not None and plots:
+        from subenv.evaluation.plots import require_matplotlib
 
-            require_matplotlib()
-
-    start = time.perf_counter()
-    results = evaluate(ctrls, the_suite, n, seed, progress, vehicle=vehicle, keep_trajectories=1)
-    elapsed = time.perf_counter() - start
-    summary = summarize(results)
-    board = leaderboard_markdown(results, title=f"Leaderboard: suite '{the_suite.name}'")
-    comparison = Comparison(
-        suite=the_suite, controllers=tuple(c.name for c in ctrls), episodes=n, seed=seed, results=results,
-        summary=summary, leaderboard=board, out_dir=None if out_dir is None else Path(out_dir),
-        elapsed_s=elapsed,
-    )
-    if out_dir is not None:
-        write_comparison(comparison, out_dir, overwrite=overwrite, plots=plots, controllers=ctrls)
+        require_matplotlib()
+    # The results folder is created (in its temporary place) before the first episode, so that a
+    # folder that cannot be written fails now, not after the rollouts.
+    folder_block = contextlib.nullcontext() if out_dir is None else atomic_output_dir(
+        out_dir, overwrite=overwrite, kind=RESULTS_KIND)
+    with folder_block as folder:
+        start = time.perf_counter()
+        results = evaluate(ctrls, the_suite, n, seed, progress, vehicle=vehicle, keep_trajectories=1)
+        elapsed = time.perf_counter() - start
+        summary = summarize(results)
+        board = leaderboard_markdown(results, title=f"Leaderboard: suite '{the_suite.name}'")
+        comparison = Comparison(
+            suite=the_suite, controllers=tuple(c.name for c in ctrls), episodes=n, seed=seed, results=results,
+            summary=summary, leaderboard=board, out_dir=None if out_dir is None else Path(out_dir),
+            elapsed_s=elapsed,
+        )
+        if folder is not None:
+            _write_files(comparison, folder, plots=plots, controllers=ctrls)
     return comparison
 
 
@@ -197,21 +208,27 @@ def write_comparison(
     controllers: Sequence[Controller] | None = None,
 ) -> Path:
     """Write the results folder of ``comparison`` (complete or not at all); returns its path."""
-    with atomic_output_dir(out_dir, overwrite=overwrite) as tmp:
-        write_csv(tmp / "results.csv", episode_table(comparison.results))
-        write_csv(tmp / "summary.csv", comparison.summary)
-        atomic_write_text(tmp / "leaderboard.md", comparison.leaderboard)
-        atomic_write_text(
-            tmp / "summary.md", summary_markdown(comparison.summary, title=f"Suite '{comparison.suite.name}'")
-        )
-        atomic_write_text(tmp / "run.json", json.dumps(_run_record(comparison, controllers), indent=2) + "\n")
-        if plots:
-            from subenv.evaluation.plots import plot_metrics_vs_speed, plot_trajectories
-
-            for scenario in comparison.suite.scenarios:
-                shown = [r for r in comparison.results
-                         if r.scenario == scenario and r.episode == 0 and r.trajectory is not None]
-                if shown:
-                    plot_trajectories(shown, tmp / "plots" / f"trajectories_{scenario}.png")
-            plot_metrics_vs_speed(comparison.results, tmp / "plots" / "metrics_vs_speed.png")
+    with atomic_output_dir(out_dir, overwrite=overwrite, kind=RESULTS_KIND) as folder:
+        _write_files(comparison, folder, plots=plots, controllers=controllers)
     return Path(out_dir)
+
+
+def _write_files(
+    comparison: Comparison, folder: Path, *, plots: bool, controllers: Sequence[Controller] | None
+) -> None:
+    write_csv(folder / "results.csv", episode_table(comparison.results))
+    write_csv(folder / "summary.csv", comparison.summary)
+    atomic_write_text(folder / "leaderboard.md", comparison.leaderboard)
+    atomic_write_text(
+        folder / "summary.md", summary_markdown(comparison.summary, title=f"Suite '{comparison.suite.name}'")
+    )
+    atomic_write_text(folder / "run.json", json.dumps(_run_record(comparison, controllers), indent=2) + "\n")
+    if plots:
+        from subenv.evaluation.plots import plot_metrics_vs_speed, plot_trajectories
+
+        for scenario in comparison.suite.scenarios:
+            shown = [r for r in comparison.results
+                     if r.scenario == scenario and r.episode == 0 and r.trajectory is not None]
+            if shown:
+                plot_trajectories(shown, folder / "plots" / f"trajectories_{scenario}.png")
+        plot_metrics_vs_speed(comparison.results, folder / "plots" / "metrics_vs_speed.png")

@@ -15,8 +15,8 @@ from typing import Any, Final
 
 import numpy as np
 
+from subenv.atomic import atomic_write_bytes
 from subenv.evaluation.metrics import DEPTH_TOLERANCE_M
-from subenv.evaluation.results import atomic_write_bytes
 from subenv.evaluation.rollout import EpisodeResult
 
 __all__ = ["plot_metrics_vs_speed", "plot_trajectories", "require_matplotlib", "save_figure"]
@@ -36,7 +36,7 @@ def save_figure(fig: Any, path: str | os.PathLike[str], image_format: str = "png
     """Write a matplotlib figure to ``path`` completely or not at all.
 
     The figure is rendered in memory (``image_format``, e.g. ``"png"``, ``"pdf"``, ``"svg"``; 110 dpi)
-    and written with :func:`~subenv.evaluation.results.atomic_write_bytes`. Returns the path.
+    and written with :func:`~subenv.atomic.atomic_write_bytes`. Returns the path.
     """
     buffer = io.BytesIO()
     fig.savefig(buffer, format=image_format, dpi=_DPI)

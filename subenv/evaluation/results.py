@@ -1,26 +1,30 @@
 """Result tables: the tidy per-episode table, aggregates with confidence intervals, the leaderboard.
 
 All tables are lists of flat dicts (one row per observation, one column per variable), written as
-CSV and Markdown. Every file is written atomically (a temporary file in the same folder, then
-``os.replace``), and a results folder is assembled in a temporary sibling folder and renamed into
-place, so a reader never sees a half-written file or folder.
+CSV and Markdown. Every file is written atomically, and a results folder is assembled beside its
+place and swapped in (:mod:`subenv.atomic`, whose functions are re-exported here), so a reader
+never sees a half-written file or folder.
 """
 
 from __future__ import annotations
 
-import contextlib
 import csv
 import io
 import math
 import os
-import shutil
-import tempfile
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, Final
 
 import numpy as np
 
+from subenv.atomic import (
+    OutputDirError,
+    atomic_output_dir,
+    atomic_write_bytes,
+    atomic_write_text,
+    check_output_dir,
+)
 from subenv.evaluation.metrics import DEPTH_TOLERANCE_M, HOLD_WINDOW_S, OUTCOMES
 from subenv.evaluation.rollout import EpisodeResult
 
@@ -28,6 +32,7 @@ __all__ = [
     "CONFIDENCE_LEVEL",
     "CONTINUOUS_METRICS",
     "RATE_METRICS",
+    "OutputDirError",
     "atomic_output_dir",
     "atomic_write_bytes",
     "atomic_write_text",
@@ -278,86 +283,6 @@ def _cell(value: Any) -> Any:
     return value
 
 
-# --- atomic writing -------------------------------------------------------------------------
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
-def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> Path:
-    """Write ``data`` to ``path`` completely or not at all (temporary file, then ``os.replace``)."""
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp creates 0600; give the file the usual mode
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return target
-
-
-def atomic_write_text(path: str | os.PathLike[str], text: str) -> Path:
-    """Write ``text`` (UTF-8) to ``path`` completely or not at all."""
-    return atomic_write_bytes(path, text.encode("utf-8"))
-
-
 def write_csv(path: str | os.PathLike[str], rows: Sequence[Mapping[str, Any]]) -> Path:
     """Write a table of flat dicts as CSV, atomically."""
     return atomic_write_text(path, table_csv(rows))
-
-
-def check_output_dir(path: str | os.PathLike[str], overwrite: bool) -> Path:
-    """Raise FileExistsError if ``path`` exists and ``overwrite`` is false (or it is not a folder)."""
-    out = Path(path)
-    if out.exists() or out.is_symlink():
-        if not out.is_dir() or out.is_symlink():
-            raise FileExistsError(f"{out} exists and is not a folder: choose another output folder")
-        if not overwrite:
-            raise FileExistsError(
-                f"{out} exists: choose another output folder or pass overwrite=True (--force)"
-            )
-    return out
-
-
-@contextlib.contextmanager
-def atomic_output_dir(path: str | os.PathLike[str], overwrite: bool = False) -> Iterator[Path]:
-    """Assemble a folder in a temporary sibling and rename it to ``path`` when the block succeeds.
-
-    Raises FileExistsError (before the block runs, and again before the rename) if ``path``
-    exists and ``overwrite`` is false. With ``overwrite`` the old folder is moved aside, the new
-    one renamed into place, then the old one deleted; if the block raises, nothing changes.
-
-    Examples
-    --------
-    >>> with atomic_output_dir("results/eval") as tmp:  # doctest: +SKIP
-    ...     write_csv(tmp / "results.csv", rows)
-    """
-    out = check_output_dir(path, overwrite)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.", suffix=".tmp"))
-    try:
-        os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp creates 0700
-        yield tmp
-        check_output_dir(out, overwrite)
-        if out.exists():
-            old = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.", suffix=".old"))
-            os.rmdir(old)
-            os.rename(out, old)
-            try:
-                os.rename(tmp, out)
-            except BaseException:
-                os.rename(old, out)
-                raise
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.rename(tmp, out)
-    finally:
-        if tmp.exists():
-            shutil.rmtree(tmp, ignore_errors=True)

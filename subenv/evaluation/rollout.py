@@ -25,7 +25,8 @@ import numpy as np
 
 from subenv.evaluation.controller import Controller, make_controller
 from subenv.evaluation.metrics import EpisodeMetrics, episode_metrics
-from subenv.evaluation.suites import DEFAULT_SEED, Suite, check_scenarios, get_suite
+from subenv.evaluation.suites import DEFAULT_SEED, Suite, check_scenarios, get_suite, suite_names
+from subenv.scenarios.registry import scenario_names
 from subenv.vehicles.loader import load_vehicle
 from subenv.vehicles.vehicle import Vehicle
 
@@ -320,12 +321,24 @@ def resolve_controllers(controllers: Sequence[Controller | str] | None) -> list[
 
 
 def resolve_suite(suite: Suite | str | Sequence[str]) -> Suite:
-    """A :class:`Suite` from itself, a registered suite name, or a list of scenario names."""
+    """A :class:`Suite` from itself, a registered suite name, a scenario name, or a list of them.
+
+    A name that is both a suite and a scenario is the suite. Raises ValueError naming an unknown
+    name and listing the known suites and scenarios.
+    """
     if isinstance(suite, Suite):
         check_scenarios(suite.scenarios)
         return suite
     if isinstance(suite, str):
-        return get_suite(suite)
+        if suite in suite_names():
+            return get_suite(suite)
+        try:
+            suite = [_scenario_of(suite)]
+        except ValueError:
+            raise ValueError(
+                f"suite={suite!r} is unknown: must be a suite name (one of {suite_names()}) or a scenario "
+                f"name (one of {scenario_names()})"
+            ) from None
     names = tuple(_scenario_of(s) for s in suite)
     return Suite(name="custom", description="scenarios chosen by the caller", scenarios=names, episodes=10)
 

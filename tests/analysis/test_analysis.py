@@ -233,7 +233,7 @@ def test_report_is_written_completely_and_not_over_an_existing_folder(analysis_r
     text = (out / "report.md").read_text()
     assert "| u_cr, eq. 3.9 closed form | 1.8979 | 1.8979 |" in text
     assert len(list(out.glob("*.png"))) == 14
-    with pytest.raises(FileExistsError, match="exists; pass overwrite=True"):
+    with pytest.raises(FileExistsError, match="exists: choose another output folder or pass overwrite=True"):
         write_report(out, suboff)
     assert [p.name for p in out.parent.iterdir()] == ["report"]  # no temporary folder left behind
 

@@ -28,7 +28,7 @@ from subenv.evaluation import (
     run_episode,
     suite_names,
 )
-from subenv.evaluation.rollout import make_env, resolve_controllers
+from subenv.evaluation.rollout import make_env, resolve_controllers, resolve_suite
 from subenv.scenarios import scenario_names
 from subenv.vehicles import Vehicle
 
@@ -142,6 +142,16 @@ def test_registered_suites_name_registered_scenarios():
     assert len(tiny.scenarios) == 2 and tiny.episodes <= 2
 
 
+def test_a_suite_is_a_suite_name_a_scenario_name_or_a_list_of_scenarios():
+    assert resolve_suite("reversal") == get_suite("reversal")
+    assert resolve_suite("Nominal").scenarios == ("Nominal",)  # what `--suite Nominal` passes
+    assert resolve_suite("subenv/LowSpeed-v0").scenarios == ("LowSpeed",)
+    assert resolve_suite(["Nominal", "LowSpeed"]).scenarios == ("Nominal", "LowSpeed")
+    with pytest.raises(ValueError, match=r"suite='Fastest' is unknown: must be a suite name \(one of \['default'.*\]\) "
+                                         r"or a scenario name \(one of \['Nominal'"):
+        resolve_suite("Fastest")
+
+
 @pytest.mark.parametrize(
     ("call", "match"),
     [
@@ -184,7 +194,8 @@ def test_comparison_end_to_end_on_the_tiny_suite(tmp_path: Path, capsys):
     assert "8/8" in capsys.readouterr().err  # the progress bar counted every episode
 
     assert sorted(p.name for p in out.iterdir()) == [
-        "leaderboard.md", "plots", "results.csv", "run.json", "summary.csv", "summary.md"]
+        ".subenv-output", "leaderboard.md", "plots", "results.csv", "run.json", "summary.csv", "summary.md"]
+    assert (out / ".subenv-output").read_text() == "subenv evaluate\n"  # what overwrite=True asks of a folder
     assert sorted(p.name for p in (out / "plots").iterdir()) == [
         "metrics_vs_speed.png", "trajectories_LowSpeed.png", "trajectories_Nominal.png"]
     assert all(p.read_bytes().startswith(b"\x89PNG") for p in (out / "plots").iterdir())
@@ -212,7 +223,7 @@ def test_comparison_end_to_end_on_the_tiny_suite(tmp_path: Path, capsys):
                            plots=False)
     assert len(again.results) == 2
     assert sorted(p.name for p in out.iterdir()) == [
-        "leaderboard.md", "results.csv", "run.json", "summary.csv", "summary.md"]
+        ".subenv-output", "leaderboard.md", "results.csv", "run.json", "summary.csv", "summary.md"]
 
 
 def test_bad_input_is_refused_before_any_episode_runs(tmp_path: Path):
