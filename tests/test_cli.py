@@ -146,8 +146,6 @@ def test_analyze_with_a_bad_vehicle_is_a_one_line_error(tmp_path: Path, no_work,
     assert list(tmp_path.iterdir()) == []
 
 
-@pytest.mark.xfail(strict=True, reason="needs the vehicle loader to refuse a singular mass matrix (issue 18, "
-                                       "finding 6); remove this mark when it does")
 def test_analyze_with_a_singular_vehicle_is_a_one_line_error(tmp_path: Path, no_work):
     text = resources.files("subenv.vehicles.data").joinpath("suboff.toml").read_text("utf-8")
     # With M_qdot' = I_y' and Z_qdot' = 0 the mass matrix [[m' - Z_wdot', -Z_qdot'], [-M_wdot', I_y' - M_qdot']]
