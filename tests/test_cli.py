@@ -11,6 +11,8 @@ from importlib import resources
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import subenv.analysis.report
 import subenv.evaluation.comparison
@@ -190,3 +192,35 @@ def test_evaluate_takes_scenario_names_for_the_suite(tmp_path: Path, capsys):
     with pytest.raises(SystemExit, match=r"suite='Fastest' is unknown: must be a suite name \(one of \['default'.*"
                                          r"or a scenario name \(one of \['Nominal'"):
         main(["evaluate", "--suite", "Fastest", "--out", str(tmp_path / "y"), "--no-progress"])
+
+
+class _Reached(Exception):
+    """The command got past its checks to its work."""
+
+
+_WORDS = st.sampled_from(["tiny", "Nominal", "LowSpeed", "nope", "", ",", "thesis", "lqr", "-1", "0", "3", "1e9",
+                          "Nominal,", "subenv/Nominal-v0", "x/y", "\x00", " ", "é"])
+
+
+@settings(max_examples=60, deadline=None, derandomize=True, database=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(options=st.lists(st.tuples(st.sampled_from(["--suite", "--controllers", "--episodes", "--seed", "--plugins",
+                                                   "--out"]), _WORDS), max_size=4))
+def test_evaluate_arguments_are_refused_in_one_line_or_reach_the_work(options, tmp_path_factory, monkeypatch):
+    """Fuzzing ``subenv evaluate``'s arguments: each is refused by a usage error or a one-line
+    message (no traceback), or the command reaches its rollouts."""
+    def reached(*args, **kwargs):  # type: ignore[no-untyped-def]
+        raise _Reached
+
+    monkeypatch.setattr(subenv.evaluation.comparison, "evaluate", reached)
+    argv = ["evaluate", "--no-progress", "--out", str(tmp_path_factory.mktemp("fuzz") / "out")]
+    for flag, word in options:
+        argv += [flag, word]
+    try:
+        main(argv)
+    except _Reached:
+        return
+    except SystemExit as exit_:
+        assert exit_.code == 2 or (isinstance(exit_.code, str) and "\n" not in exit_.code.strip()), exit_.code
+        return
+    pytest.fail(f"{argv} neither ran nor was refused")

@@ -70,6 +70,10 @@ MAX_WEIGHT: Final = 1e6
 is at most ``MAX_WEIGHT * (pi / MIN_PITCH_LIMIT_RAD)^2`` in size, and more only at a terminal pitch
 beyond pi)."""
 MAX_PLANE_RATE_RADPS: Final = 1000.0
+MAX_DEPTH_BAND_M: Final = 1e5
+"""The largest ``max_depth_error_m`` and ``depth_scale_m`` [m]: nine times the deepest ocean, so a
+study may let the boat sink for hours (``tests/physics``), and the observation bounds stay finite
+in float32."""
 
 
 @dataclass(frozen=True)
@@ -118,8 +122,8 @@ class DivePlaneConfig:
                 check.positive("plane_rate_limit_radps", self.plane_rate_limit_radps, upper=MAX_PLANE_RATE_RADPS))
         put(self, "max_pitch_rad", check.number("max_pitch_rad", self.max_pitch_rad, MIN_PITCH_LIMIT_RAD, math.pi / 2))
         put(self, "max_depth_error_m",
-            check.positive("max_depth_error_m", self.max_depth_error_m, upper=MAX_DEPTH_COMMAND_M))
-        put(self, "depth_scale_m", check.positive("depth_scale_m", self.depth_scale_m, upper=MAX_DEPTH_COMMAND_M))
+            check.positive("max_depth_error_m", self.max_depth_error_m, upper=MAX_DEPTH_BAND_M))
+        put(self, "depth_scale_m", check.positive("depth_scale_m", self.depth_scale_m, upper=MAX_DEPTH_BAND_M))
         for name in ("pitch_weight", "effort_weight", "termination_penalty"):
             put(self, name, check.number(name, getattr(self, name), 0.0, MAX_WEIGHT))
 

@@ -118,8 +118,8 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
       (``tests/dynamics/test_integrator.py``).
     - ``plane_rate_limit_radps``: None (planes move at once) or the planes' largest rate, in
       (0, 1000] rad/s.
-    - ``max_pitch_rad`` in [0.01, pi/2], ``max_depth_error_m`` in (0, 1000] m: the Episode End
-      limits. ``depth_scale_m`` in (0, 1000] m, ``pitch_weight``, ``effort_weight`` and
+    - ``max_pitch_rad`` in [0.01, pi/2], ``max_depth_error_m`` in (0, 1e5] m: the Episode End
+      limits. ``depth_scale_m`` in (0, 1e5] m, ``pitch_weight``, ``effort_weight`` and
       ``termination_penalty`` in [0, 1e6]: the Rewards' terms. Within these bounds every reward
       and observation is finite; a value outside them raises ``ValueError``.
     - ``config``: instead of the arguments above, a :class:`~subenv.envs.DivePlaneConfig` (the

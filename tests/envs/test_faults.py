@@ -23,7 +23,7 @@ from hypothesis import strategies as st
 
 from subenv.envs import DivePlaneConfig, DivePlaneEnv, DivePlaneVectorEnv
 from subenv.envs import vector as vector_module
-from subenv.envs.config import MAX_DEPTH_COMMAND_M, MAX_WEIGHT, MIN_PITCH_LIMIT_RAD
+from subenv.envs.config import MAX_DEPTH_BAND_M, MAX_WEIGHT, MIN_PITCH_LIMIT_RAD
 
 FUZZ = settings(max_examples=25, deadline=None, derandomize=True, database=None,
                 suppress_health_check=[HealthCheck.too_slow])
@@ -163,8 +163,8 @@ def test_ctrl_c_during_threaded_stepping_never_corrupts_the_environment():
 @FUZZ
 @given(
     max_pitch_rad=st.floats(MIN_PITCH_LIMIT_RAD, math.pi / 2),
-    max_depth_error_m=st.floats(1e-3, MAX_DEPTH_COMMAND_M),
-    depth_scale_m=st.floats(1e-9, MAX_DEPTH_COMMAND_M),
+    max_depth_error_m=st.floats(1e-3, MAX_DEPTH_BAND_M),
+    depth_scale_m=st.floats(1e-9, MAX_DEPTH_BAND_M),
     weights=st.tuples(*[st.sampled_from([0.0, 1e-300, 1.0, MAX_WEIGHT])] * 3),
     bang=st.integers(0, 2**16),
 )
@@ -304,3 +304,53 @@ def test_a_vector_reset_refused_for_an_episode_drawn_changes_nothing():
     actions = np.random.default_rng(3).uniform(-1, 1, size=(10, 3, 1))
     assert_steps_equal(rollout(env, actions), rollout(reference, actions))
     np.testing.assert_array_equal(env.reset()[0], reference.reset()[0])
+
+
+# --- property-based fuzzing of what a user passes in ------------------------------------------------
+_ANYTHING = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True), st.integers(-10**400, 10**400), st.booleans(), st.none(),
+    st.text(max_size=3), st.complex_numbers(max_magnitude=10), st.sampled_from([np.float32(0.7), np.int64(30)]),
+)
+_OPTIONS = st.dictionaries(
+    st.sampled_from(["speed", "depth_command", "initial_state", "speeed"]),
+    st.one_of(_ANYTHING, st.lists(_ANYTHING, min_size=0, max_size=5),
+              st.dictionaries(st.sampled_from(["pitch", "heave", "pitch_rate", "depth", "x"]), _ANYTHING, max_size=3),
+              st.floats(0.01, 10.0), st.floats(0.3, 1000.0)),
+    max_size=3,
+)
+
+
+@FUZZ
+@given(options=_OPTIONS)
+def test_reset_options_give_a_valid_episode_or_a_clear_error_that_changes_nothing(options):
+    env, reference = (DivePlaneEnv(scenario="Randomized") for _ in range(2))
+    env.reset(seed=0)
+    reference.reset(seed=0)
+    try:
+        obs, info = env.reset(options=options)
+    except ValueError as error:
+        assert str(error).startswith(("options[", "reset options")), error
+        np.testing.assert_array_equal(env.reset()[0], reference.reset()[0])  # as if never called
+        return
+    assert env.observation_space.contains(obs), obs
+    assert all(np.isfinite(v) for k, v in info.items() if k not in ("termination_reason", "critical_speed_mps",
+                                                                      "critical_froude", "froude_number"))
+    for _ in range(5):
+        obs, reward, *_ = env.step(np.array([1.0], dtype=np.float32))
+        assert np.isfinite(obs).all() and math.isfinite(reward)
+
+
+@FUZZ
+@given(action=st.lists(st.floats(allow_nan=True, allow_infinity=True, width=64), min_size=1, max_size=1))
+def test_any_real_action_is_clipped_and_a_non_finite_one_refused(action):
+    env = DivePlaneEnv(scenario="LowSpeed")
+    env.reset(seed=1)
+    before = env.state
+    if not all(math.isfinite(a) for a in action):
+        with pytest.raises(ValueError, match=r"^action=.* is invalid: must be finite"):
+            env.step(np.array(action))
+        np.testing.assert_array_equal(env.state, before)
+        return
+    obs, reward, *_ = env.step(np.array(action))
+    assert np.isfinite(obs).all() and math.isfinite(reward)
+    assert abs(env.planes_rad[0]) <= env.plane_limit_rad

@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -293,3 +295,38 @@ def test_make_refuses_a_singular_vehicle_file_naming_it(tmp_path: Path):
     path.write_text(text.replace("Z_wdot = -1.4529e-2", f"Z_wdot = {_mass_slug(raw) / _nd2(raw)!r}"))
     with pytest.raises(ValueError, match=rf"vehicle file {re.escape(str(path))}: hydrodynamics\.Z_wdot=.*positive definite"):
         gym.make("subenv/DivePlane-v0", vehicle=str(path))
+
+
+_NUMERIC_FIELDS = [(section, key) for section, values in _suboff_file().items() if isinstance(values, dict)
+                   for key, value in values.items() if isinstance(value, (int, float)) and not isinstance(value, bool)]
+
+
+@settings(max_examples=60, deadline=None, derandomize=True, database=None)
+@given(field=st.sampled_from(_NUMERIC_FIELDS),
+       value=st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.integers(-10**400, 10**400),
+                       st.booleans(), st.text(max_size=2), st.lists(st.floats(), max_size=2)),
+       scale=st.sampled_from([None, -1.0, 0.0, 1e-300, 0.5, 2.0, 1e300]))
+def test_a_perturbed_vehicle_file_loads_an_admissible_vehicle_or_is_refused_by_name(field, value, scale):
+    """Fuzzing the shipped file, one field at a time: the loader gives a vehicle whose environment
+    steps with finite outputs, or a ValueError that names the file; never another exception."""
+    import gymnasium as gym
+
+    import subenv  # noqa: F401  (registers the ids)
+
+    section, key = field
+    raw = _suboff_file()
+    raw[section][key] = value if scale is None else raw[section][key] * scale
+    try:
+        vehicle = vehicle_from_dict(raw, origin="fuzz.toml")
+    except ValueError as error:
+        assert str(error).startswith("vehicle file fuzz.toml"), error
+        return
+    try:
+        env = gym.make("subenv/Nominal-v0", vehicle=vehicle)
+    except ValueError as error:  # admissible as a vehicle, but not for the environment (e.g. no critical speed)
+        assert "is invalid" in str(error) or "has none" in str(error), error
+        return
+    obs, _ = env.reset(seed=0)
+    for _ in range(10):
+        obs, reward, *_ = env.step(np.array([1.0], dtype=np.float32))
+        assert np.isfinite(obs).all() and np.isfinite(reward)
