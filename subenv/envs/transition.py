@@ -56,6 +56,7 @@ __all__ = [
     "observe",
     "plane_angles",
     "reward_terms",
+    "sensor_noise",
     "speed_at",
     "step",
     "step_block",
@@ -221,27 +222,37 @@ def reward_terms(pitch_rad: float, depth_error_m: float, effort: float, terminat
     return r_depth, r_pitch, r_effort, r_termination
 
 
+_NO_NOISE: Final = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+
 @inline_kernel
-def observation(s: np.void, e: np.void, rng: np.random.Generator, i: int, cfg: np.void, obs: np.ndarray) -> None:
+def sensor_noise(rng: np.random.Generator, cfg: np.void) -> tuple[float, ...]:
+    """The observation's noise, :data:`N_OBS` values drawn from ``rng``: ``rng.normal(0, 1, size=8) *
+    std``, one depth sensor for components 0 and 7."""
+    std = cfg.noise_std
+    n0 = rng.normal(0.0, 1.0) * std[0]
+    n1 = rng.normal(0.0, 1.0) * std[1]
+    n2 = rng.normal(0.0, 1.0) * std[2]
+    n3 = rng.normal(0.0, 1.0) * std[3]
+    n4 = rng.normal(0.0, 1.0) * std[4]
+    n5 = rng.normal(0.0, 1.0) * std[5]
+    n6 = rng.normal(0.0, 1.0) * std[6]
+    n7 = rng.normal(0.0, 1.0) * std[7]
+    n0 = n7
+    return n0, n1, n2, n3, n4, n5, n6, n7
+
+
+@inline_kernel
+def observation(s: np.void, e: np.void, noise: tuple[float, ...], i: int, cfg: np.void, obs: np.ndarray) -> None:
     """Write the observation of state ``s`` in episode ``e`` into row ``i`` of ``obs`` (float32,
-    :data:`N_OBS` columns), drawing its noise from ``rng`` (the sub-environment's generator) when the
-    episode has sensor noise."""
+    :data:`N_OBS` columns), with ``noise`` (:func:`sensor_noise`) added when the episode has sensor
+    noise."""
     depth = s.depth_m
     v0 = depth - e.depth_command_m
     v1, v2, v3 = s.pitch_rad, s.heave_mps, s.pitch_rate_radps
     v4, v5, v6, v7 = s.speed_mps, s.stern_plane_rad, s.bow_plane_rad, depth
     if e.sensor_noise:
-        # rng.normal(0, 1, size=8) * std, one depth sensor for components 0 and 7.
-        std = cfg.noise_std
-        n0 = rng.normal(0.0, 1.0) * std[0]
-        n1 = rng.normal(0.0, 1.0) * std[1]
-        n2 = rng.normal(0.0, 1.0) * std[2]
-        n3 = rng.normal(0.0, 1.0) * std[3]
-        n4 = rng.normal(0.0, 1.0) * std[4]
-        n5 = rng.normal(0.0, 1.0) * std[5]
-        n6 = rng.normal(0.0, 1.0) * std[6]
-        n7 = rng.normal(0.0, 1.0) * std[7]
-        n0 = n7
+        n0, n1, n2, n3, n4, n5, n6, n7 = noise
         v0, v1, v2, v3 = v0 + n0, v1 + n1, v2 + n2, v3 + n3
         v4, v5, v6, v7 = v4 + n4, v5 + n5, v6 + n6, v7 + n7
     # Only a terminal state (or noise at zero speed) can reach the bounds.
@@ -336,14 +347,20 @@ def step_block(state: np.ndarray, episode: np.ndarray, actions: FloatArray, acti
         x2, x3 = block[(LANE_PITCH + 2) * L + j], block[(LANE_PITCH + 3) * L + j]
         s.time_s = s.time_s + dt
         s.speed_mps = speeds_end[j]
-        std = e.disturbance_std_N
-        # The generator is taken from the list once per step: every item taken costs a reference count,
-        # and two per step halved what a second thread adds where the episodes draw numbers.
-        rng = rngs[i]
-        if std > 0.0:  # a first-order Gauss-Markov process with stationary standard deviation std
-            s.disturbance_N = (cfg.disturbance_decay * s.disturbance_N
-                               + cfg.disturbance_gain * rng.normal(0.0, std))
         reason = episode_end(x0, x1, x2, x3, e.depth_command_m, cfg)
+        std = e.disturbance_std_N
+        noisy = e.sensor_noise and reason != _DIVERGED  # (a diverged state is not observed again)
+        noise = _NO_NOISE
+        if std > 0.0 or noisy:
+            # The generator is taken from the list once per step, and only by an episode that draws:
+            # every item taken costs a reference count (two per step took a third off what a second
+            # thread adds; one per step where none is needed, a tenth off one thread's rate).
+            rng = rngs[i]
+            if std > 0.0:  # a first-order Gauss-Markov process with stationary standard deviation std
+                s.disturbance_N = (cfg.disturbance_decay * s.disturbance_N
+                                   + cfg.disturbance_gain * rng.normal(0.0, std))
+            if noisy:
+                noise = sensor_noise(rng, cfg)
         if reason != _DIVERGED:  # (a diverged state keeps the last valid one, and its observation)
             s.pitch_rad, s.heave_mps, s.pitch_rate_radps, s.depth_m = x0, x1, x2, x3
         terminated = reason != 0
@@ -354,7 +371,7 @@ def step_block(state: np.ndarray, episode: np.ndarray, actions: FloatArray, acti
         r_depth, r_pitch, r_effort, r_termination = reward_terms(
             s.pitch_rad, s.depth_m - e.depth_command_m, efforts[j], terminated, cfg)
         if reason != _DIVERGED:
-            observation(s, e, rng, i, cfg, obs)
+            observation(s, e, noise, i, cfg, obs)
         _report(block_report, j, s, e, r_depth, r_pitch, r_effort, r_termination, reason, terminated, truncated)
     # Key by key into the step's report (each key's row written in order, not 22 rows per env).
     for c in range(_N_REPORT):
@@ -438,5 +455,5 @@ def observe(state: np.ndarray, episode: np.ndarray, indices: np.ndarray, obs: np
         i = indices[k]
         s, e = state[i], episode[i]
         s.speed_mps = speed_at(s.time_s, e.n_knots, e.knot_time_s, e.knot_speed_mps)
-        observation(s, e, rngs[i], i, cfg, obs)
+        observation(s, e, sensor_noise(rngs[i], cfg) if e.sensor_noise else _NO_NOISE, i, cfg, obs)
         _report(report, i, s, e, 0.0, 0.0, 0.0, 0.0, 0, False, False)

@@ -16,7 +16,7 @@ from typing import Any
 
 from subenv import _validation as check
 from subenv import units
-from subenv.vehicles.vehicle import HullOffsets, HydroCoefficients, PlaneCoefficients, Vehicle
+from subenv.vehicles.vehicle import LENGTH_RANGE_M, HullOffsets, HydroCoefficients, PlaneCoefficients, Vehicle
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -194,10 +194,11 @@ def vehicle_from_dict(data: Mapping[str, Any], origin: str = "<dict>") -> Vehicl
     hydro = dict(si["hydrodynamics"])
     crossflow_drag = hydro.pop("crossflow_drag")
     length = body["length"]
-    # Station convention of the thesis's offsets: x = (10 - station) L / 20, forward positive.
-    x_m = tuple((10.0 - s) / 20.0 * length for s in hull["stations"])  # (L / 20 first overflows a huge L)
     breadth_m = tuple(hull["max_diameter"] * r for r in hull["radius_ratio"])
     try:
+        check.number("length_m", length, *LENGTH_RANGE_M)  # (before the stations: a huge length overflows them)
+        # Station convention of the thesis's offsets: x = (10 - station) L / 20, forward positive.
+        x_m = tuple((10.0 - s) * length / 20.0 for s in hull["stations"])
         return Vehicle(
             name=str(data["name"]),
             description=str(data.get("description", "")),

@@ -13,7 +13,7 @@ import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any
+from typing import Any, Final
 
 import numpy as np
 
@@ -108,7 +108,8 @@ class HullOffsets:
     @property
     def area_m2(self) -> float:
         """Planform area int b(x) dx, exact for the piecewise-linear hull [m^2]."""
-        return float(np.trapezoid(self.breadth_m[::-1], self.x_m[::-1]))  # tail to nose: x increasing
+        x = np.asarray(self.x_m)
+        return float(-np.trapezoid(self.breadth_m, x)) + 0.0  # (+ 0.0: an all-zero hull has area 0.0, not -0.0)
 
     @property
     def centroid_x_m(self) -> float:
@@ -149,7 +150,9 @@ _POSITIVE_FIELDS = ("weight_N", "buoyancy_N", "inertia_y_kg_m2", "gravity_m_s2")
 # ranges: any water, fresh to the densest brine, with a wide margin; any hull from a 1 cm model to longer
 # than any vessel afloat. Outside them the derivatives, or their products in the analysis, leave the
 # floating-point range (water_density = 1e-300 made eq. 3.9 underflow; length = 1e308 overflowed).
-_RANGES = {"water_density_kg_m3": (500.0, 2000.0), "length_m": (0.01, 1000.0)}
+LENGTH_RANGE_M: Final = (0.01, 1000.0)
+"""The lengths a vehicle may have [m]."""
+_RANGES = {"water_density_kg_m3": (500.0, 2000.0), "length_m": LENGTH_RANGE_M}
 # Checked fields that enter the mass matrix (the hydrodynamic derivatives do too, but never change).
 _MASS_MATRIX_FIELDS = frozenset({*_RANGES, "weight_N", "gravity_m_s2", "inertia_y_kg_m2", "x_G_m"})
 _CHECKED_FIELDS = (*_RANGES, *_POSITIVE_FIELDS, "x_G_m", "z_G_m", "x_B_m", "z_B_m", "crossflow_drag")
