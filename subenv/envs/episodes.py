@@ -191,7 +191,7 @@ def check_options(config: DivePlaneConfig, options: Mapping[str, Any] | None) ->
     if "depth_command" in options:
         value = options["depth_command"]
         check.require("options['depth_command']", value,
-                      check.is_number(value) and math.isfinite(value)
+                      check.is_finite(value)
                       and config.broach_depth_m < value <= MAX_DEPTH_COMMAND_M,
                       f"a number in ({config.broach_depth_m:.4g}, {MAX_DEPTH_COMMAND_M:g}] m (below the hull radius)")
     if "initial_state" in options:
@@ -216,14 +216,12 @@ def _initial_state(config: DivePlaneConfig, value: Any, drawn: tuple[float, floa
             f"options['initial_state']={value!r} is invalid: must be (pitch, heave, pitch_rate, depth) "
             f"or a mapping with keys {list(STATE_KEYS)}"
         )
-    if not all(check.is_number(v) for v in state):
-        raise ValueError(f"options['initial_state']={value!r} is invalid: must hold real numbers")
-    state = [float(v) for v in state]
     for key, v in zip(STATE_KEYS, state):
-        if key == "depth" and math.isnan(command) and math.isnan(v):
-            continue  # (the drawn depth, not known yet)
-        if not math.isfinite(v):
-            raise ValueError(f"options['initial_state'][{key!r}]={v!r} is invalid: must be finite")
+        if not check.is_number(v):
+            raise ValueError(f"options['initial_state']={value!r} is invalid: must hold real numbers")
+        unknown_depth = key == "depth" and math.isnan(command) and isinstance(v, float) and math.isnan(v)
+        check.require(f"options['initial_state'][{key!r}]", v, check.is_finite(v) or unknown_depth, "finite")
+    state = [float(v) for v in state]
     pitch, heave, rate, depth = state
     limit = config.max_pitch_rad
     check.require("options['initial_state']['pitch']", pitch, abs(pitch) < limit,

@@ -204,7 +204,8 @@ def test_a_rejected_reset_does_not_change_the_next_episode():
     env, reference = gym.make("subenv/Randomized-v0"), gym.make("subenv/Randomized-v0")
     env.reset(seed=0)
     reference.reset(seed=0)
-    for options in ({"speed": -1.0}, {"initial_state": [0, 0, 0, "10"]}, {"depth_command": True}, {"nope": 1}):
+    for options in ({"speed": -1.0}, {"initial_state": [0, 0, 0, "10"]}, {"depth_command": True}, {"nope": 1},
+                    {"depth_command": 10**400}, {"initial_state": {"pitch": 10**400}}):
         with pytest.raises(ValueError, match="is invalid|unknown"):
             env.reset(options=options)
     np.testing.assert_array_equal(env.reset()[0], reference.reset()[0])
@@ -320,7 +321,7 @@ _OPTIONS = st.dictionaries(
 )
 
 
-@FUZZ
+@settings(FUZZ, max_examples=150)
 @given(options=_OPTIONS)
 def test_reset_options_give_a_valid_episode_or_a_clear_error_that_changes_nothing(options):
     env, reference = (DivePlaneEnv(scenario="Randomized") for _ in range(2))
