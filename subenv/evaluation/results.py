@@ -12,7 +12,7 @@ import csv
 import io
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, Final
 
@@ -25,12 +25,13 @@ from subenv.atomic import (
     atomic_write_text,
     check_output_dir,
 )
-from subenv.evaluation.metrics import DEPTH_TOLERANCE_M, HOLD_WINDOW_S, OUTCOMES
+from subenv.evaluation.metrics import DEPTH_TOLERANCE_M, HOLD_WINDOW_S, OUTCOMES, EpisodeMetrics
 from subenv.evaluation.rollout import EpisodeResult
 
 __all__ = [
     "CONFIDENCE_LEVEL",
     "CONTINUOUS_METRICS",
+    "OUTCOME_NOTE",
     "RATE_METRICS",
     "OutputDirError",
     "atomic_output_dir",
@@ -40,6 +41,7 @@ __all__ = [
     "episode_table",
     "leaderboard_markdown",
     "mean_interval",
+    "outcome_counts",
     "summarize",
     "summary_markdown",
     "table_csv",
@@ -50,8 +52,12 @@ __all__ = [
 CONFIDENCE_LEVEL: Final = 0.95
 """Two-sided level of every confidence interval in the tables."""
 
-RATE_METRICS: Final = ("success", "wrong_branch", "steady_offset", "broached", "terminated")
-"""Boolean metrics aggregated as a rate with a Wilson interval."""
+RATE_METRICS: Final = OUTCOMES
+"""The outcomes, each aggregated as a rate with a Wilson interval.
+
+Every episode has exactly one outcome (:data:`~subenv.evaluation.metrics.OUTCOMES`, with its
+order of precedence), so the rates of a row add up to 1 and every table counts a failure once.
+"""
 
 CONTINUOUS_METRICS: Final = {
     "iae_m_s": (0.0, math.inf),
@@ -133,20 +139,41 @@ def _groups(results: Sequence[EpisodeResult]) -> dict[tuple[str, str], list[Epis
     return groups
 
 
+def outcome_counts(metrics: Iterable[EpisodeMetrics]) -> dict[str, int]:
+    """Episodes per outcome: every outcome of :data:`~subenv.evaluation.metrics.OUTCOMES` (in its
+    order, zeros included), then any other outcome that occurred (sorted).
+
+    The one count behind every table: :func:`summarize` (and so ``summary.md``/``summary.csv``)
+    and :func:`leaderboard_markdown` both count failures with it, so their numbers agree.
+    """
+    counts = dict.fromkeys(OUTCOMES, 0)
+    others: dict[str, int] = {}
+    for m in metrics:
+        if m.outcome in counts:
+            counts[m.outcome] += 1
+        else:
+            others[m.outcome] = others.get(m.outcome, 0) + 1
+    return counts | dict(sorted(others.items()))
+
+
 def summarize(results: Sequence[EpisodeResult], confidence: float = CONFIDENCE_LEVEL) -> list[dict[str, Any]]:
     """Aggregate per controller x scenario (in the order first seen).
 
-    Columns: ``controller``, ``scenario``, ``episodes``; for each of :data:`RATE_METRICS`
-    ``<m>_rate``, ``<m>_ci_low``, ``<m>_ci_high`` (Wilson); for each of
+    Columns: ``controller``, ``scenario``, ``episodes``; for each outcome (:data:`RATE_METRICS`,
+    and any other that occurred) ``outcome_<o>`` (the count of :func:`outcome_counts`) and
+    ``<o>_rate``, ``<o>_ci_low``, ``<o>_ci_high`` (Wilson); for each of
     :data:`CONTINUOUS_METRICS` ``<m>_mean``, ``<m>_ci_low``, ``<m>_ci_high`` (Student t);
-    ``settled`` (episodes with a finite settling time); and ``outcome_<name>`` counts.
+    ``settled`` (episodes with a finite settling time).
     """
+    extra = [o for o in _outcomes(results) if o not in OUTCOMES]
     rows = []
     for (controller, scenario), group in _groups(results).items():
         row: dict[str, Any] = {"controller": controller, "scenario": scenario, "episodes": len(group)}
         metrics = [r.metrics for r in group]
-        for name in RATE_METRICS:
-            k = sum(bool(getattr(m, name)) for m in metrics)
+        counts = outcome_counts(metrics)
+        row |= {f"outcome_{o}": counts.get(o, 0) for o in (*OUTCOMES, *extra)}
+        for name in (*OUTCOMES, *extra):
+            k = counts.get(name, 0)
             low, high = wilson_interval(k, len(metrics), confidence)
             row |= {f"{name}_rate": k / len(metrics), f"{name}_ci_low": low, f"{name}_ci_high": high}
         for name, support in CONTINUOUS_METRICS.items():
@@ -156,8 +183,6 @@ def summarize(results: Sequence[EpisodeResult], confidence: float = CONFIDENCE_L
                 row["settled"] = len(values)
             mean, low, high = mean_interval(values, confidence, support)
             row |= {f"{name}_mean": mean, f"{name}_ci_low": low, f"{name}_ci_high": high}
-        for outcome in _outcomes(results):
-            row[f"outcome_{outcome}"] = sum(m.outcome == outcome for m in metrics)
         rows.append(row)
     return rows
 
@@ -181,6 +206,18 @@ def _num(mean: float, low: float, high: float, fmt: str = ".3g") -> str:
     return f"{mean:{fmt}} [{low:{fmt}}, {high:{fmt}}]"
 
 
+OUTCOME_NOTE: Final = (
+    "Each episode counts under one outcome, the first that applies: success (not terminated and "
+    f"|depth error| <= {DEPTH_TOLERANCE_M:g} m over the final {HOLD_WINDOW_S:g} s); wrong branch (a steady "
+    "pitched state with a plane pinned at its limit, off depth, over that window, even if the episode then "
+    "broached or left the depth band); steady offset (settled off depth, planes free); the environment's "
+    "termination reason (broached, left depth band, pitch limit, diverged); unsettled (still moving off depth "
+    "at the time limit)."
+)
+"""How the tables count outcomes (the precedence of :data:`~subenv.evaluation.metrics.OUTCOMES`), in
+the notes of the leaderboard and of ``summary.md``."""
+
+
 def _markdown_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
     lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
     lines += ["| " + " | ".join(row) + " |" for row in rows]
@@ -193,7 +230,8 @@ def leaderboard_markdown(
     """Markdown leaderboard: controllers as rows, success rate per scenario with its interval.
 
     Rows are sorted by the success rate over all the suite's episodes (pooled), best first, then
-    by name. The last columns break the pooled failures down by outcome.
+    by name. The last columns break the pooled failures down by outcome (:func:`outcome_counts`,
+    the counts :func:`summarize` gives per scenario).
     """
     if not results:
         raise ValueError("results is empty: nothing to rank")
@@ -213,53 +251,55 @@ def leaderboard_markdown(
             ks = sum(r.metrics.success for r in group)
             ci = wilson_interval(ks, len(group), confidence) if group else (math.nan, math.nan)
             cells.append(_pct(ks / len(group), *ci) if group else "-")
-        cells += [str(sum(m.outcome == o for m in ms)) for o in failure_outcomes]
+        counts = outcome_counts(ms)
+        cells += [str(counts.get(o, 0)) for o in failure_outcomes]
         rows.append(cells)
     episodes = sorted({len(g) for g in groups.values()})
     per = str(episodes[0]) if len(episodes) == 1 else f"{episodes[0]}-{episodes[-1]}"
     header = ["controller", "all scenarios", *scenarios, *(o.replace("_", " ") for o in failure_outcomes)]
     note = (
         f"Success rate with {100 * confidence:.0f}% Wilson intervals, {per} episodes per scenario "
-        f"(the same seeds for every controller). Success: not terminated and |depth error| <= "
-        f"{DEPTH_TOLERANCE_M:g} m over the final {HOLD_WINDOW_S:g} s. Last columns: failures by outcome, "
-        "all scenarios (wrong branch: steady pitched state with the planes pinned, off depth; steady "
-        "offset: settled off depth, planes free; unsettled: still moving off depth at the time limit)."
+        f"(the same seeds for every controller). Last columns: episodes per failure outcome, all "
+        f"scenarios. {OUTCOME_NOTE}"
     )
     return f"## {title}\n\n{_markdown_table(header, rows)}\n\n{note}\n"
 
 
-_SUMMARY_COLUMNS: Final = (
-    ("success", "success", "rate"),
-    ("wrong branch", "wrong_branch", "rate"),
-    ("broached", "broached", "rate"),
-    ("IAE [m s]", "iae_m_s", "mean"),
-    ("settling [s]", "settling_time_s", "mean"),
-    ("overshoot [m]", "overshoot_m", "mean"),
-    ("peak pitch [deg]", "peak_pitch_deg", "mean"),
-    ("plane RMS [rad]", "plane_rms_rad", "mean"),
-    ("saturated", "saturated_fraction", "mean"),
+_SUMMARY_MEANS: Final = (
+    ("IAE [m s]", "iae_m_s"),
+    ("settling [s]", "settling_time_s"),
+    ("overshoot [m]", "overshoot_m"),
+    ("peak pitch [deg]", "peak_pitch_deg"),
+    ("plane RMS [rad]", "plane_rms_rad"),
+    ("saturated", "saturated_fraction"),
 )
 
 
 def summary_markdown(summary: Sequence[Mapping[str, Any]], *, title: str = "Per scenario") -> str:
-    """The aggregate table (from :func:`summarize`) as Markdown, one row per controller x scenario."""
-    header = ["scenario", "controller", "n", *(label for label, _, _ in _SUMMARY_COLUMNS), "settled"]
+    """The aggregate table (from :func:`summarize`) as Markdown, one row per controller x scenario.
+
+    The rate columns are the success rate and the rate of every failure outcome that occurred in
+    any row, so each row's rates add up to 100% (up to rounding) and, times ``n``, summed over the
+    scenarios, give the leaderboard's failure counts.
+    """
+    outcomes = [key.removeprefix("outcome_") for key in dict.fromkeys(k for r in summary for k in r)
+                if key.startswith("outcome_")]
+    shown = [o for o in outcomes if o == "success" or any(r.get(f"outcome_{o}", 0) for r in summary)]
+    header = ["scenario", "controller", "n", *(o.replace("_", " ") for o in shown),
+              *(label for label, _ in _SUMMARY_MEANS), "settled"]
     scenarios = list(dict.fromkeys(r["scenario"] for r in summary))
     ordered = sorted(summary, key=lambda r: scenarios.index(r["scenario"]))  # stable: controllers keep order
     rows = []
     for r in ordered:
         cells = [r["scenario"], r["controller"], str(r["episodes"])]
-        for _, name, kind in _SUMMARY_COLUMNS:
-            if kind == "rate":
-                cells.append(_pct(r[f"{name}_rate"], r[f"{name}_ci_low"], r[f"{name}_ci_high"]))
-            else:
-                cells.append(_num(r[f"{name}_mean"], r[f"{name}_ci_low"], r[f"{name}_ci_high"]))
+        cells += [_pct(r[f"{o}_rate"], r[f"{o}_ci_low"], r[f"{o}_ci_high"]) for o in shown]
+        cells += [_num(r[f"{name}_mean"], r[f"{name}_ci_low"], r[f"{name}_ci_high"]) for _, name in _SUMMARY_MEANS]
         cells.append(str(r["settled"]))
         rows.append(cells)
     note = (
-        "Means with 95% Student-t intervals (rates: Wilson). Settling time averages the episodes "
-        "that settled (column 'settled'). IAE charges a terminated episode its final error until "
-        "the scheduled end."
+        "Rates of each outcome with 95% Wilson intervals; means with 95% Student-t intervals. Settling "
+        "time averages the episodes that settled (column 'settled'). IAE charges a terminated episode "
+        f"its final error until the scheduled end. {OUTCOME_NOTE}"
     )
     return f"## {title}\n\n{_markdown_table(header, rows)}\n\n{note}\n"
 

@@ -3,14 +3,17 @@
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import math
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from subenv.evaluation import results as res
+from subenv.evaluation.metrics import OUTCOMES, episode_metrics
 
 
 @pytest.mark.parametrize(
@@ -137,3 +140,80 @@ def test_a_failed_run_writes_no_folder(tmp_path: Path):
     (tmp_path / "file").write_text("not a folder")
     with pytest.raises(FileExistsError, match="not a folder"):
         res.check_output_dir(tmp_path / "file", overwrite=True)
+
+
+def _wrong_branch_then_broached(make_result, controller: str, scenario: str, episode: int):
+    """The thesis's failure mode over the final 60 s (stern plane pinned, steady 3 deg pitch, rising off
+    depth), ended by broaching: outcome wrong_branch, broached flag set."""
+    t = np.arange(0.0, 121.0, 1.0)
+    e = np.linspace(2.0, -8.0, t.size)
+    limit = 0.4
+    m = episode_metrics(t, e, np.full_like(t, math.radians(3.0)), np.zeros_like(t), np.full_like(t, limit),
+                        np.zeros_like(t), termination_reason="broached", plane_limit_rad=limit)
+    assert m.wrong_branch and m.broached and m.outcome == "wrong_branch"
+    return dataclasses.replace(make_result(controller, scenario, episode, False), metrics=m)
+
+
+def _broached(make_result, controller: str, scenario: str, episode: int):
+    t = np.arange(0.0, 31.0, 1.0)
+    zeros = np.zeros_like(t)
+    m = episode_metrics(t, np.linspace(0.0, -10.0, t.size), zeros, zeros, zeros, zeros,
+                        termination_reason="broached", plane_limit_rad=0.4)
+    assert m.outcome == "broached"
+    return dataclasses.replace(make_result(controller, scenario, episode, False), metrics=m)
+
+
+def test_outcome_counts_count_every_episode_once(make_result):
+    metrics = [_wrong_branch_then_broached(make_result, "c", "A", 0).metrics,
+               _broached(make_result, "c", "A", 1).metrics, make_result("c", "A", 2, True).metrics]
+    counts = res.outcome_counts(metrics)
+    assert list(counts)[: len(OUTCOMES)] == list(OUTCOMES)
+    assert counts["wrong_branch"] == 1 and counts["broached"] == 1 and counts["success"] == 1
+    assert sum(counts.values()) == 3  # the broaching wrong-branch episode is not counted twice
+    assert sum(m.broached for m in metrics) == 2  # though two episodes ended by broaching
+
+
+def _markdown_rows(text: str) -> list[dict[str, str]]:
+    lines = [line for line in text.splitlines() if line.startswith("| ")]
+    header = [cell.strip() for cell in lines[0].strip("|").split("|")]
+    return [dict(zip(header, (cell.strip() for cell in line.strip("|").split("|")))) for line in lines[1:]]
+
+
+def _assert_tables_agree(results) -> set[str]:
+    """The leaderboard's failure counts equal summary.md's rates times n, summed over the scenarios;
+    each summary row's rates add up to 100%. Returns the failure outcomes the tables show."""
+    board = _markdown_rows(res.leaderboard_markdown(results))
+    summary = _markdown_rows(res.summary_markdown(res.summarize(results)))
+    scenarios = {r.scenario for r in results}
+    board_failures = [k for k in board[0] if k not in {"controller", "all scenarios", *scenarios}]
+    rate_columns = list(summary[0])[3: list(summary[0]).index("IAE [m s]")]
+    assert rate_columns[0] == "success" and rate_columns[1:] == board_failures
+    for row in summary:
+        percents = [int(row[c].split("%")[0]) for c in rate_columns]
+        assert abs(sum(percents) - 100) <= len(percents) / 2  # integer rounding of each rate
+    for line in board:
+        mine = [row for row in summary if row["controller"] == line["controller"]]
+        for outcome in board_failures:
+            from_summary = sum(round(int(row[outcome].split("%")[0]) * int(row["n"]) / 100) for row in mine)
+            assert int(line[outcome]) == from_summary, (line["controller"], outcome)
+    return set(board_failures)
+
+
+def test_leaderboard_and_summary_count_failures_alike(make_result):
+    results = []
+    for i in range(4):
+        results += [_wrong_branch_then_broached(make_result, "thesis", "A", i) if i < 2
+                    else _broached(make_result, "thesis", "A", i),
+                    make_result("thesis", "B", i, success=i < 3), make_result("other", "A", i, success=True),
+                    _broached(make_result, "other", "B", i) if i == 0 else make_result("other", "B", i, True)]
+    assert _assert_tables_agree(results) == {"wrong branch", "steady offset", "broached"}
+    board = {row["controller"]: row for row in _markdown_rows(res.leaderboard_markdown(results))}
+    assert board["thesis"]["broached"] == "2" and board["thesis"]["wrong branch"] == "2"
+    assert "first that applies" in res.leaderboard_markdown(results)
+    assert "first that applies" in res.summary_markdown(res.summarize(results))
+
+
+def test_tables_agree_on_a_small_run(small_run):
+    # The case that made the tables disagree: wrong-branch episodes that then broached.
+    assert any(r.metrics.outcome == "wrong_branch" and r.metrics.broached for r in small_run.results)
+    assert _assert_tables_agree(small_run.results) >= {"wrong branch", "broached"}
