@@ -37,11 +37,14 @@ __all__ = [
     "atomic_output_dir",
     "atomic_write_bytes",
     "atomic_write_text",
+    "by_speed_ratio",
     "check_output_dir",
     "episode_table",
     "leaderboard_markdown",
     "mean_interval",
+    "median_interval",
     "outcome_counts",
+    "representative_episodes",
     "summarize",
     "summary_markdown",
     "table_csv",
@@ -126,6 +129,39 @@ def mean_interval(
     return (mean, max(float(low), support[0]), min(float(high), support[1]))
 
 
+_BOOTSTRAP_RESAMPLES: Final = 4999
+"""Resamples of :func:`median_interval`: enough that the percentile bounds move by well under the
+interval's own width from one seed to another, few enough for hundreds of intervals per figure."""
+
+_BOOTSTRAP_SEED: Final = 0
+"""Fixed, so the same results give the same intervals (and the same figure) every time."""
+
+
+def median_interval(
+    values: Sequence[float] | np.ndarray, confidence: float = CONFIDENCE_LEVEL
+) -> tuple[float, float, float]:
+    """(median, low, high): the median and its percentile-bootstrap confidence interval
+    (``scipy.stats.bootstrap``, fixed seed).
+
+    For skewed metrics such as the IAE, where one terminated episode (charged its final error until
+    the scheduled end) can outweigh twenty good ones in a mean. Fewer than 2 values give nan
+    bounds; values that are all equal give a zero-width interval.
+    """
+    x = np.asarray(values, dtype=float)
+    if x.size == 0:
+        return (math.nan, math.nan, math.nan)
+    median = float(np.median(x))
+    if x.size < 2:
+        return (median, math.nan, math.nan)
+    if np.all(x == x[0]):
+        return (median, median, median)
+    from scipy import stats
+
+    ci = stats.bootstrap((x,), np.median, confidence_level=confidence, n_resamples=_BOOTSTRAP_RESAMPLES,
+                         method="percentile", rng=np.random.default_rng(_BOOTSTRAP_SEED)).confidence_interval
+    return (median, float(ci.low), float(ci.high))
+
+
 # --- tables ---------------------------------------------------------------------------------
 def episode_table(results: Sequence[EpisodeResult]) -> list[dict[str, Any]]:
     """The tidy per-episode table: one row per controller x scenario x episode."""
@@ -185,6 +221,97 @@ def summarize(results: Sequence[EpisodeResult], confidence: float = CONFIDENCE_L
             row |= {f"{name}_mean": mean, f"{name}_ci_low": low, f"{name}_ci_high": high}
         rows.append(row)
     return rows
+
+
+_MAX_SPEED_BINS: Final = 6
+"""At most this many bins of u/u_cr per scenario: with the default 100 episodes, about 20 episodes per
+bin and controller, so a success rate's Wilson interval is about +-20 points, not +-30."""
+
+
+def by_speed_ratio(
+    results: Sequence[EpisodeResult], bins: int | None = None, confidence: float = CONFIDENCE_LEVEL
+) -> list[dict[str, Any]]:
+    """Success rate and median IAE per scenario x controller x bin of the speed ratio u / u_cr.
+
+    u is the speed at the end of the episode (over the hold window that decides success; the only
+    speed except in ``SpeedTransient``), u_cr the episode's own critical speed (its loading and the
+    controller's plane allocation), so episodes of different loadings and controllers share an axis.
+    Each scenario is binned on its own: equal-width bins spanning the ratios of its episodes, the
+    same edges for every controller; a scenario whose episodes all have one ratio has one bin.
+    Episodes without a finite ratio are left out.
+
+    Parameters
+    ----------
+    results : sequence of EpisodeResult
+    bins : int, optional
+        Bins per scenario; default ``round(sqrt(n) / 2)`` in 1..6, n the most episodes of one
+        controller in the scenario.
+    confidence : float
+        Level of the intervals.
+
+    Returns
+    -------
+    list of dict
+        One row per non-empty bin, in the order of scenarios, then controllers, first seen:
+        ``scenario``, ``controller``, ``bin``, ``ratio_low``, ``ratio_high`` (the bin's edges),
+        ``ratio_mean``, ``episodes``, ``success``, ``success_rate``, ``success_ci_low``,
+        ``success_ci_high`` (Wilson), ``iae_median``, ``iae_ci_low``, ``iae_ci_high``
+        (:func:`median_interval`).
+    """
+    if bins is not None and not (isinstance(bins, int) and bins >= 1):
+        raise ValueError(f"bins={bins!r} is invalid: must be an integer >= 1")
+    ratio = {id(r): r.final_speed_mps / r.critical_speed_mps for r in results}
+    usable = [r for r in results if math.isfinite(ratio[id(r)])]
+    rows: list[dict[str, Any]] = []
+    for scenario in dict.fromkeys(r.scenario for r in usable):
+        mine = [r for r in usable if r.scenario == scenario]
+        controllers = list(dict.fromkeys(r.controller for r in mine))
+        x = np.array([ratio[id(r)] for r in mine])
+        low, high = float(x.min()), float(x.max())
+        most = max(sum(r.controller == c for r in mine) for c in controllers)
+        n_bins = bins or int(np.clip(round(math.sqrt(most) / 2), 1, _MAX_SPEED_BINS))
+        if math.isclose(low, high, rel_tol=1e-9, abs_tol=1e-12):
+            n_bins = 1
+        edges = np.linspace(low, high, n_bins + 1)
+        which = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, n_bins - 1)
+        for c in controllers:
+            for b in range(n_bins):
+                group = [(r, float(u)) for r, u, k in zip(mine, x, which) if r.controller == c and k == b]
+                if not group:
+                    continue
+                k_ok = sum(r.metrics.success for r, _ in group)
+                s_low, s_high = wilson_interval(k_ok, len(group), confidence)
+                median, i_low, i_high = median_interval([r.metrics.iae_m_s for r, _ in group], confidence)
+                rows.append({
+                    "scenario": scenario, "controller": c, "bin": b, "ratio_low": float(edges[b]),
+                    "ratio_high": float(edges[b + 1]), "ratio_mean": float(np.mean([u for _, u in group])),
+                    "episodes": len(group), "success": k_ok, "success_rate": k_ok / len(group),
+                    "success_ci_low": s_low, "success_ci_high": s_high,
+                    "iae_median": median, "iae_ci_low": i_low, "iae_ci_high": i_high,
+                })
+    return rows
+
+
+def representative_episodes(results: Sequence[EpisodeResult]) -> dict[str, dict[str, EpisodeResult]]:
+    """Per scenario, one episode for each outcome that occurred: ``{scenario: {outcome: result}}``.
+
+    Of the episodes of a scenario with a given outcome, the representative belongs to the controller
+    that had that outcome most often there (the first in the results on a tie), and is that
+    controller's episode of median IAE among them (the lower median; the earlier episode on a tie):
+    a typical case of the outcome, not its extreme. Scenarios and outcomes are in the order of the
+    results and of :data:`~subenv.evaluation.metrics.OUTCOMES`.
+    """
+    chosen: dict[str, dict[str, EpisodeResult]] = {}
+    for scenario in dict.fromkeys(r.scenario for r in results):
+        mine = [r for r in results if r.scenario == scenario]
+        chosen[scenario] = {}
+        for outcome in _outcomes(mine):
+            having = [r for r in mine if r.metrics.outcome == outcome]
+            controllers = list(dict.fromkeys(r.controller for r in having))
+            most = max(controllers, key=lambda c: sum(r.controller == c for r in having))  # first on a tie
+            ranked = sorted((r for r in having if r.controller == most), key=lambda r: (r.metrics.iae_m_s, r.episode))
+            chosen[scenario][outcome] = ranked[(len(ranked) - 1) // 2]
+    return chosen
 
 
 def _outcomes(results: Sequence[EpisodeResult]) -> list[str]:

@@ -217,3 +217,43 @@ def test_tables_agree_on_a_small_run(small_run):
     # The case that made the tables disagree: wrong-branch episodes that then broached.
     assert any(r.metrics.outcome == "wrong_branch" and r.metrics.broached for r in small_run.results)
     assert _assert_tables_agree(small_run.results) >= {"wrong branch", "broached"}
+
+
+def test_by_speed_ratio_bins_each_scenario_on_its_own(make_result):
+    results = []
+    for i, ratio in enumerate(np.linspace(0.3, 0.8, 8)):  # scenario "Low": ratios 0.3-0.8
+        r = make_result("a", "Low", i, success=ratio > 0.55, iae=float(i + 1))
+        results.append(dataclasses.replace(r, final_speed_mps=ratio * r.critical_speed_mps))
+    for i in range(3):  # scenario "Fixed": one speed, 2.63 u_cr
+        r = make_result("a", "Fixed", i, success=True)
+        results.append(dataclasses.replace(r, final_speed_mps=2.63 * r.critical_speed_mps))
+    rows = res.by_speed_ratio(results, bins=2)
+    low = [row for row in rows if row["scenario"] == "Low"]
+    assert [x for row in low for x in (row["ratio_low"], row["ratio_high"])] == pytest.approx([0.3, 0.55, 0.55, 0.8])
+    assert [row["episodes"] for row in low] == [4, 4]
+    assert [row["success"] for row in low] == [0, 4]
+    assert (low[1]["success_ci_low"], low[1]["success_ci_high"]) == pytest.approx(res.wilson_interval(4, 4))
+    fixed = [row for row in rows if row["scenario"] == "Fixed"]
+    assert len(fixed) == 1 and fixed[0]["episodes"] == 3 and fixed[0]["ratio_mean"] == pytest.approx(2.63)
+    by_default = res.by_speed_ratio(results)  # 8 episodes: round(sqrt(8) / 2) = 1 bin
+    assert [row["episodes"] for row in by_default if row["scenario"] == "Low"] == [8]
+
+
+def test_median_interval_brackets_the_median_and_repeats():
+    values = [1.0, 2.0, 3.0, 4.0, 100.0]
+    median, low, high = res.median_interval(values)
+    assert median == 3.0 and 1.0 <= low <= 3.0 <= high <= 100.0
+    assert res.median_interval(values) == (median, low, high)  # a fixed seed: the same figure every time
+    assert res.median_interval([2.0, 2.0]) == (2.0, 2.0, 2.0)
+    one = res.median_interval([7.0])
+    assert one[0] == 7.0 and math.isnan(one[1]) and math.isnan(one[2])
+
+
+def test_representative_episode_is_the_commonest_controllers_median(make_result):
+    results = [make_result("rare", "S", 0, success=True, iae=0.5)]
+    results += [make_result("common", "S", i, success=True, iae=float(iae)) for i, iae in enumerate([3, 1, 2])]
+    results += [make_result("rare", "S", 5, success=False)]
+    chosen = res.representative_episodes(results)["S"]
+    assert list(chosen) == ["success", "steady_offset"]
+    assert (chosen["success"].controller, chosen["success"].episode) == ("common", 2)  # IAE 2 of 1, 2, 3
+    assert (chosen["steady_offset"].controller, chosen["steady_offset"].episode) == ("rare", 5)
