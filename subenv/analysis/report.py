@@ -11,7 +11,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Final
 
 import numpy as np
 from scipy.optimize import brentq
@@ -177,8 +177,34 @@ def _plot_branches(ax: Any, xs: list[float], states: list[list[Equilibrium]], va
                 label=label and f"{label} (unstable)")
 
 
+def _legend_outside(ax: Any) -> None:
+    """The legend to the right of the axes, where it covers no data (the figure's constrained
+    layout makes room for it)."""
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, fontsize="small")
+
+
+_TITLES: Final = {
+    "fig3-4": "Closed-loop eigenvalues against speed, thesis gain (Riedel 1993, Fig. 3-4)",
+    "fig3-5_3-7": "Symmetric pitchfork: steady pitch, plane angle and depth offset against Froude number\n"
+                  "(Riedel 1993, Figs 3-5 to 3-7)",
+    "fig3-9": "Critical Froude number against the bow/stern allocation alpha (Riedel 1993, Fig. 3-9)",
+    "fig3-13": "Critical and plane-saturation Froude numbers against alpha (Riedel 1993, Fig. 3-13)",
+    "fig3-14": "Controllability determinant against Froude number (Riedel 1993, Fig. 3-14)",
+    "fig4-1": "Steady pitch against Froude number, with and without a ballast offset\n(Riedel 1993, Fig. 4-1)",
+    "fig4-2": "Bifurcation sets in the ballast offset-Froude number plane (Riedel 1993, Fig. 4-2)",
+    "fig4-6": "Steady pitch against Froude number with plane saturation, x_GB/L = -1e-4\n(Riedel 1993, Fig. 4-6)",
+    "fig4-11": "Path A at constant ballast through the bifurcation and saturation cusps\n(Riedel 1993, Fig. 4-11)",
+    "fig4-13": "Steady pitch against ballast offset at constant speed: hysteresis (Riedel 1993, Fig. 4-13)",
+    "fig5-2": "Level-flight trim against speed with 0.01% excess buoyancy (Riedel 1993, Fig. 5-2)",
+    "fig5-3": "Depth gain of the pole placement repeated at each speed (Riedel 1993, Fig. 5-3)",
+    "fig5-4": "Critical Froude number as the bow planes' share alpha grows (Riedel 1993, Fig. 5-4)",
+    "fig5-7": "Saturation cusps with drag and excess buoyancy (supplementary; Riedel 1993, Fig. 5-7)",
+}
+"""Each figure's title: what it shows, then the thesis figure it reproduces."""
+
+
 def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
-    """name -> function drawing into a fresh figure and returning its caption."""
+    """name -> function drawing into a fresh figure and returning its caption (keys: :data:`_TITLES`)."""
     drag_free = vehicle.variant(crossflow_drag=0.0)
     L = vehicle.length_m
     ucr = critical_speed(vehicle)
@@ -193,7 +219,7 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
         ax.axhline(0, color="k", lw=0.5)
         ax.axvline(mps_to_fps(ucr), color="r", ls="--", lw=1, label=f"u_cr = {mps_to_fps(ucr):.4f} fps")
         ax.set(xlabel="speed [fps]", ylabel="Re(eigenvalue) [1/s]", ylim=(-1.5, 0.3))
-        ax.legend()
+        _legend_outside(ax)
         return "Fig. 3-4: real parts of the closed-loop eigenvalues with the thesis gain; one crosses zero at u_cr."
 
     def fig_3_5_to_3_7(fig: Any) -> str:
@@ -208,7 +234,7 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
         axes[1].set_ylabel("delta [deg]")
         axes[2].set_ylabel("Z_ss / L")
         axes[2].set_xlabel("Froude number")
-        axes[0].legend(fontsize=7)
+        _legend_outside(axes[0])
         return ("Figs 3-5 to 3-7: symmetric pitchfork (eqs 3.17-3.23) with saturation (eq. 4.42); filled stable, "
                 "hollow unstable. Saturated states sink or rise steadily, so have no Z_ss.")
 
@@ -226,7 +252,7 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
         ax.plot([critical_froude(vehicle, float(a)) for a in alphas], alphas, label="critical")
         ax.plot([_saturation_pitch_and_froude(vehicle, float(a))[1] for a in alphas], alphas, "--", label="saturation")
         ax.set(xlabel="Froude number", ylabel="alpha")
-        ax.legend()
+        _legend_outside(ax)
         return "Fig. 3-13: critical and plane-saturation Froude numbers versus alpha."
 
     def fig_3_14(fig: Any) -> str:
@@ -237,7 +263,7 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
             ax.plot(fns, det / np.abs(det).max(), label=f"alpha = {a:g}")
         ax.axhline(0, color="k", lw=0.5)
         ax.set(xlabel="Froude number", ylabel="det(controllability matrix), normalised")
-        ax.legend()
+        _legend_outside(ax)
         return "Fig. 3-14: the controllability matrix becomes singular at the critical Froude number."
 
     def fig_4_1(fig: Any) -> str:
@@ -256,7 +282,7 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
             ax.plot(xs_a[~stab_a], ths_a[~stab_a], "o", ms=2.5, mfc="none", color=color, alpha=0.6,
                     label=f"{name} unstable")
         ax.set(xlabel="Froude number", ylabel="theta [deg]", ylim=(-40, 40))
-        ax.legend(fontsize=7)
+        _legend_outside(ax)
         return ("Fig. 4-1: exact steady states (eq. 4.3, no saturation) for x_GB/L = -1e-4 next to the symmetric "
                 "pitchfork; the bias perturbs the pitchfork and moves the bifurcation to lower Fn.")
 
@@ -278,7 +304,7 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
         x = bif.offset_from_beta(drag_free, beta, bif.speed_from_lambda(drag_free, lam_approx)) / L
         ax.plot(x, np.sqrt(lam_approx), "C2-.", label="approximate cusp eq. 4.39")
         ax.set(xlabel="x_GB / L", ylabel="sqrt(lambda) = Fn", xlim=(-6e-4, 6e-4))
-        ax.legend(fontsize=7)
+        _legend_outside(ax)
         return ("Fig. 4-2: bifurcation sets in the (x_GB, Fn) plane. The printed eq. 4.37 carries a dimensional u^2 "
                 "(evaluated in fps, as the thesis did); the dimensionally consistent cusp matches the exact folds.")
 
@@ -289,7 +315,7 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
         ax = fig.subplots()
         _plot_branches(ax, list(fns), states, lambda e: _deg(e.pitch_rad), "x_GB/L = -1e-4")
         ax.set(xlabel="Froude number", ylabel="theta [deg]")
-        ax.legend(fontsize=7)
+        _legend_outside(ax)
         return "Fig. 4-6: exact solution set for x_GB/L = -1e-4 with plane saturation (eqs 4.3, 4.42)."
 
     def fig_4_11(fig: Any) -> str:
@@ -304,7 +330,7 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
         ax.plot(xm / L, fn, "C1:")
         ax.axvline(_XGB_OVER_L_CH4, color="C2", label="path A, x_GB/L = -1e-4")
         ax.set(xlabel="x_GB / L", ylabel="sqrt(lambda)", xlim=(-6e-4, 6e-4))
-        ax.legend(fontsize=7)
+        _legend_outside(ax)
         return "Fig. 4-11: path A at constant ballast through the bifurcation and saturation cusps."
 
     def fig_4_13(fig: Any) -> str:
@@ -318,7 +344,7 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
             ax.plot(branch.values / L, np.degrees(branch.states[:, 0]), "-", color=color, lw=0.6, alpha=0.5,
                     label=f"{name}: continuation, planes unlimited")
         ax.set(xlabel="x_GB / L", ylabel="theta [deg]", ylim=(-20, 20))
-        ax.legend(fontsize=7)
+        _legend_outside(ax)
         return ("Fig. 4-13: steady pitch versus ballast at constant speed. With saturation, path C (Fn 1.0) jumps "
                 "between the saturated branches (hysteresis); the thin lines are the pseudo-arclength continuation "
                 "of the unlimited-plane steady states, whose folds give the S-shape.")
@@ -331,11 +357,14 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
         axes[0].plot(speeds, np.degrees(trim.pitch_rad))
         axes[1].plot(speeds, np.degrees(trim.plane_rad))
         for ax in axes:
-            ax.axvline(ucr, color="r", ls="--", lw=1)
+            ax.axvline(ucr, color="r", ls="--", lw=1, label=f"u_cr = {ucr:.3f} m/s")
             ax.axhline(0, color="k", lw=0.5)
         axes[0].set(ylabel="pitch [deg]", ylim=(-20, 20))
         axes[1].set(ylabel="stern planes [deg]", ylim=(-40, 40), xlabel="speed [m/s]")
-        axes[1].axhspan(-22.9, 22.9, color="g", alpha=0.08)
+        limit_deg = math.degrees(vehicle.planes.limit_rad)
+        axes[1].axhspan(-limit_deg, limit_deg, color="g", alpha=0.08, label=f"within the plane limit +-{limit_deg:.1f} deg")
+        _legend_outside(axes[0])
+        _legend_outside(axes[1])
         return ("Fig. 5-2: pitch and stern-plane angle for straight and level flight with 0.01% excess buoyancy "
                 "(BIFSU.M's B = 1.0001 W); both pass through infinity at u_cr and reverse sign below it.")
 
@@ -344,8 +373,9 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
         k4 = scheduled_depth_gain(vehicle, speeds)
         ax = fig.subplots()
         ax.plot(speeds, k4)
-        ax.axvline(ucr, color="r", ls="--", lw=1)
+        ax.axvline(ucr, color="r", ls="--", lw=1, label=f"u_cr = {ucr:.3f} m/s")
         ax.set(xlabel="speed [m/s]", ylabel="scheduled depth gain k4 [rad/m]", ylim=(-5, 5))
+        _legend_outside(ax)
         return "Fig. 5-3: depth gain of the pole-placement design repeated at each speed; it diverges at u_cr."
 
     def fig_5_4(fig: Any) -> str:
@@ -361,7 +391,7 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
         ax.semilogx(alphas, fns)
         ax.axhline(critical_froude(vehicle, BOW_PLANES_ONLY), color="r", ls="--", lw=1, label="bow planes only")
         ax.set(xlabel="alpha", ylabel="critical Froude number")
-        ax.legend()
+        _legend_outside(ax)
         return "Fig. 5-4: critical Froude number as alpha grows; bow planes alone give 2.05."
 
     def fig_5_7(fig: Any) -> str:
@@ -378,7 +408,7 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
                 ax.plot(xp / L, fn, style, color=f"C{k}", label=label)
                 ax.plot(xm / L, fn, style, color=f"C{k}")
         ax.set(xlabel="x_GB / L", ylabel="sqrt(lambda)", xlim=(-1.5e-3, 1.5e-3))
-        ax.legend(fontsize=6)
+        _legend_outside(ax)
         return ("Fig. 5-7 (supplementary): saturation cusps with C_D = 0.3 and excess buoyancy (eqs 5.1-5.2). "
                 "Dotted: the thesis's inputs (truncated hull A = 19.85 ft^2, x_A = 0.201 ft, its drag-moment "
                 "sign); solid: the full hull and the physically consistent sign the simulation uses.")
@@ -428,10 +458,9 @@ def write_report(out_dir: str | Path, vehicle: Vehicle | None = None, overwrite:
         rows = reproduce_numbers(vehicle)
         captions = []
         for name, draw in _figures(vehicle).items():
-            fig = plt.figure(figsize=(7, 5) if name != "fig3-5_3-7" else (7, 8))
+            fig = plt.figure(figsize=(8.5, 5) if name != "fig3-5_3-7" else (8.5, 8), layout="constrained")
             caption = draw(fig)
-            fig.suptitle(caption.split(":")[0])
-            fig.tight_layout()
+            fig.suptitle(_TITLES[name], fontsize="medium")
             fig.savefig(folder / f"{name}.png", dpi=100)
             plt.close(fig)
             captions.append((name, caption))

@@ -10,8 +10,8 @@ rolls out, aggregates and writes::
         summary.csv         the same, machine-readable
         results.csv         the tidy per-episode table (one row per controller x scenario x episode)
         run.json            what was run: suite, scenarios, episodes, seeds, controllers, tolerances
-        plots/trajectories_<Scenario>.png   every controller on the scenario's first episode
-        plots/metrics_vs_speed.png          success rate and IAE against speed, u_cr marked
+        plots/trajectories_<Scenario>.png   a typical episode of each outcome that occurred
+        plots/metrics_vs_speed.png          success rate and IAE against u / u_cr, per scenario
 
 The folder appears complete or not at all, and replaces an earlier one atomically
 (:func:`subenv.atomic.atomic_output_dir`); it holds a marker file saying it is a result of
@@ -43,7 +43,7 @@ from subenv.evaluation.results import (
     summary_markdown,
     write_csv,
 )
-from subenv.evaluation.rollout import EpisodeResult, evaluate, resolve_controllers, resolve_suite
+from subenv.evaluation.rollout import EpisodeResult, Trajectory, evaluate, resolve_controllers, resolve_suite
 from subenv.evaluation.suites import DEFAULT_SEED, DEFAULT_SUITE, Suite
 from subenv.vehicles.vehicle import Vehicle
 
@@ -164,7 +164,7 @@ def run_comparison(
             elapsed_s=elapsed,
         )
         if folder is not None:
-            _write_files(comparison, folder, plots=plots, controllers=ctrls)
+            _write_files(comparison, folder, plots=plots, controllers=ctrls, vehicle=vehicle)
     return comparison
 
 
@@ -206,15 +206,21 @@ def write_comparison(
     overwrite: bool = False,
     plots: bool = True,
     controllers: Sequence[Controller] | None = None,
+    vehicle: str | Vehicle = "suboff",
 ) -> Path:
-    """Write the results folder of ``comparison`` (complete or not at all); returns its path."""
+    """Write the results folder of ``comparison`` (complete or not at all); returns its path.
+
+    The plots replay the episodes they show from their seeds, with ``controllers`` (default: the
+    registered ones of the comparison's names) on ``vehicle``, which must be the run's.
+    """
     with atomic_output_dir(out_dir, overwrite=overwrite, kind=RESULTS_KIND) as folder:
-        _write_files(comparison, folder, plots=plots, controllers=controllers)
+        _write_files(comparison, folder, plots=plots, controllers=controllers, vehicle=vehicle)
     return Path(out_dir)
 
 
 def _write_files(
-    comparison: Comparison, folder: Path, *, plots: bool, controllers: Sequence[Controller] | None
+    comparison: Comparison, folder: Path, *, plots: bool, controllers: Sequence[Controller] | None,
+    vehicle: str | Vehicle,
 ) -> None:
     write_csv(folder / "results.csv", episode_table(comparison.results))
     write_csv(folder / "summary.csv", comparison.summary)
@@ -224,11 +230,16 @@ def _write_files(
     )
     atomic_write_text(folder / "run.json", json.dumps(_run_record(comparison, controllers), indent=2) + "\n")
     if plots:
-        from subenv.evaluation.plots import plot_metrics_vs_speed, plot_trajectories
+        from subenv.evaluation.plots import plot_metrics_vs_speed, plot_outcomes, replay_trajectory
+
+        by_name = {c.name: c for c in controllers or resolve_controllers(list(comparison.controllers))}
+
+        def trajectory_of(r: EpisodeResult) -> Trajectory:
+            return replay_trajectory(r, by_name[r.controller], vehicle=vehicle,
+                                     max_duration_s=comparison.suite.max_duration_s)
 
         for scenario in comparison.suite.scenarios:
-            shown = [r for r in comparison.results
-                     if r.scenario == scenario and r.episode == 0 and r.trajectory is not None]
-            if shown:
-                plot_trajectories(shown, folder / "plots" / f"trajectories_{scenario}.png")
+            mine = [r for r in comparison.results if r.scenario == scenario]
+            if mine:
+                plot_outcomes(mine, folder / "plots" / f"trajectories_{scenario}.png", trajectory_of)
         plot_metrics_vs_speed(comparison.results, folder / "plots" / "metrics_vs_speed.png")

@@ -106,7 +106,25 @@ OUTCOMES: Final = (
     "success", "wrong_branch", "steady_offset", "broached", "left_depth_band", "pitch_limit", "diverged",
     "unsettled",
 )
-"""The values of :attr:`EpisodeMetrics.outcome`, best first."""
+"""The values of :attr:`EpisodeMetrics.outcome`, in order of precedence.
+
+Every episode has exactly one outcome: the first of these that applies.
+
+1. ``success``: see :attr:`EpisodeMetrics.success`.
+2. ``wrong_branch``: the final hold window shows the thesis's failure mode (a steady pitch with a
+   plane pinned, off depth), whatever ended the episode. It comes before the termination reason
+   because it explains it: a boat on the wrong branch drifts off depth until it broaches or leaves
+   the depth band, so such an episode counts as ``wrong_branch``, not ``broached``.
+3. ``steady_offset``: ran to the time limit settled off depth with the planes free.
+4. The environment's termination reason: ``broached``, ``left_depth_band``, ``pitch_limit``,
+   ``diverged`` (at most one per episode).
+5. ``unsettled``: ran to the time limit off depth, still moving.
+
+The boolean fields :attr:`EpisodeMetrics.broached` and :attr:`EpisodeMetrics.terminated` say what
+ended the episode and may overlap an outcome (a wrong-branch episode can have ``broached``
+true); the tables count outcomes (:func:`subenv.evaluation.results.outcome_counts`), so their
+failure counts add up to the failures.
+"""
 
 
 @dataclass(frozen=True)
@@ -116,10 +134,10 @@ class EpisodeMetrics:
     Attributes
     ----------
     outcome : str
-        One of :data:`OUTCOMES`: ``"success"``; else ``"wrong_branch"`` or ``"steady_offset"``
-        if the episode ended so (these explain a later termination, so they take precedence);
-        else the termination reason; else ``"unsettled"`` (ran to the time limit off depth,
-        still moving).
+        One of :data:`OUTCOMES`, the first that applies in its order of precedence:
+        ``"success"``; else ``"wrong_branch"`` or ``"steady_offset"`` if the episode ended so
+        (these explain a later termination, so they take precedence); else the termination
+        reason; else ``"unsettled"`` (ran to the time limit off depth, still moving).
     success : bool
         Not terminated, and |depth error| <= tolerance over the whole final hold window.
     terminated : bool
@@ -127,7 +145,8 @@ class EpisodeMetrics:
     termination_reason : str
         The environment's reason ("" when the episode ran to its time limit).
     broached : bool
-        Terminated by broaching (the hull broke the surface).
+        Terminated by broaching (the hull broke the surface), whatever the outcome (a
+        wrong-branch episode that ends by broaching has ``outcome == "wrong_branch"``).
     wrong_branch : bool
         Ended at the thesis's failure mode: a steady, non-level pitch with a plane pinned at one
         limit, off the ordered depth.

@@ -1,7 +1,8 @@
-"""Plots of an evaluation: every controller on the same episode, and metrics versus speed.
+"""Plots of an evaluation: a typical episode of every outcome, and metrics against u / u_cr.
 
 Figures are built on :class:`matplotlib.figure.Figure` directly (the Agg canvas, no pyplot state,
-no display needed) and written atomically. matplotlib is the optional ``plot`` extra.
+no display needed) and written atomically. matplotlib is the optional ``plot`` extra. Legends sit
+outside the axes, so they never cover data.
 """
 
 from __future__ import annotations
@@ -9,19 +10,40 @@ from __future__ import annotations
 import io
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, Final
 
 import numpy as np
 
 from subenv.atomic import atomic_write_bytes
-from subenv.evaluation.metrics import DEPTH_TOLERANCE_M
-from subenv.evaluation.rollout import EpisodeResult
+from subenv.evaluation.controller import Controller
+from subenv.evaluation.metrics import DEPTH_TOLERANCE_M, HOLD_WINDOW_S
+from subenv.evaluation.results import CONFIDENCE_LEVEL, by_speed_ratio, representative_episodes
+from subenv.evaluation.rollout import EpisodeResult, Trajectory, run_episode
+from subenv.vehicles.vehicle import Vehicle
 
-__all__ = ["plot_metrics_vs_speed", "plot_trajectories", "require_matplotlib", "save_figure"]
+__all__ = [
+    "outcomes_figure",
+    "plot_metrics_vs_speed",
+    "plot_outcomes",
+    "replay_trajectory",
+    "require_matplotlib",
+    "save_figure",
+    "speed_crossing_s",
+]
 
 _DPI: Final = 110
+
+_HOLD_COLOR: Final = "gold"
+_HOLD_ALPHA: Final = 0.3
+"""The final hold window on the depth-error axes: see-through, so the tolerance band shows within it."""
+
+_OUTCOME_COLORS: Final = {
+    "success": "tab:green", "wrong_branch": "tab:red", "steady_offset": "tab:orange", "broached": "tab:blue",
+    "left_depth_band": "tab:purple", "pitch_limit": "tab:brown", "diverged": "black", "unsettled": "tab:gray",
+}
+"""One colour per outcome, the same in every figure (an outcome not listed is drawn in magenta)."""
 
 
 def require_matplotlib() -> None:
@@ -43,6 +65,179 @@ def save_figure(fig: Any, path: str | os.PathLike[str], image_format: str = "png
     return atomic_write_bytes(path, buffer.getvalue())
 
 
+# --- a typical episode of every outcome -------------------------------------------------------
+def replay_trajectory(
+    result: EpisodeResult,
+    controller: Controller,
+    *,
+    vehicle: str | Vehicle = "suboff",
+    max_duration_s: float | None = None,
+) -> Trajectory:
+    """The trajectory of ``result``: its own if kept, else the episode run again from its seed.
+
+    Seeded episodes are deterministic, so running ``controller`` (the one that produced ``result``)
+    on the same scenario, seed, vehicle and time limit gives the same episode. The replay is checked
+    against the recorded metrics (outcome and IAE); a mismatch raises ValueError, since a figure of
+    a different episode would mislabel it.
+    """
+    if result.trajectory is not None:
+        return result.trajectory
+    if controller.name != result.controller:
+        raise ValueError(f"result of controller {result.controller!r} cannot be replayed with {controller.name!r}")
+    again = run_episode(controller, result.scenario, result.seed, episode=result.episode, vehicle=vehicle,
+                        max_duration_s=max_duration_s)
+    if again.metrics.outcome != result.metrics.outcome or not math.isclose(
+            again.metrics.iae_m_s, result.metrics.iae_m_s, rel_tol=1e-6, abs_tol=1e-9):
+        raise ValueError(
+            f"replaying {result.controller} on {result.scenario} seed {result.seed} gave outcome "
+            f"{again.metrics.outcome!r}, IAE {again.metrics.iae_m_s:.6g} m s; the results say "
+            f"{result.metrics.outcome!r}, {result.metrics.iae_m_s:.6g} m s (another vehicle or time limit, or a "
+            "controller that is not deterministic?)"
+        )
+    assert again.trajectory is not None
+    return again.trajectory
+
+
+def speed_crossing_s(trajectory: Trajectory) -> float | None:
+    """Time at which the speed first crosses the critical speed [s], linear between the samples on
+    either side; None if it stays on one side (at or above u_cr counts as above)."""
+    u, ucr = trajectory.speed_mps, trajectory.critical_speed_mps
+    above = u >= ucr
+    changes = np.flatnonzero(above[1:] != above[:-1])
+    if changes.size == 0:
+        return None
+    k = int(changes[0])
+    t0, t1 = trajectory.time_s[k], trajectory.time_s[k + 1]
+    return float(t0 + (ucr - u[k]) / (u[k + 1] - u[k]) * (t1 - t0))
+
+
+def _label(outcome: str) -> str:
+    return outcome.replace("_", " ")
+
+
+def outcomes_figure(
+    results: Sequence[EpisodeResult],
+    trajectory_of: Callable[[EpisodeResult], Trajectory] | None = None,
+    *,
+    title: str | None = None,
+) -> Any:
+    """The figure of :func:`plot_outcomes` (a :class:`matplotlib.figure.Figure`), not written.
+
+    One column per outcome that occurred, holding the episode
+    :func:`~subenv.evaluation.results.representative_episodes` chose for it; the top axes of a
+    column is titled with the outcome, controller, seed, speed ratio and how many episodes had
+    that outcome.
+    """
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    scenarios = list(dict.fromkeys(r.scenario for r in results))
+    if len(scenarios) != 1:
+        raise ValueError(f"results come from scenarios {scenarios}: pass the episodes of one scenario")
+    chosen = representative_episodes(results)[scenarios[0]]
+
+    def own(r: EpisodeResult) -> Trajectory:
+        if r.trajectory is None:
+            raise ValueError(f"{r.controller} on {r.scenario} seed {r.seed} has no trajectory: pass trajectory_of")
+        return r.trajectory
+
+    get = trajectory_of or own
+    shown = [(outcome, r, get(r)) for outcome, r in chosen.items()]
+    with_speed = any(np.ptp(tr.speed_mps) > 0 for _, _, tr in shown)
+    rows = 4 if with_speed else 3
+    fig = Figure(figsize=(max(6.0, 3.4 * len(shown)), 2.1 * rows + 2.1), layout="constrained")
+    axes = fig.subplots(rows, len(shown), sharex="col", squeeze=False)
+    crossing_drawn = False
+    for col, (outcome, r, tr) in enumerate(shown):
+        color = _OUTCOME_COLORS.get(outcome, "magenta")
+        ax_e, ax_p, ax_d = axes[0, col], axes[1, col], axes[2, col]
+        ax_e.axhspan(-DEPTH_TOLERANCE_M, DEPTH_TOLERANCE_M, color="0.88")
+        if not tr.termination_reason:  # a terminated episode has no hold window: it failed at its end
+            ax_e.axvspan(tr.time_s[-1] - HOLD_WINDOW_S, tr.time_s[-1], color=_HOLD_COLOR, alpha=_HOLD_ALPHA)
+        ax_e.plot(tr.time_s, tr.depth_error_m, color=color)
+        ax_e.invert_yaxis()  # depth is positive down: too deep plots below
+        ax_p.plot(tr.time_s, np.degrees(tr.pitch_rad), color=color)
+        ax_d.plot(tr.time_s[1:], np.degrees(tr.stern_plane_rad[1:]), color=color, drawstyle="steps-pre")
+        if np.any(tr.bow_plane_rad[1:] != 0.0):
+            ax_d.plot(tr.time_s[1:], np.degrees(tr.bow_plane_rad[1:]), color=color, linestyle="--",
+                      drawstyle="steps-pre")
+        for sign in (1, -1):
+            ax_d.axhline(sign * math.degrees(tr.plane_limit_rad), color="0.4", linewidth=0.8, linestyle=":")
+        if tr.termination_reason:
+            ax_e.plot(tr.time_s[-1], tr.depth_error_m[-1], marker="X", color="k", markersize=9, linestyle="")
+        crossing = speed_crossing_s(tr) if with_speed else None
+        if with_speed:
+            ax_u = axes[3, col]
+            ax_u.plot(tr.time_s, tr.speed_mps, color=color)
+            ax_u.axhline(tr.critical_speed_mps, color="k", linestyle="--", linewidth=1)
+            ax_u.set_xlabel("time [s]")
+        else:
+            ax_d.set_xlabel("time [s]")
+        if crossing is not None:
+            crossing_drawn = True
+            for ax in axes[:, col]:
+                ax.axvline(crossing, color="crimson", linestyle="-.", linewidth=1)
+            axes[3, col].annotate(f"u = u_cr\nat {crossing:.0f} s", (crossing, tr.critical_speed_mps),
+                                  xytext=(6, 6), textcoords="offset points", fontsize="small", color="crimson")
+        count = sum(x.metrics.outcome == outcome for x in results)
+        ratio0 = tr.speed_mps[0] / tr.critical_speed_mps
+        ratio1 = r.final_speed_mps / r.critical_speed_mps
+        speed = f"u/u_cr {ratio1:.2f}" if math.isclose(ratio0, ratio1) else f"u/u_cr {ratio0:.2f} to {ratio1:.2f}"
+        ended = f", ended: {_label(tr.termination_reason)}" if tr.termination_reason not in ("", outcome) else ""
+        ax_e.set_title(f"{_label(outcome)}: {count} of {len(results)}\n{r.controller}, seed {r.seed}{ended}\n{speed}",
+                       fontsize="medium", color=color)
+        for ax in axes[:, col]:
+            ax.grid(alpha=0.3)
+    axes[0, 0].set_ylabel("depth error [m]\n(+ too deep)")
+    axes[1, 0].set_ylabel("pitch [deg]\n(+ nose up)")
+    axes[2, 0].set_ylabel("planes [deg]")
+    if with_speed:
+        axes[3, 0].set_ylabel("speed [m/s]")
+    handles = [
+        Patch(color="0.88", label=f"|depth error| <= {DEPTH_TOLERANCE_M:g} m"),
+        Patch(color=_HOLD_COLOR, alpha=_HOLD_ALPHA, label=f"final {HOLD_WINDOW_S:g} s (success judged)"),
+        Line2D([], [], color="0.3", label="stern plane"),
+        Line2D([], [], color="0.3", linestyle="--", label="bow plane"),
+        Line2D([], [], color="0.4", linestyle=":", label="plane limit"),
+    ]
+    if any(tr.termination_reason for _, _, tr in shown):
+        handles.append(Line2D([], [], color="k", marker="X", linestyle="", label="terminated"))
+    if with_speed:
+        handles.append(Line2D([], [], color="k", linestyle="--", label="critical speed u_cr"))
+    if crossing_drawn:
+        handles.append(Line2D([], [], color="crimson", linestyle="-.", label="u crosses u_cr"))
+    fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 4 if len(shown) > 1 else 2),
+               fontsize="small")
+    controllers = len({x.controller for x in results})
+    fig.suptitle(title or (
+        f"{scenarios[0]}: a typical episode of each outcome\n({len(results)} episodes, {controllers} "
+        f"controller{'s' if controllers > 1 else ''}; success is judged over the final {HOLD_WINDOW_S:g} s)"
+    ), fontsize="medium")
+    return fig
+
+
+def plot_outcomes(
+    results: Sequence[EpisodeResult],
+    path: str | os.PathLike[str],
+    trajectory_of: Callable[[EpisodeResult], Trajectory] | None = None,
+    *,
+    title: str | None = None,
+) -> Path:
+    """Depth error, pitch and planes against time for a typical episode of each outcome of one scenario.
+
+    ``results`` are every episode of one scenario (all controllers). One column per outcome that
+    occurred (success, wrong branch, broached, ...), holding the episode
+    :func:`~subenv.evaluation.results.representative_episodes` chose: the controller with that
+    outcome most often, its episode of median IAE. ``trajectory_of`` gives an episode's trajectory
+    (e.g. :func:`replay_trajectory` with the controller bound); by default the results must carry
+    theirs. When the speed varies (``SpeedTransient``) a fourth row shows the speed and u_cr, and
+    the time the speed crosses u_cr is marked in every row.
+    """
+    return save_figure(outcomes_figure(results, trajectory_of, title=title), path)
+
+
+# --- metrics against u / u_cr -----------------------------------------------------------------
 def _colors(names: Sequence[str]) -> dict[str, Any]:
     from matplotlib import colormaps
 
@@ -50,136 +245,81 @@ def _colors(names: Sequence[str]) -> dict[str, Any]:
     return {name: cmap(i % 10) for i, name in enumerate(names)}
 
 
-def plot_trajectories(
-    results: Sequence[EpisodeResult], path: str | os.PathLike[str], *, title: str | None = None
-) -> Path:
-    """Depth error, pitch and plane angles against time, one line per controller, same episode.
-
-    ``results`` are the results (with trajectories) of one scenario and seed; the figure has
-    three panels sharing the time axis, the tolerance band shaded on the depth-error panel.
-    """
-    from matplotlib.figure import Figure
-
-    runs = [r for r in results if r.trajectory is not None]
-    if not runs:
-        raise ValueError("no result carries a trajectory (evaluate(..., keep_trajectories >= 1))")
-    keys = {(r.scenario, r.seed) for r in runs}
-    if len(keys) != 1:
-        raise ValueError(f"results come from several episodes {sorted(keys)}: pass one scenario and seed")
-    colors = _colors([r.controller for r in runs])
-    fig = Figure(figsize=(9, 8.5))
-    axes = fig.subplots(3, 1, sharex=True)
-    axes[0].axhspan(-DEPTH_TOLERANCE_M, DEPTH_TOLERANCE_M, color="0.9", label=f"+-{DEPTH_TOLERANCE_M:g} m")
-    for r in runs:
-        tr = r.trajectory
-        assert tr is not None
-        color = colors[r.controller]
-        label = f"{r.controller} ({r.metrics.outcome.replace('_', ' ')})"
-        axes[0].plot(tr.time_s, tr.depth_error_m, color=color, label=label)
-        axes[1].plot(tr.time_s, np.degrees(tr.pitch_rad), color=color)
-        axes[2].plot(tr.time_s[1:], np.degrees(tr.stern_plane_rad[1:]), color=color, drawstyle="steps-pre")
-        if np.any(tr.bow_plane_rad[1:] != 0.0):
-            axes[2].plot(tr.time_s[1:], np.degrees(tr.bow_plane_rad[1:]), color=color, linestyle="--",
-                         drawstyle="steps-pre")
-        if tr.termination_reason:
-            axes[0].plot(tr.time_s[-1], tr.depth_error_m[-1], marker="x", color=color, markersize=9)
-    limit = math.degrees(runs[0].trajectory.plane_limit_rad)  # type: ignore[union-attr]
-    for sign in (1, -1):
-        axes[2].axhline(sign * limit, color="0.5", linewidth=0.8, linestyle=":")
-    axes[0].invert_yaxis()  # depth is positive down: too deep plots below
-    axes[0].set_ylabel("depth error [m]\n(+ too deep)")
-    axes[1].set_ylabel("pitch [deg]\n(+ nose up)")
-    axes[2].set_ylabel("planes [deg]\n(solid stern, dashed bow)")
-    axes[2].set_xlabel("time [s]")
-    for ax in axes:
-        ax.grid(alpha=0.3)
-    axes[0].legend(loc="best", fontsize="small")
-    first = runs[0]
-    u0, u1 = first.initial_speed_mps, first.final_speed_mps
-    speeds = f"{u0:.3f} m/s" if math.isclose(u0, u1) else f"{u0:.3f} -> {u1:.3f} m/s"
-    ucrs = sorted({round(r.critical_speed_mps, 4) for r in runs})
-    fig.suptitle(title or (
-        f"{first.scenario}, seed {first.seed}: speed {speeds}, u_cr {', '.join(f'{u:.3f}' for u in ucrs)} m/s"
-    ))
-    fig.tight_layout()
-    return save_figure(fig, path)
-
-
-_MAX_CRITICAL_LINES: Final = 3
-"""With more distinct critical speeds than this (randomised loadings), speeds are plotted as u / u_cr."""
+_DODGE: Final = 0.5
+"""Share of a bin's width over which the controllers' points are spread, side by side (the bin itself
+is shaded, so the spread reads as one bin, not as different speeds)."""
 
 
 def plot_metrics_vs_speed(
     results: Sequence[EpisodeResult], path: str | os.PathLike[str], *, bins: int | None = None
 ) -> Path:
-    """Success rate (binned) and IAE (per episode) against speed, the critical speed marked.
+    """Success rate and median IAE against u / u_cr, one column per scenario, binned with intervals.
 
-    The speed is the one at the end of the episode, over the hold window that decides success
-    (the only speed, except in ``SpeedTransient``, whose decisive speed is its final one). Each
-    distinct critical speed of the results (one per loading and plane allocation) is a vertical
-    line, labelled with the controllers it applies to. When the loadings vary (more than three
-    distinct critical speeds, as in ``Randomized``), the axis is the speed in units of each
-    episode's own critical speed instead, with u / u_cr = 1 marked.
+    The bins and intervals are :func:`~subenv.evaluation.results.by_speed_ratio`'s: per scenario,
+    equal-width bins of the speed ratio (final speed over the episode's own critical speed); success
+    rate with 95% Wilson intervals, median IAE with 95% bootstrap intervals. Each point sits at its
+    bin's centre, the controllers side by side within the bin; u = u_cr is marked.
     """
     from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
 
-    if not results:
-        raise ValueError("results is empty: nothing to plot")
-    by_ucr: dict[float, list[str]] = {}
-    for r in results:
-        if math.isfinite(r.critical_speed_mps):
-            names = by_ucr.setdefault(round(r.critical_speed_mps, 4), [])
-            if r.controller not in names:
-                names.append(r.controller)
-    relative = len(by_ucr) > _MAX_CRITICAL_LINES
-
-    def x_of(r: EpisodeResult) -> float:
-        return r.final_speed_mps / r.critical_speed_mps if relative else r.final_speed_mps
-
-    controllers = list(dict.fromkeys(r.controller for r in results))
+    table = by_speed_ratio(results, bins)
+    if not table:
+        raise ValueError("no episode has a finite speed ratio to plot against (results empty, or no critical speed?)")
+    scenarios = list(dict.fromkeys(row["scenario"] for row in table))
+    controllers = list(dict.fromkeys(row["controller"] for row in table))
     colors = _colors(controllers)
-    speeds = np.array([x_of(r) for r in results])
-    speeds = speeds[np.isfinite(speeds)]
-    if speeds.size == 0:
-        raise ValueError("no episode has a finite speed to plot against (no critical speed?)")
-    n_bins = bins or int(np.clip(math.ceil(math.sqrt(len(set(np.round(speeds, 6))))), 4, 15))
-    low, high = float(speeds.min()), float(speeds.max())
-    if high <= low:
-        n_bins = 1
-    edges = np.linspace(low, high, n_bins + 1)
-
-    fig = Figure(figsize=(9, 7.5))
-    ax_success, ax_iae = fig.subplots(2, 1, sharex=True)
-    for c in controllers:
-        mine = [r for r in results if r.controller == c and math.isfinite(x_of(r))]
-        u = np.array([x_of(r) for r in mine])
-        ok = np.array([r.metrics.success for r in mine], dtype=float)
-        which = np.clip(np.digitize(u, edges[1:-1]), 0, n_bins - 1)
-        counts = np.bincount(which, minlength=n_bins)
-        with np.errstate(invalid="ignore", divide="ignore"):  # empty bins: nan breaks the line
-            rate = np.bincount(which, weights=ok, minlength=n_bins) / counts
-            at = np.bincount(which, weights=u, minlength=n_bins) / counts  # mean speed in the bin
-        ax_success.plot(at, rate, marker="o", color=colors[c], label=c)
-        iae = np.array([r.metrics.iae_m_s for r in mine])
-        ax_iae.scatter(u, iae, s=12, alpha=0.6, color=colors[c], label=c)
-    lines = [(1.0, "u = u_cr of each episode")] if relative else [
-        (ucr, f"u_cr = {ucr:.3f} m/s" + ("" if len(by_ucr) == 1 else f" ({', '.join(names)})"))
-        for ucr, names in sorted(by_ucr.items())
-    ]
-    for i, (x, label) in enumerate(lines):
-        style = ("--", ":", "-.")[i % 3]
-        for ax in (ax_success, ax_iae):
-            ax.axvline(x, color="k", linestyle=style, linewidth=1, label=label if ax is ax_success else None)
-    ax_success.set_ylim(-0.05, 1.05)
-    ax_success.set_ylabel(f"success rate\n({n_bins} equal speed bins,\nat their mean speed)")
-    ax_success.legend(loc="best", fontsize="small")
-    if np.all([r.metrics.iae_m_s > 0 for r in results]):
-        ax_iae.set_yscale("log")
-    ax_iae.set_ylabel("IAE [m s] per episode")
-    ax_iae.set_xlabel("speed over the final hold window " + ("/ u_cr" if relative else "[m/s]"))
-    for ax in (ax_success, ax_iae):
-        ax.grid(alpha=0.3)
-    scenarios = ", ".join(dict.fromkeys(r.scenario for r in results))
-    fig.suptitle(f"Metrics versus speed ({scenarios})", fontsize="medium")
-    fig.tight_layout()
+    fig = Figure(figsize=(max(6.0, 2.9 * len(scenarios) + 1.5), 6.4), layout="constrained")
+    axes = fig.subplots(2, len(scenarios), sharey="row", squeeze=False)
+    positive = all(row["iae_median"] > 0 for row in table)
+    for col, scenario in enumerate(scenarios):
+        ax_s, ax_i = axes[0, col], axes[1, col]
+        rows = [row for row in table if row["scenario"] == scenario]
+        low = min(row["ratio_low"] for row in rows)
+        high = max(row["ratio_high"] for row in rows)
+        n_bins = 1 + max(row["bin"] for row in rows)
+        width = (high - low) / n_bins or 0.1 * low  # one speed: a band 10% wide around it
+        edges = np.linspace(low, high, n_bins + 1) if high > low else np.array([low - width / 2, low + width / 2])
+        for j, c in enumerate(controllers):
+            mine = [row for row in rows if row["controller"] == c]
+            if not mine:
+                continue
+            offset = (j - (len(controllers) - 1) / 2) * _DODGE * width / len(controllers)
+            x = np.array([0.5 * (row["ratio_low"] + row["ratio_high"]) + offset for row in mine])
+            for ax, key in ((ax_s, "success"), (ax_i, "iae")):
+                centre = np.array([row[f"{key}_rate" if key == "success" else "iae_median"] for row in mine])
+                lo = np.array([row[f"{key}_ci_low"] for row in mine])
+                hi = np.array([row[f"{key}_ci_high"] for row in mine])
+                yerr = np.nan_to_num(np.vstack([centre - lo, hi - centre]))  # no interval: no bar
+                ax.errorbar(x, centre, yerr=yerr, color=colors[c], marker="o", markersize=4, linewidth=1,
+                            capsize=2)
+        episodes = max(sum(row["episodes"] for row in rows if row["controller"] == c) for c in controllers)
+        ax_s.set_title(f"{scenario}\n({episodes} episodes per controller)", fontsize="medium")
+        # u = u_cr is brought into view when it is nearer the data than the data's own span.
+        x_low, x_high = edges[0] - 0.1 * width, edges[-1] + 0.1 * width
+        if 1.0 < x_low and x_low - 1.0 < high - low:
+            x_low = 0.95
+        if 1.0 > x_high and 1.0 - x_high < high - low:
+            x_high = 1.05
+        for ax in (ax_s, ax_i):
+            for b in range(0, len(edges) - 1, 2):
+                ax.axvspan(edges[b], edges[b + 1], color="0.93", zorder=0)
+            if x_low < 1.0 < x_high:
+                ax.axvline(1.0, color="k", linestyle="--", linewidth=1)
+            ax.set_xlim(x_low, x_high)
+            ax.grid(alpha=0.3, axis="y")
+        ax_i.set_xlabel("u / u_cr")
+    axes[0, 0].set_ylim(-0.05, 1.05)
+    axes[0, 0].set_ylabel(f"success rate\n({100 * CONFIDENCE_LEVEL:.0f}% Wilson interval)")
+    axes[1, 0].set_ylabel(f"median IAE [m s]\n({100 * CONFIDENCE_LEVEL:.0f}% bootstrap interval)")
+    if positive:
+        axes[1, 0].set_yscale("log")
+    handles = [Line2D([], [], color=colors[c], marker="o", label=c) for c in controllers]
+    handles.append(Line2D([], [], color="k", linestyle="--", label="u = u_cr"))
+    fig.legend(handles=handles, loc="outside right center", fontsize="small")
+    fig.suptitle(
+        "Success and IAE against u / u_cr (final speed over the episode's own critical speed); equal-width "
+        "bins per scenario (shaded bands alternate), the controllers side by side within each bin",
+        fontsize="medium",
+    )
     return save_figure(fig, path)

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 import pytest
 
+from subenv.evaluation import DEFAULT_SEED, Controller, evaluate, make_controller
 from subenv.evaluation.metrics import episode_metrics
 from subenv.evaluation.rollout import EpisodeResult
 
@@ -33,3 +35,25 @@ def make_result() -> Callable[..., EpisodeResult]:
         )
 
     return _result
+
+
+@dataclass(frozen=True)
+class SmallRun:
+    """Results of a small real evaluation, and the controllers that produced them."""
+
+    controllers: dict[str, Controller]
+    results: list[EpisodeResult]
+
+
+@pytest.fixture(scope="session")
+def small_run() -> SmallRun:
+    """``thesis`` and ``reversal_aware`` on four scenarios, 4 episodes each, no trajectories kept (a few
+    seconds). The seeds (10003-10006) give the thesis controller every kind of failure in few episodes:
+    wrong branch (on BallastOffset two that then broach), broached, steady offset, unsettled."""
+    import baselines  # noqa: F401  (registers the classical controllers)
+
+    controllers = {name: make_controller(name) for name in ("thesis", "reversal_aware")}
+    scenarios = ["LowSpeed", "PeriscopeDepth", "SpeedTransient", "BallastOffset"]
+    results = evaluate(list(controllers.values()), scenarios, episodes=4, seed=DEFAULT_SEED + 3, progress=False,
+                       keep_trajectories=0)
+    return SmallRun(controllers, results)

@@ -1,4 +1,5 @@
-"""The figures are written (completely, as PNG) for fixed and for randomised critical speeds."""
+"""The figures show what the results hold: a typical episode of every outcome, the speed crossing u_cr,
+metrics binned against u / u_cr; and they are written completely, as PNG."""
 
 from __future__ import annotations
 
@@ -8,10 +9,24 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from subenv.evaluation.plots import plot_metrics_vs_speed, plot_trajectories
+from subenv.evaluation.plots import (
+    outcomes_figure,
+    plot_metrics_vs_speed,
+    plot_outcomes,
+    replay_trajectory,
+    speed_crossing_s,
+)
+from subenv.evaluation.results import representative_episodes
 from subenv.evaluation.rollout import TrajectoryRecorder
 
 pytest.importorskip("matplotlib")
+
+
+def _trajectory_of(small_run):
+    def get(r):
+        return replay_trajectory(r, small_run.controllers[r.controller])
+
+    return get
 
 
 @pytest.fixture
@@ -35,18 +50,68 @@ def test_metrics_vs_speed_is_written(tmp_path: Path, randomised: bool, at_speed)
     assert [p.name for p in path.parent.iterdir()] == ["m.png"]
 
 
-def test_trajectories_need_one_episode_with_trajectories(tmp_path: Path, at_speed):
-    info = {"time_s": 0.0, "depth_error_m": 1.0, "pitch_rad": 0.0, "heave_mps": 0.0, "pitch_rate_radps": 0.0,
-            "speed_mps": 0.4, "stern_plane_rad": 0.0, "bow_plane_rad": 0.0, "depth_m": 11.0,
-            "depth_command_m": 10.0, "critical_speed_mps": 0.5785}
+@pytest.mark.parametrize("scenario", ["LowSpeed", "PeriscopeDepth", "SpeedTransient"])
+def test_outcome_figure_shows_one_chosen_episode_per_outcome(small_run, scenario: str):
+    mine = [r for r in small_run.results if r.scenario == scenario]
+    fig = outcomes_figure(mine, _trajectory_of(small_run))
+    chosen = representative_episodes(mine)[scenario]
+    titles = [ax.get_title() for ax in fig.axes if ax.get_title()]
+    occurred = {r.metrics.outcome for r in mine}
+    assert set(chosen) == occurred  # every outcome that occurred, and only those
+    assert len(titles) == len(chosen)
+    for title, (outcome, r) in zip(titles, chosen.items()):
+        count = sum(x.metrics.outcome == outcome for x in mine)
+        assert title.startswith(f"{outcome.replace('_', ' ')}: {count} of {len(mine)}\n")
+        assert f"{r.controller}, seed {r.seed}" in title
+
+
+def test_speed_transient_shows_the_speed_and_where_it_crosses_u_cr(small_run):
+    mine = [r for r in small_run.results if r.scenario == "SpeedTransient"]
+    get = _trajectory_of(small_run)
+    fig = outcomes_figure(mine, get)
+    columns = len(representative_episodes(mine)["SpeedTransient"])
+    assert len(fig.axes) == 4 * columns  # depth error, pitch, planes, and the speed
+    speed_axes = fig.axes[3 * columns:]
+    for ax, r in zip(speed_axes, representative_episodes(mine)["SpeedTransient"].values()):
+        tr = get(r)
+        crossing = speed_crossing_s(tr)
+        assert crossing is not None and tr.time_s[0] < crossing < tr.time_s[-1]  # 2-2.6 u_cr down to 0.4-0.7
+        k = int(np.searchsorted(tr.time_s, crossing))
+        assert tr.speed_mps[k - 1] >= tr.critical_speed_mps > tr.speed_mps[k]
+        vertical = [line.get_xdata()[0] for line in ax.get_lines() if len(set(line.get_xdata())) == 1]
+        horizontal = [line.get_ydata()[0] for line in ax.get_lines() if len(set(line.get_ydata())) == 1]
+        assert crossing in vertical and tr.critical_speed_mps in horizontal
+        assert any(text.get_text().startswith("u = u_cr") for text in ax.texts)
+
+
+def test_speed_crossing_is_interpolated_and_absent_at_constant_speed():
+    info = {"time_s": 0.0, "depth_error_m": 0.0, "pitch_rad": 0.0, "heave_mps": 0.0, "pitch_rate_radps": 0.0,
+            "speed_mps": 2.0, "stern_plane_rad": 0.0, "bow_plane_rad": 0.0, "depth_m": 10.0,
+            "depth_command_m": 10.0, "critical_speed_mps": 1.0}
     recorder = TrajectoryRecorder(info)
     for k in range(1, 5):
-        recorder.record(np.zeros(1), info | {"time_s": 0.5 * k, "stern_plane_rad": 0.1})
-    trajectory = recorder.finish("", 0.4, 2.0)
-    one = dataclasses.replace(at_speed("a", 0.4, 0.5785, False), trajectory=trajectory)
-    two = dataclasses.replace(one, controller="b")
-    assert plot_trajectories([one, two], tmp_path / "t.png").read_bytes().startswith(b"\x89PNG")
-    with pytest.raises(ValueError, match="several episodes"):
-        plot_trajectories([one, dataclasses.replace(two, seed=999)], tmp_path / "u.png")
-    with pytest.raises(ValueError, match="no result carries a trajectory"):
-        plot_trajectories([at_speed("a", 0.4, 0.5785, False)], tmp_path / "v.png")
+        recorder.record(np.zeros(1), info | {"time_s": 10.0 * k, "speed_mps": 2.0 - 0.4 * k})  # 1.2 at 20 s, 0.8 at 30 s
+    assert speed_crossing_s(recorder.finish("", 0.4, 40.0)) == pytest.approx(25.0)
+    level = TrajectoryRecorder(info)
+    level.record(np.zeros(1), info | {"time_s": 1.0})
+    assert speed_crossing_s(level.finish("", 0.4, 1.0)) is None
+
+
+def test_replay_gives_the_recorded_episode_and_refuses_another(small_run):
+    r = next(r for r in small_run.results if r.metrics.outcome == "wrong_branch")
+    tr = replay_trajectory(r, small_run.controllers[r.controller])
+    assert tr.metrics() == r.metrics
+    with pytest.raises(ValueError, match="the results say 'success'"):
+        replay_trajectory(dataclasses.replace(r, metrics=dataclasses.replace(r.metrics, outcome="success")),
+                          small_run.controllers[r.controller])
+
+
+def test_outcome_plot_is_written_and_needs_one_scenario_with_trajectories(tmp_path: Path, small_run):
+    get = _trajectory_of(small_run)
+    mine = [r for r in small_run.results if r.scenario == "LowSpeed"]
+    path = plot_outcomes(mine, tmp_path / "plots" / "t.png", get)
+    assert path.read_bytes().startswith(b"\x89PNG") and [p.name for p in path.parent.iterdir()] == ["t.png"]
+    with pytest.raises(ValueError, match="pass the episodes of one scenario"):
+        outcomes_figure(small_run.results, get)
+    with pytest.raises(ValueError, match="has no trajectory"):
+        outcomes_figure(mine)  # no trajectories kept, and no way to replay given

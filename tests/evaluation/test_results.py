@@ -3,14 +3,17 @@
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import math
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from subenv.evaluation import results as res
+from subenv.evaluation.metrics import OUTCOMES, episode_metrics
 
 
 @pytest.mark.parametrize(
@@ -137,3 +140,120 @@ def test_a_failed_run_writes_no_folder(tmp_path: Path):
     (tmp_path / "file").write_text("not a folder")
     with pytest.raises(FileExistsError, match="not a folder"):
         res.check_output_dir(tmp_path / "file", overwrite=True)
+
+
+def _wrong_branch_then_broached(make_result, controller: str, scenario: str, episode: int):
+    """The thesis's failure mode over the final 60 s (stern plane pinned, steady 3 deg pitch, rising off
+    depth), ended by broaching: outcome wrong_branch, broached flag set."""
+    t = np.arange(0.0, 121.0, 1.0)
+    e = np.linspace(2.0, -8.0, t.size)
+    limit = 0.4
+    m = episode_metrics(t, e, np.full_like(t, math.radians(3.0)), np.zeros_like(t), np.full_like(t, limit),
+                        np.zeros_like(t), termination_reason="broached", plane_limit_rad=limit)
+    assert m.wrong_branch and m.broached and m.outcome == "wrong_branch"
+    return dataclasses.replace(make_result(controller, scenario, episode, False), metrics=m)
+
+
+def _broached(make_result, controller: str, scenario: str, episode: int):
+    t = np.arange(0.0, 31.0, 1.0)
+    zeros = np.zeros_like(t)
+    m = episode_metrics(t, np.linspace(0.0, -10.0, t.size), zeros, zeros, zeros, zeros,
+                        termination_reason="broached", plane_limit_rad=0.4)
+    assert m.outcome == "broached"
+    return dataclasses.replace(make_result(controller, scenario, episode, False), metrics=m)
+
+
+def test_outcome_counts_count_every_episode_once(make_result):
+    metrics = [_wrong_branch_then_broached(make_result, "c", "A", 0).metrics,
+               _broached(make_result, "c", "A", 1).metrics, make_result("c", "A", 2, True).metrics]
+    counts = res.outcome_counts(metrics)
+    assert list(counts)[: len(OUTCOMES)] == list(OUTCOMES)
+    assert counts["wrong_branch"] == 1 and counts["broached"] == 1 and counts["success"] == 1
+    assert sum(counts.values()) == 3  # the broaching wrong-branch episode is not counted twice
+    assert sum(m.broached for m in metrics) == 2  # though two episodes ended by broaching
+
+
+def _markdown_rows(text: str) -> list[dict[str, str]]:
+    lines = [line for line in text.splitlines() if line.startswith("| ")]
+    header = [cell.strip() for cell in lines[0].strip("|").split("|")]
+    return [dict(zip(header, (cell.strip() for cell in line.strip("|").split("|")))) for line in lines[1:]]
+
+
+def _assert_tables_agree(results) -> set[str]:
+    """The leaderboard's failure counts equal summary.md's rates times n, summed over the scenarios;
+    each summary row's rates add up to 100%. Returns the failure outcomes the tables show."""
+    board = _markdown_rows(res.leaderboard_markdown(results))
+    summary = _markdown_rows(res.summary_markdown(res.summarize(results)))
+    scenarios = {r.scenario for r in results}
+    board_failures = [k for k in board[0] if k not in {"controller", "all scenarios", *scenarios}]
+    rate_columns = list(summary[0])[3: list(summary[0]).index("IAE [m s]")]
+    assert rate_columns[0] == "success" and rate_columns[1:] == board_failures
+    for row in summary:
+        percents = [int(row[c].split("%")[0]) for c in rate_columns]
+        assert abs(sum(percents) - 100) <= len(percents) / 2  # integer rounding of each rate
+    for line in board:
+        mine = [row for row in summary if row["controller"] == line["controller"]]
+        for outcome in board_failures:
+            from_summary = sum(round(int(row[outcome].split("%")[0]) * int(row["n"]) / 100) for row in mine)
+            assert int(line[outcome]) == from_summary, (line["controller"], outcome)
+    return set(board_failures)
+
+
+def test_leaderboard_and_summary_count_failures_alike(make_result):
+    results = []
+    for i in range(4):
+        results += [_wrong_branch_then_broached(make_result, "thesis", "A", i) if i < 2
+                    else _broached(make_result, "thesis", "A", i),
+                    make_result("thesis", "B", i, success=i < 3), make_result("other", "A", i, success=True),
+                    _broached(make_result, "other", "B", i) if i == 0 else make_result("other", "B", i, True)]
+    assert _assert_tables_agree(results) == {"wrong branch", "steady offset", "broached"}
+    board = {row["controller"]: row for row in _markdown_rows(res.leaderboard_markdown(results))}
+    assert board["thesis"]["broached"] == "2" and board["thesis"]["wrong branch"] == "2"
+    assert "first that applies" in res.leaderboard_markdown(results)
+    assert "first that applies" in res.summary_markdown(res.summarize(results))
+
+
+def test_tables_agree_on_a_small_run(small_run):
+    # The case that made the tables disagree: wrong-branch episodes that then broached.
+    assert any(r.metrics.outcome == "wrong_branch" and r.metrics.broached for r in small_run.results)
+    assert _assert_tables_agree(small_run.results) >= {"wrong branch", "broached"}
+
+
+def test_by_speed_ratio_bins_each_scenario_on_its_own(make_result):
+    results = []
+    for i, ratio in enumerate(np.linspace(0.3, 0.8, 8)):  # scenario "Low": ratios 0.3-0.8
+        r = make_result("a", "Low", i, success=ratio > 0.55, iae=float(i + 1))
+        results.append(dataclasses.replace(r, final_speed_mps=ratio * r.critical_speed_mps))
+    for i in range(3):  # scenario "Fixed": one speed, 2.63 u_cr
+        r = make_result("a", "Fixed", i, success=True)
+        results.append(dataclasses.replace(r, final_speed_mps=2.63 * r.critical_speed_mps))
+    rows = res.by_speed_ratio(results, bins=2)
+    low = [row for row in rows if row["scenario"] == "Low"]
+    assert [x for row in low for x in (row["ratio_low"], row["ratio_high"])] == pytest.approx([0.3, 0.55, 0.55, 0.8])
+    assert [row["episodes"] for row in low] == [4, 4]
+    assert [row["success"] for row in low] == [0, 4]
+    assert (low[1]["success_ci_low"], low[1]["success_ci_high"]) == pytest.approx(res.wilson_interval(4, 4))
+    fixed = [row for row in rows if row["scenario"] == "Fixed"]
+    assert len(fixed) == 1 and fixed[0]["episodes"] == 3 and fixed[0]["ratio_mean"] == pytest.approx(2.63)
+    by_default = res.by_speed_ratio(results)  # 8 episodes: round(sqrt(8) / 2) = 1 bin
+    assert [row["episodes"] for row in by_default if row["scenario"] == "Low"] == [8]
+
+
+def test_median_interval_brackets_the_median_and_repeats():
+    values = [1.0, 2.0, 3.0, 4.0, 100.0]
+    median, low, high = res.median_interval(values)
+    assert median == 3.0 and 1.0 <= low <= 3.0 <= high <= 100.0
+    assert res.median_interval(values) == (median, low, high)  # a fixed seed: the same figure every time
+    assert res.median_interval([2.0, 2.0]) == (2.0, 2.0, 2.0)
+    one = res.median_interval([7.0])
+    assert one[0] == 7.0 and math.isnan(one[1]) and math.isnan(one[2])
+
+
+def test_representative_episode_is_the_commonest_controllers_median(make_result):
+    results = [make_result("rare", "S", 0, success=True, iae=0.5)]
+    results += [make_result("common", "S", i, success=True, iae=float(iae)) for i, iae in enumerate([3, 1, 2])]
+    results += [make_result("rare", "S", 5, success=False)]
+    chosen = res.representative_episodes(results)["S"]
+    assert list(chosen) == ["success", "steady_offset"]
+    assert (chosen["success"].controller, chosen["success"].episode) == ("common", 2)  # IAE 2 of 1, 2, 3
+    assert (chosen["steady_offset"].controller, chosen["steady_offset"].episode) == ("rare", 5)
