@@ -1,6 +1,7 @@
 """Evaluation: the controller interface and registry, and the harness that compares controllers.
 
-- :mod:`~subenv.evaluation.controller`: the :class:`Controller` protocol and its registry.
+- :mod:`~subenv.evaluation.controller`: the :class:`Controller` protocol (and :class:`BatchController`,
+  acting on many episodes at once) and its registry.
 - :mod:`~subenv.evaluation.metrics`: per-episode metrics from a recorded trajectory.
 - :mod:`~subenv.evaluation.rollout`: running controllers on episodes (:func:`evaluate`).
 - :mod:`~subenv.evaluation.suites`: named sets of scenarios (``default``, ``reversal``, ...).
@@ -11,8 +12,11 @@
 
 from subenv.evaluation.comparison import DEFAULT_OUT_DIR, Comparison, run_comparison, write_comparison
 from subenv.evaluation.controller import (
+    BatchController,
     Controller,
     ControllerFactory,
+    SingleRowMixin,
+    check_batch,
     controller_names,
     make_controller,
     register_controller,
@@ -32,13 +36,16 @@ __all__ = [
     "DEFAULT_OUT_DIR",
     "DEFAULT_SEED",
     "DEFAULT_SUITE",
+    "BatchController",
     "Comparison",
     "Controller",
     "ControllerFactory",
     "EpisodeMetrics",
     "EpisodeResult",
+    "SingleRowMixin",
     "Suite",
     "Trajectory",
+    "check_batch",
     "controller_names",
     "episode_metrics",
     "evaluate",
