@@ -3,7 +3,9 @@
 - :mod:`~subenv.evaluation.controller`: the :class:`Controller` protocol (and :class:`BatchController`,
   acting on many episodes at once) and its registry.
 - :mod:`~subenv.evaluation.metrics`: per-episode metrics from a recorded trajectory.
-- :mod:`~subenv.evaluation.rollout`: running controllers on episodes (:func:`evaluate`).
+- :mod:`~subenv.evaluation.rollout`: running controllers on episodes, batched in the vector
+  environment (:func:`evaluate`).
+- :mod:`~subenv.evaluation.progress`: progress on a terminal or in a log, the first run's compile notice.
 - :mod:`~subenv.evaluation.suites`: named sets of scenarios (``default``, ``reversal``, ...).
 - :mod:`~subenv.evaluation.results`: tables, confidence intervals, the leaderboard, atomic writes.
 - :mod:`~subenv.evaluation.plots`: trajectory and metrics-versus-speed figures (matplotlib).
@@ -22,7 +24,7 @@ from subenv.evaluation.controller import (
     register_controller,
 )
 from subenv.evaluation.metrics import EpisodeMetrics, episode_metrics
-from subenv.evaluation.rollout import EpisodeResult, Trajectory, evaluate, run_episode
+from subenv.evaluation.rollout import EpisodeResult, Trajectory, evaluate, run_episode, run_episodes
 from subenv.evaluation.suites import (
     DEFAULT_SEED,
     DEFAULT_SUITE,
@@ -55,6 +57,7 @@ __all__ = [
     "register_suite",
     "run_comparison",
     "run_episode",
+    "run_episodes",
     "suite_names",
     "write_comparison",
 ]
