@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -11,6 +11,7 @@ import numpy as np
 from agents.features import DepthIntegral
 from agents.policy import TrainedAgent, load_agent
 from subenv.dynamics import CONTROL_PERIOD_S
+from subenv.evaluation import SingleRowMixin, check_batch
 from subenv.vehicles import Vehicle
 
 __all__ = ["AgentController"]
@@ -20,11 +21,12 @@ __all__ = ["AgentController"]
 _DYNAMICS_KWARGS = ("vehicle", "dt", "substeps", "plane_rate_limit_radps", "max_pitch_rad", "max_depth_error_m")
 
 
-class AgentController:
+class AgentController(SingleRowMixin):
     """A trained agent (:func:`agents.load_agent`) behind the :class:`~subenv.evaluation.Controller` protocol.
 
-    Acts deterministically on the environment's observation: appends the depth-error integral
-    (:mod:`agents.features`) if the agent observes it, then normalises as in training.
+    Acts deterministically on the environment's observations (one episode, or a batch: one row
+    per episode): appends each episode's depth-error integral (:mod:`agents.features`) if the
+    agent observes it, then normalises as in training.
     ``control`` and ``alpha`` are those the agent was trained with.
 
     Parameters
@@ -47,22 +49,24 @@ class AgentController:
         self.name = name or self.agent.path.parent.name
         self.control = env_kwargs.get("control", "dual")
         self.alpha = float(env_kwargs.get("alpha", 0.0))
-        integral = self.agent.config.depth_integral
-        self._integral = None if integral is None else DepthIntegral(1, CONTROL_PERIOD_S, integral)
+        self._integral_config = self.agent.config.depth_integral
+        self._integral: DepthIntegral | None = None
+        self._episodes = 0
         self._first = True
 
-    def reset(self, info: Mapping[str, Any], vehicle: Vehicle) -> None:
-        """Start an episode: the depth-error integral (if the agent observes it) restarts at 0."""
-        if self._integral is not None:
-            self._integral.reset()
+    def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
+        """Start ``len(infos)`` episodes: their depth-error integrals (if the agent observes it) start at 0."""
+        self._episodes = len(infos)
+        if self._integral_config is not None:
+            self._integral = DepthIntegral(self._episodes, CONTROL_PERIOD_S, self._integral_config)
         self._first = True
 
-    def act(self, observation: np.ndarray) -> np.ndarray:
+    def act_batch(self, observations: np.ndarray) -> np.ndarray:
+        obs = check_batch(observations, self._episodes).astype(np.float32, copy=False)
         if self._integral is None:
-            return self.agent.predict(observation)
-        obs = np.asarray(observation, dtype=np.float32).reshape(1, -1)
+            return self.agent.predict(obs)
         if self._first:  # the reset's observation: I_0 = 0
             self._first = False
         else:
             self._integral.update(obs)
-        return self.agent.predict(self._integral.append(obs, self._integral.value)[0])
+        return self.agent.predict(self._integral.append(obs, self._integral.value))

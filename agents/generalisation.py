@@ -5,7 +5,7 @@ The shipped agents train on ``subenv/Mixed-v0``: the six base scenarios, speeds 
 |x_GB| <= 3 mm, excess buoyancy <= 0.1% of the weight, hull drag C_D in 0.2-0.4, a 0.3 N
 heave-force disturbance. The scenarios below lie outside those ranges, one axis at a time,
 noise-free and undisturbed like the evaluation suites; they are not registered (nobody should
-train on them) and run through the same harness (:func:`subenv.evaluation.run_episode`). The
+train on them) and run through the same harness (:func:`subenv.evaluation.run_episodes`). The
 registered ``Randomized`` scenario (``subenv/DivePlane-v0``: z_GB 0.8-1.25, C_D 0-0.6, a 2 N
 disturbance) is held out too, as harder conditions.
 """
@@ -15,9 +15,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Final
 
-import gymnasium as gym
-
-from subenv.evaluation import Controller, run_episode
+from subenv.evaluation import Controller, run_episodes
 from subenv.evaluation.rollout import EpisodeResult
 from subenv.evaluation.suites import DEFAULT_SEED
 from subenv.scenarios import Scenario, get_scenario
@@ -48,14 +46,5 @@ def evaluate_held_out(
     scenarios: Sequence[Scenario] = HELD_OUT,
 ) -> list[EpisodeResult]:
     """Every controller on the same ``episodes`` seeded episodes (``seed + i``) of every held-out scenario."""
-    results = []
-    for controller in controllers:
-        for scenario in scenarios:
-            env = gym.make("subenv/DivePlane-v0", scenario=scenario, control=controller.control,
-                           alpha=controller.alpha)
-            try:
-                results += [run_episode(controller, env, seed + i, episode=i, keep_trajectory=False)
-                            for i in range(episodes)]
-            finally:
-                env.close()
-    return results
+    return [result for controller in controllers for scenario in scenarios
+            for result in run_episodes(controller, scenario, range(seed, seed + episodes))]

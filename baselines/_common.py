@@ -1,4 +1,9 @@
-"""Pieces the classical controllers share: reading the observation, and gain schedules as data."""
+"""Pieces the classical controllers share: reading the observations, and gain schedules as data.
+
+Everything here works on batches (one row per episode) with elementwise operations only, so a
+row's result has the same bits whatever the batch size (a BLAS dot product may sum in another
+order for another shape).
+"""
 
 from __future__ import annotations
 
@@ -15,14 +20,32 @@ DEPTH_ERROR, PITCH, HEAVE, PITCH_RATE, SPEED = (
 )
 
 
-def feedback_state(observation: np.ndarray, depth_error_limit_m: float = np.inf) -> np.ndarray:
-    """x = (theta, w, q, depth error) from an observation, the error clipped to +-limit.
+def feedback_state(observations: np.ndarray, depth_error_limit_m: float = np.inf) -> np.ndarray:
+    """x = (theta, w, q, depth error) of every row of ``observations`` (N, obs_dim): shape (N, 4), the
+    error clipped to +-limit.
 
     Clipping the depth error bounds the command far from the ordered depth, so the boat approaches
     it at a limited pitch instead of pinning its planes (a classic depth-error saturation).
     """
-    error = float(np.clip(observation[DEPTH_ERROR], -depth_error_limit_m, depth_error_limit_m))
-    return np.array([observation[PITCH], observation[HEAVE], observation[PITCH_RATE], error], dtype=float)
+    obs = np.asarray(observations, dtype=float)
+    error = np.clip(obs[:, DEPTH_ERROR], -depth_error_limit_m, depth_error_limit_m)
+    return np.stack([obs[:, PITCH], obs[:, HEAVE], obs[:, PITCH_RATE], error], axis=1)
+
+
+def speeds(observations: np.ndarray) -> np.ndarray:
+    """The observed speed [m/s] of every row of ``observations`` (N, obs_dim)."""
+    return np.asarray(observations[:, SPEED], dtype=float)
+
+
+def row_dot(gains: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """sum_k gains[..., k] x[:, k] for every row of ``x`` (N, k); ``gains`` one row or one per row of ``x``.
+
+    Summed in the order k = 0, 1, ...: the same bits for every batch size.
+    """
+    total = gains[..., 0] * x[:, 0]
+    for k in range(1, x.shape[1]):
+        total = total + gains[..., k] * x[:, k]
+    return total
 
 
 @dataclass(frozen=True)
@@ -44,13 +67,13 @@ class GainSchedule:
             raise ValueError(f"points={points!r} is invalid: must be at least 2 ascending speeds")
         return cls(gains=np.array([design(float(u)) for u in pts]), points=pts)
 
-    def at(self, speed_mps: float) -> np.ndarray:
-        """The interpolated gain row at ``speed_mps``."""
+    def at(self, speed_mps: float | np.ndarray) -> np.ndarray:
+        """The interpolated gain row at ``speed_mps``: shape (n_states,), or (N, n_states) for N speeds.
+
+        Outside the grid the weight t is clipped to 0 or 1, which gives the end gains exactly.
+        """
         p = self.points
-        if speed_mps <= p[0]:
-            return self.gains[0]
-        if speed_mps >= p[-1]:
-            return self.gains[-1]
-        i = int(np.searchsorted(p, speed_mps)) - 1
-        t = (speed_mps - p[i]) / (p[i + 1] - p[i])
+        u = np.asarray(speed_mps, dtype=float)
+        i = np.clip(np.searchsorted(p, u) - 1, 0, p.size - 2)
+        t = np.clip((u - p[i]) / (p[i + 1] - p[i]), 0.0, 1.0)[..., None]
         return (1.0 - t) * self.gains[i] + t * self.gains[i + 1]

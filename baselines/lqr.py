@@ -2,16 +2,17 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any, Final
 
 import numpy as np
 from scipy.linalg import solve_continuous_are
 
-from baselines._common import SPEED, GainSchedule, feedback_state
+from baselines._common import GainSchedule, feedback_state, row_dot, speeds
 from subenv.analysis import linear_model
 from subenv.analysis.linear import Allocation
 from subenv.dynamics import CONTROL_PERIOD_S
+from subenv.evaluation import SingleRowMixin, check_batch
 from subenv.vehicles import Vehicle
 
 # Bryson's rule: each state weighted by the inverse square of its acceptable size.
@@ -43,27 +44,34 @@ def lqi_gain(vehicle: Vehicle, speed_mps: float, alpha: Allocation, plane_limit_
 
 
 class DepthIntegrator:
-    """Integral of the (clipped) depth error with conditional-integration anti-windup."""
+    """Integral of the (clipped) depth error of N episodes, with conditional-integration anti-windup."""
 
     def __init__(self, dt_s: float, limit: float) -> None:
-        self.dt_s, self.limit, self.value = dt_s, limit, 0.0
+        self.dt_s, self.limit = dt_s, limit
+        self.value = np.zeros(0)
 
-    def update(self, error: float, integral_gain: float, saturated: bool) -> None:
+    def reset(self, episodes: int) -> None:
+        """Start ``episodes`` integrals at 0."""
+        self.value = np.zeros(episodes)
+
+    def update(self, error: np.ndarray, integral_gain: np.ndarray, saturated: np.ndarray) -> None:
         # Integrate unless the planes are saturated and integrating would push them further.
-        if not saturated or np.sign(error) != np.sign(integral_gain * self.value):
-            self.value = float(np.clip(self.value + error * self.dt_s, -self.limit, self.limit))
+        hold = saturated & (np.sign(error) == np.sign(integral_gain * self.value))
+        self.value = np.where(hold, self.value, np.clip(self.value + error * self.dt_s, -self.limit, self.limit))
 
 
-def lqi_command(gain: np.ndarray, observation: np.ndarray, integrator: DepthIntegrator, limit_rad: float) -> float:
-    """The saturated plane command -K (theta, w, q, e, int e), advancing the integrator (anti-windup)."""
-    x = feedback_state(observation, DEPTH_ERROR_LIMIT_M)
-    raw = -float(gain[:4] @ x + gain[4] * integrator.value)
-    delta = float(np.clip(raw, -limit_rad, limit_rad))
-    integrator.update(float(x[3]), float(gain[4]), saturated=delta != raw)
+def lqi_command(gains: np.ndarray, observations: np.ndarray, integrator: DepthIntegrator,
+                limit_rad: float) -> np.ndarray:
+    """The saturated plane commands -K (theta, w, q, e, int e) of every row of ``observations``
+    (``gains``: one row, or one per observation), advancing the integrator (anti-windup)."""
+    x = feedback_state(observations, DEPTH_ERROR_LIMIT_M)
+    raw = -(row_dot(gains[..., :4], x) + gains[..., 4] * integrator.value)
+    delta = np.clip(raw, -limit_rad, limit_rad)
+    integrator.update(x[:, 3], gains[..., 4], saturated=delta != raw)
     return delta
 
 
-class ScheduledLQR:
+class ScheduledLQR(SingleRowMixin):
     """LQR with integral action on the stern planes (dual control, alpha = 0), scheduled over speed.
 
     A modern reference: the optimal gain for the thesis's plane allocation at every speed, so it
@@ -83,17 +91,18 @@ class ScheduledLQR:
         self._limit = 0.4
         self.integrator = DepthIntegrator(dt_s, ACCEPTABLE["depth_error_integral_ms"] * 3)
 
-    def reset(self, info: Mapping[str, Any], vehicle: Vehicle) -> None:
+    def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
         if vehicle is not self._vehicle:
             self._limit = vehicle.planes.limit_rad
             self.schedule = GainSchedule.design(
                 self.points, lambda u: lqi_gain(vehicle, u, self.alpha, self._limit)
             )
             self._vehicle = vehicle
-        self.integrator.value = 0.0
+        self.integrator.reset(len(infos))
 
-    def act(self, observation: np.ndarray) -> np.ndarray:
+    def act_batch(self, observations: np.ndarray) -> np.ndarray:
         if self.schedule is None:
-            raise RuntimeError("call reset() first")
-        delta = lqi_command(self.schedule.at(float(observation[SPEED])), observation, self.integrator, self._limit)
-        return np.array([delta / self._limit], dtype=np.float32)
+            raise RuntimeError("call reset() or reset_batch() first")
+        obs = check_batch(observations, self.integrator.value.size)
+        delta = lqi_command(self.schedule.at(speeds(obs)), obs, self.integrator, self._limit)
+        return (delta / self._limit).astype(np.float32)[:, None]

@@ -2,16 +2,17 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any, Final
 
 import numpy as np
 from scipy.optimize import brentq
 
-from baselines._common import SPEED, GainSchedule
+from baselines._common import GainSchedule, speeds
 from baselines.lqr import ACCEPTABLE, DEFAULT_POINTS, DepthIntegrator, lqi_command, lqi_gain
 from subenv.analysis import critical_speed
 from subenv.dynamics import CONTROL_PERIOD_S
+from subenv.evaluation import SingleRowMixin, check_batch
 from subenv.vehicles import Vehicle
 
 ALLOCATIONS: Final = (-1.0, 1.0)
@@ -20,7 +21,7 @@ HYSTERESIS: Final = 0.03
 """Relative speed band around the switching speed inside which the allocation is kept."""
 
 
-class ReversalAware:
+class ReversalAware(SingleRowMixin):
     """Depth control that knows where the planes reverse, and keeps away from it.
 
     The physics (Riedel 1993 Ch. III, V): with one plane command and allocation alpha, the depth
@@ -62,12 +63,13 @@ class ReversalAware:
         self.points = np.asarray(points, dtype=float)
         self.schedules: dict[float, GainSchedule] = {}
         self.switch_speed_mps = float("nan")
-        self.allocation = ALLOCATIONS[0]
+        self.allocation = np.zeros(0)
+        """The allocation alpha in use in every episode (one per row of the last ``reset_batch``)."""
         self._vehicle: Vehicle | None = None
         self._limit = 0.4
         self.integrator = DepthIntegrator(dt_s, ACCEPTABLE["depth_error_integral_ms"] * 3)
 
-    def reset(self, info: Mapping[str, Any], vehicle: Vehicle) -> None:
+    def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
         if vehicle is not self._vehicle:
             self._limit = vehicle.planes.limit_rad
             ucr = {a: critical_speed(vehicle, a) for a in ALLOCATIONS}
@@ -81,30 +83,40 @@ class ReversalAware:
                 for a in ALLOCATIONS
             }
             self._vehicle = vehicle
-        self.integrator.value = 0.0
-        self.allocation = self._choose(float(info["speed_mps"]), None)
+        self.integrator.reset(len(infos))
+        self.allocation = self._choose(np.array([float(info["speed_mps"]) for info in infos]), None)
 
     @staticmethod
     def _margin(u: float, ucr: float) -> float:
         return abs(1.0 - (u / ucr) ** 2)
 
-    def _choose(self, speed: float, current: float | None) -> float:
-        """The slow-speed allocation (largest u_cr) below the switching speed, the other above."""
+    def _choose(self, speed_mps: np.ndarray, current: np.ndarray | None) -> np.ndarray:
+        """The slow-speed allocation (largest u_cr) below the switching speed, the other above; within
+        the hysteresis band around it, ``current``."""
+        chosen = np.where(speed_mps < self.switch_speed_mps, self._slow, self._fast)
+        if current is None:
+            return chosen
         band = HYSTERESIS * self.switch_speed_mps
-        if current is not None and abs(speed - self.switch_speed_mps) < band:
-            return current
-        return self._slow if speed < self.switch_speed_mps else self._fast
+        return np.where(np.abs(speed_mps - self.switch_speed_mps) < band, current, chosen)
 
-    def act(self, observation: np.ndarray) -> np.ndarray:
+    def _gains(self, allocation: np.ndarray, speed_mps: np.ndarray) -> np.ndarray:
+        """The gain row of every episode's allocation at its speed, shape (N, 5)."""
+        slow, fast = (self.schedules[a].at(speed_mps) for a in (self._slow, self._fast))
+        return np.where((allocation == self._slow)[:, None], slow, fast)
+
+    def act_batch(self, observations: np.ndarray) -> np.ndarray:
         if not self.schedules:
-            raise RuntimeError("call reset() first")
-        speed = float(observation[SPEED])
+            raise RuntimeError("call reset() or reset_batch() first")
+        obs = check_batch(observations, self.allocation.size)
+        speed = speeds(obs)
         allocation = self._choose(speed, self.allocation)
-        gain = self.schedules[allocation].at(speed)
-        if allocation != self.allocation:
-            old = self.schedules[self.allocation].at(speed)[4]
-            if gain[4] != 0:
-                self.integrator.value *= old / gain[4]  # bumpless: keep the integral's command
-            self.allocation = allocation
-        delta = lqi_command(gain, observation, self.integrator, self._limit)
-        return np.array([delta, allocation * delta], dtype=np.float32) / np.float32(self._limit)
+        gains = self._gains(allocation, speed)
+        switched = allocation != self.allocation
+        if switched.any():  # bumpless: keep the integral's command where the integral gain is not 0
+            old = self._gains(self.allocation, speed)[:, 4]
+            rescale = switched & (gains[:, 4] != 0)
+            self.integrator.value = np.where(
+                rescale, self.integrator.value * (old / np.where(rescale, gains[:, 4], 1.0)), self.integrator.value)
+        self.allocation = allocation
+        delta = lqi_command(gains, obs, self.integrator, self._limit)
+        return np.stack([delta, allocation * delta], axis=1).astype(np.float32) / np.float32(self._limit)

@@ -2,20 +2,21 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
-from baselines._common import SPEED, GainSchedule, feedback_state
+from baselines._common import GainSchedule, feedback_state, row_dot, speeds
 from subenv.analysis import THESIS_POLES, place_gain
+from subenv.evaluation import SingleRowMixin
 from subenv.vehicles import Vehicle
 
 DEFAULT_POINTS = np.linspace(0.15, 2.0, 38)
 """Scheduling speeds [m/s], every 0.05 m/s; for SUBOFF u_cr = 0.5785 m/s lies between two points."""
 
 
-class GainScheduledPolePlacement:
+class GainScheduledPolePlacement(SingleRowMixin):
     """Pole placement at every scheduling speed (same poles as the thesis), interpolated at the current speed.
 
     What it does near the critical speed: the depth gain that places the poles is
@@ -38,7 +39,7 @@ class GainScheduledPolePlacement:
         self._vehicle: Vehicle | None = None
         self._limit = 0.4
 
-    def reset(self, info: Mapping[str, Any], vehicle: Vehicle) -> None:
+    def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
         if vehicle is not self._vehicle:
             self.schedule = GainSchedule.design(
                 self.points, lambda u: place_gain(vehicle, u, THESIS_POLES, self.alpha)
@@ -46,9 +47,8 @@ class GainScheduledPolePlacement:
             self._vehicle = vehicle
             self._limit = vehicle.planes.limit_rad
 
-    def act(self, observation: np.ndarray) -> np.ndarray:
+    def act_batch(self, observations: np.ndarray) -> np.ndarray:
         if self.schedule is None:
-            raise RuntimeError("call reset() first")
-        gain = self.schedule.at(float(observation[SPEED]))
-        delta = -float(gain @ feedback_state(observation))
-        return np.array([np.clip(delta / self._limit, -1.0, 1.0)], dtype=np.float32)
+            raise RuntimeError("call reset() or reset_batch() first")
+        delta = -row_dot(self.schedule.at(speeds(observations)), feedback_state(observations))
+        return np.clip(delta / self._limit, -1.0, 1.0).astype(np.float32)[:, None]

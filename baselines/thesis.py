@@ -2,17 +2,18 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
-from baselines._common import feedback_state
+from baselines._common import feedback_state, row_dot
 from subenv.analysis import thesis_gain
+from subenv.evaluation import SingleRowMixin
 from subenv.vehicles import Vehicle
 
 
-class ThesisPolePlacement:
+class ThesisPolePlacement(SingleRowMixin):
     """delta = -K (theta, w, q, Z - Z_cmd), K placed at 5 fps with poles (-0.3, -0.31, -0.32, -0.33).
 
     Designed once from the linear model of :mod:`subenv.analysis` (the gains of eq. 2.98, in SI)
@@ -35,12 +36,12 @@ class ThesisPolePlacement:
             raise RuntimeError("call reset() first: the gain is designed for the episode's vehicle")
         return self._gain
 
-    def reset(self, info: Mapping[str, Any], vehicle: Vehicle) -> None:
+    def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
         if vehicle is not self._vehicle:  # design once per design model
             self._gain = thesis_gain(vehicle, self.alpha)
             self._vehicle = vehicle
             self._limit = vehicle.planes.limit_rad
 
-    def act(self, observation: np.ndarray) -> np.ndarray:
-        delta = -float(self.gain @ feedback_state(observation))
-        return np.array([np.clip(delta / self._limit, -1.0, 1.0)], dtype=np.float32)
+    def act_batch(self, observations: np.ndarray) -> np.ndarray:
+        delta = -row_dot(self.gain, feedback_state(observations))
+        return np.clip(delta / self._limit, -1.0, 1.0).astype(np.float32)[:, None]

@@ -162,7 +162,7 @@ def evaluate(args: argparse.Namespace) -> int:
         comparison = run_comparison(
             args.controllers, suite, args.episodes, out, overwrite=args.force,
             seed=DEFAULT_SEED if args.seed is None else args.seed,
-            progress=not args.no_progress and sys.stderr.isatty(), plots=not args.no_plots,
+            progress=not args.no_progress, plots=not args.no_plots,
         )
     except (FileExistsError, OutputDirError) as exc:
         raise SystemExit(f"subenv evaluate: --out: {exc}") from None
@@ -230,7 +230,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                         help="replace the results folder if it holds earlier results (it has the marker file)")
     p_eval.add_argument("--no-plots", action="store_true", help="write tables only")
     p_eval.add_argument("--no-progress", action="store_true",
-                        help="no progress bar (it is shown only when stderr is a terminal)")
+                        help="no progress on stderr (a bar on a terminal, otherwise a line every 5%%)")
     p_eval.add_argument("--plugins", type=_names, help=f"comma-separated packages that register controllers "
                                           f"(default: {','.join(DEFAULT_PLUGINS)})")
     p_eval.add_argument("--list", action="store_true", help="list the controllers and suites, and exit")

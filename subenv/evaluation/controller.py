@@ -5,20 +5,29 @@ A controller maps an observation to an action in [-1, 1]. It declares which acti
 the environment reports (``info`` at reset: speed, critical speed, depth command, ...) and the
 vehicle it was designed for. It never reads the environment's internals.
 
+A controller may also act on a batch of episodes at once (:class:`BatchController`:
+``reset_batch`` with one ``info`` per episode, then ``act_batch`` on an ``(N, obs_dim)`` array of
+observations, one row per episode, keeping any per-episode state, such as an integrator, per
+row). The harness then steps all the episodes of a scenario together in one vector environment;
+a controller without the batch methods is run one episode at a time. :class:`SingleRowMixin`
+gives a batch controller its single-episode ``reset`` and ``act``, so that there is one copy of
+the control law.
+
 Other packages (``baselines``, ``agents``) register factories with :func:`register_controller`
 when they are imported; ``subenv`` itself imports neither.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any, Literal, Protocol, runtime_checkable
 
 import numpy as np
 
 from subenv.vehicles.vehicle import Vehicle
 
-__all__ = ["Controller", "ControllerFactory", "controller_names", "make_controller", "register_controller"]
+__all__ = ["BatchController", "Controller", "ControllerFactory", "SingleRowMixin", "check_batch", "controller_names",
+           "make_controller", "register_controller"]
 
 ControlMode = Literal["dual", "independent"]
 
@@ -49,6 +58,51 @@ class Controller(Protocol):
     def act(self, observation: np.ndarray) -> np.ndarray:
         """The action for ``observation`` (float32, in [-1, 1], shaped like the action space)."""
         ...
+
+
+@runtime_checkable
+class BatchController(Controller, Protocol):
+    """A :class:`Controller` that also acts on N episodes at once, one row each.
+
+    Row ``i`` of every ``act_batch`` call belongs to the episode of ``infos[i]`` given to the last
+    ``reset_batch``, and its action must be what ``reset(infos[i], vehicle)`` then ``act`` on that
+    row's observations would give (the harness's results do not depend on the batch size:
+    ``tests/evaluation/test_batched_harness.py``). The row of an episode that has ended keeps
+    coming, with the observations of an episode nobody records, until the batch's last episode
+    ends: its actions are ignored, but must be finite.
+    """
+
+    def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
+        """Start ``len(infos)`` episodes: ``infos[i]`` is episode i's reset ``info`` (as ``reset`` gets it)."""
+        ...
+
+    def act_batch(self, observations: np.ndarray) -> np.ndarray:
+        """Actions for ``observations`` of shape (N, obs_dim), one row per episode: shape (N, n_actions),
+        float32 in [-1, 1]."""
+        ...
+
+
+class SingleRowMixin:
+    """``reset`` and ``act`` of a :class:`BatchController` as batches of one row."""
+
+    def reset(self, info: Mapping[str, Any], vehicle: Vehicle) -> None:
+        self.reset_batch([info], vehicle)  # type: ignore[attr-defined]
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        action: np.ndarray = self.act_batch(np.asarray(observation)[None])[0]  # type: ignore[attr-defined]
+        return action
+
+
+def check_batch(observations: np.ndarray, rows: int) -> np.ndarray:
+    """``observations`` as an array, checked to have shape (rows, obs_dim): one row per episode started
+    by the last ``reset_batch`` (ValueError otherwise)."""
+    obs = np.asarray(observations)
+    if obs.ndim != 2 or obs.shape[0] != rows:
+        raise ValueError(
+            f"observations has shape {obs.shape}: must have shape ({rows}, obs_dim), one row per episode "
+            "of the last reset_batch"
+        )
+    return obs
 
 
 ControllerFactory = Callable[[], Controller]

@@ -1,45 +1,61 @@
-"""Rolling out controllers: one episode recorded as a :class:`Trajectory`, and whole suites.
+"""Rolling out controllers: episodes recorded as :class:`Trajectory` objects, and whole suites.
 
-The harness makes each environment with the controller's own action space
-(``gym.make(f"subenv/{scenario}-v0", control=controller.control, alpha=controller.alpha)``),
-calls ``controller.reset(info, env.unwrapped.base_vehicle)`` after every ``env.reset`` and
-records the true state the environment reports in ``info`` (not the possibly noisy observation)
-at the reset and after every step.
+The harness steps the native vector environment, ``gym.make_vec(f"subenv/{scenario}-v0",
+num_envs=N, control=controller.control, alpha=controller.alpha)``: the episodes of a scenario run
+together, up to :data:`MAX_BATCH` at a time, sub-environment ``i`` reset with its own episode's
+seed (``reset(seed=[seed_0, seed_1, ...])``), and a :class:`~subenv.evaluation.BatchController`
+acts on all of them in one call (``reset_batch`` with every episode's reset ``info`` and the
+design vehicle, then ``act_batch`` on the (N, obs_dim) observations). An episode that has ended is
+left behind (its sub-environment resets and steps on, unrecorded) until the batch's last one ends.
+A controller without the batch methods runs one episode at a time in one environment
+(``gym.make``), with ``reset(info, vehicle)`` and ``act(obs)``, as the harness did before batching.
 
-Episodes are run one environment at a time. At about 10-30 us per step (environment plus a
-baseline controller's ``act``), the default comparison takes seconds per controller; batching
-through ``gym.make_vec`` would need one controller instance per sub-environment and is left for
-when controllers are slow enough to matter. The seeds follow ``gym.make_vec``'s convention
-(episode ``i`` is ``reset(seed=base_seed + i)``), so a batched run would draw the same episodes.
+Either way the harness records the true state the environment reports in ``info`` (not the
+possibly noisy observation) at the reset and after every step. Sub-environment ``i`` reset with
+seed ``s`` is, step for step and bit for bit, ``gym.make(id)`` reset with seed ``s``
+(:class:`~subenv.envs.DivePlaneVectorEnv`), so an episode's result does not depend on the episodes
+run beside it: ``tests/evaluation/test_batched_harness.py`` checks every baseline and agent batched
+against one episode at a time.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Final
 
 import gymnasium as gym
 import numpy as np
 
-from subenv.evaluation.controller import Controller, make_controller
+from subenv.envs import DivePlaneVectorEnv
+from subenv.evaluation.controller import BatchController, Controller, make_controller
 from subenv.evaluation.metrics import EpisodeMetrics, episode_metrics
+from subenv.evaluation.progress import Progress, compile_notice
 from subenv.evaluation.suites import DEFAULT_SEED, Suite, check_scenarios, get_suite, suite_names
 from subenv.scenarios.registry import scenario_names
+from subenv.scenarios.scenario import Scenario
 from subenv.vehicles.loader import load_vehicle
 from subenv.vehicles.vehicle import Vehicle
 
 __all__ = [
+    "MAX_BATCH",
     "EpisodeResult",
     "Trajectory",
     "TrajectoryRecorder",
     "evaluate",
     "make_env",
+    "make_vector_env",
     "resolve_controllers",
     "resolve_suite",
     "run_episode",
+    "run_episodes",
 ]
+
+MAX_BATCH: Final = 512
+"""Episodes stepped together at most: the vector environment's one-thread size
+(:data:`subenv.envs.vector.ENVS_PER_THREAD`); the recorded samples of a batch of 600 s episodes take
+about 50 MB."""
 
 _RECORDED = (
     "time_s", "depth_error_m", "pitch_rad", "heave_mps", "pitch_rate_radps", "speed_mps",
@@ -88,33 +104,54 @@ class Trajectory:
 
 
 class TrajectoryRecorder:
-    """Collects ``info`` dicts (reset, then every step) into a :class:`Trajectory`."""
+    """Collects the ``info`` of N episodes stepped together (Gymnasium's vector ``info``, an array per
+    key) or of one (a dict of floats), at the reset and after every step, into :class:`Trajectory` objects.
+    """
 
-    def __init__(self, reset_info: dict[str, Any]) -> None:
-        self._columns: list[list[float]] = [[float(reset_info[k])] for k in _RECORDED]
-        self._actions: list[np.ndarray] = []
-        self._depth_command_m = float(reset_info["depth_command_m"])
-        self._critical_speed_mps = float(reset_info["critical_speed_mps"])
+    def __init__(self, reset_info: Mapping[str, Any]) -> None:
+        self._samples = [self._sample(reset_info)]  # each (len(_RECORDED), N)
+        self._actions: list[np.ndarray] = []  # each (N, n_actions)
+        self._depth_command_m = np.atleast_1d(np.asarray(reset_info["depth_command_m"], dtype=float))
+        self._critical_speed_mps = np.atleast_1d(np.asarray(reset_info["critical_speed_mps"], dtype=float))
+        self._stacked: tuple[np.ndarray, np.ndarray] | None = None
 
-    def record(self, action: np.ndarray, info: dict[str, Any]) -> None:
-        self._actions.append(np.asarray(action, dtype=np.float32).reshape(-1))
-        for column, key in zip(self._columns, _RECORDED):
-            column.append(float(info[key]))
+    @staticmethod
+    def _sample(info: Mapping[str, Any]) -> np.ndarray:
+        return np.array([info[key] for key in _RECORDED], dtype=float).reshape(len(_RECORDED), -1)
+
+    def record(self, actions: np.ndarray, info: Mapping[str, Any]) -> None:
+        """The actions of a step (shape (N, n_actions), or (n_actions,) for one episode) and its ``info``."""
+        episodes = self._samples[0].shape[1]
+        self._actions.append(np.array(actions, dtype=np.float32).reshape(episodes, -1))
+        self._samples.append(self._sample(info))
+        self._stacked = None
+
+    def trajectory(
+        self, episode: int, steps: int, termination_reason: str, plane_limit_rad: float, episode_duration_s: float
+    ) -> Trajectory:
+        """Episode ``episode``'s (its row) first ``steps`` steps."""
+        if self._stacked is None:
+            episodes = self._samples[0].shape[1]
+            actions = np.stack(self._actions) if self._actions else np.zeros((0, episodes, 1), dtype=np.float32)
+            self._stacked = np.stack(self._samples), actions
+        samples, actions = self._stacked
+        time_s, error, pitch, heave, rate, speed, stern, bow, depth = (
+            np.ascontiguousarray(column) for column in samples[: steps + 1, :, episode].T
+        )
+        return Trajectory(
+            time_s=time_s, depth_error_m=error, pitch_rad=pitch, heave_mps=heave, pitch_rate_radps=rate,
+            speed_mps=speed, stern_plane_rad=stern, bow_plane_rad=bow, depth_m=depth,
+            actions=np.ascontiguousarray(actions[:steps, episode]), termination_reason=termination_reason,
+            depth_command_m=float(self._depth_command_m[episode]),
+            critical_speed_mps=float(self._critical_speed_mps[episode]),
+            plane_limit_rad=plane_limit_rad, episode_duration_s=episode_duration_s,
+        )
 
     def finish(
         self, termination_reason: str, plane_limit_rad: float, episode_duration_s: float
     ) -> Trajectory:
-        time_s, error, pitch, heave, rate, speed, stern, bow, depth = (
-            np.asarray(c, dtype=float) for c in self._columns
-        )
-        actions = np.stack(self._actions) if self._actions else np.zeros((0, 1), dtype=np.float32)
-        return Trajectory(
-            time_s=time_s, depth_error_m=error, pitch_rad=pitch, heave_mps=heave, pitch_rate_radps=rate,
-            speed_mps=speed, stern_plane_rad=stern, bow_plane_rad=bow, depth_m=depth,
-            actions=actions, termination_reason=termination_reason,
-            depth_command_m=self._depth_command_m, critical_speed_mps=self._critical_speed_mps,
-            plane_limit_rad=plane_limit_rad, episode_duration_s=episode_duration_s,
-        )
+        """The trajectory of one episode, recorded to its end."""
+        return self.trajectory(0, len(self._actions), termination_reason, plane_limit_rad, episode_duration_s)
 
 
 @dataclass(frozen=True)
@@ -174,29 +211,59 @@ def _scenario_of(name: str) -> str:
     return scenario
 
 
+def _env_args(
+    controller: Controller, scenario: str | Scenario, vehicle: str | Vehicle, max_duration_s: float | None
+) -> tuple[str, dict[str, Any]]:
+    """The id and keyword arguments of ``scenario``'s environments for ``controller``."""
+    if isinstance(scenario, Scenario):
+        env_id, kwargs = "subenv/DivePlane-v0", {"scenario": scenario}
+    else:
+        env_id, kwargs = f"subenv/{_scenario_of(scenario)}-v0", {}
+    kwargs |= {"control": controller.control, "alpha": controller.alpha, "vehicle": vehicle}
+    if max_duration_s is not None:
+        dt = gym.spec(env_id).kwargs.get("dt", 0.5)
+        kwargs["max_episode_steps"] = max(1, math.ceil(max_duration_s / dt - 1e-9))
+    return env_id, kwargs
+
+
 def make_env(
     controller: Controller,
-    scenario: str,
+    scenario: str | Scenario,
     *,
     vehicle: str | Vehicle = "suboff",
     max_duration_s: float | None = None,
 ) -> gym.Env:  # type: ignore[type-arg]
-    """The environment of ``scenario`` (a name or ``subenv/<Name>-v0``) for ``controller``'s action space.
+    """The environment of ``scenario`` for ``controller``'s action space.
 
-    ``max_duration_s`` truncates episodes earlier than the scenario does (Gymnasium's
-    ``max_episode_steps``).
+    ``scenario`` is a registered name, ``subenv/<Name>-v0``, or an unregistered :class:`Scenario`
+    (run as ``subenv/DivePlane-v0`` with that scenario). ``max_duration_s`` truncates episodes
+    earlier than the scenario does (Gymnasium's ``max_episode_steps``).
     """
-    env_id = f"subenv/{_scenario_of(scenario)}-v0"
-    kwargs: dict[str, Any] = {"control": controller.control, "alpha": controller.alpha, "vehicle": vehicle}
-    if max_duration_s is not None:
-        dt = gym.spec(env_id).kwargs.get("dt", 0.5)
-        kwargs["max_episode_steps"] = max(1, math.ceil(max_duration_s / dt - 1e-9))
+    env_id, kwargs = _env_args(controller, scenario, vehicle, max_duration_s)
     return gym.make(env_id, **kwargs)
+
+
+def make_vector_env(
+    controller: Controller,
+    scenario: str | Scenario,
+    num_envs: int,
+    *,
+    vehicle: str | Vehicle = "suboff",
+    max_duration_s: float | None = None,
+) -> DivePlaneVectorEnv:
+    """``num_envs`` environments of ``scenario`` stepped together (``gym.make_vec``), as :func:`make_env`'s.
+
+    Ended sub-environments reset on the next step (``autoreset_mode="NextStep"``).
+    """
+    env_id, kwargs = _env_args(controller, scenario, vehicle, max_duration_s)
+    env = gym.make_vec(env_id, num_envs=num_envs, **kwargs)
+    assert isinstance(env, DivePlaneVectorEnv)  # every subenv id's vector entry point
+    return env
 
 
 def run_episode(
     controller: Controller,
-    env_id_or_scenario: str | gym.Env,  # type: ignore[type-arg]
+    scenario: str | Scenario,
     seed: int,
     *,
     episode: int = 0,
@@ -207,69 +274,174 @@ def run_episode(
 ) -> EpisodeResult:
     """Run ``controller`` for one episode from ``reset(seed=seed)`` and compute its metrics.
 
+    ``episode`` is the index recorded in the result; ``keep_trajectory`` attaches the
+    :class:`Trajectory` (memory: ~100 kB per 600 s episode); the other arguments are those of
+    :func:`run_episodes`.
+    """
+    (result,) = run_episodes(controller, scenario, [seed], first_episode=episode, vehicle=vehicle,
+                             max_duration_s=max_duration_s, keep_trajectories=int(keep_trajectory), options=options)
+    return result
+
+
+def run_episodes(
+    controller: Controller,
+    scenario: str | Scenario,
+    seeds: Sequence[int],
+    *,
+    first_episode: int = 0,
+    vehicle: str | Vehicle = "suboff",
+    max_duration_s: float | None = None,
+    keep_trajectories: int = 0,
+    options: dict[str, Any] | None = None,
+    on_episode: Callable[[EpisodeResult], None] | None = None,
+    batched: bool = True,
+) -> list[EpisodeResult]:
+    """Run ``controller`` for one episode from ``reset(seed=s)`` per seed and compute the metrics.
+
     Parameters
     ----------
     controller : Controller
-        Reset with the reset ``info`` and the environment's design vehicle.
-    env_id_or_scenario : str or gymnasium.Env
-        A scenario name, a ``subenv/<Name>-v0`` id, or an environment made by :func:`make_env`
-        (reused: pass one to run many episodes without rebuilding it). A given environment
-        must have the controller's ``control`` and ``alpha``.
-    seed : int
-        The reset seed.
-    episode : int
-        Index recorded in the result.
+        A :class:`~subenv.evaluation.BatchController` runs up to :data:`MAX_BATCH` episodes
+        together in one vector environment; any other controller one episode at a time, in one
+        environment.
+    scenario : str or Scenario
+        A scenario name, a ``subenv/<Name>-v0`` id, or an unregistered :class:`Scenario`.
+    seeds : sequence of int
+        The reset seeds, one per episode; results in this order.
+    first_episode : int
+        The index recorded in the first result (then +1 per seed).
     vehicle, max_duration_s
-        For a new environment, see :func:`make_env`.
-    keep_trajectory : bool
-        Attach the :class:`Trajectory` to the result (memory: ~100 kB per 600 s episode).
+        See :func:`make_env`.
+    keep_trajectories : int
+        Attach the :class:`Trajectory` to the first this-many results.
     options : dict, optional
-        ``env.reset`` options (``speed``, ``depth_command``, ``initial_state``) to place the
-        episode exactly.
+        ``env.reset`` options (``speed``, ``depth_command``, ``initial_state``), applied to every
+        episode, to place it exactly.
+    on_episode : callable, optional
+        Called with each result as it is produced.
+    batched : bool
+        False runs a batch controller one episode at a time as well, with its ``reset`` and ``act``
+        (the same results: ``tests/evaluation/test_batched_harness.py``; ``benchmarks/harness.py``
+        times both).
     """
-    if isinstance(env_id_or_scenario, str):
-        env = make_env(controller, env_id_or_scenario, vehicle=vehicle, max_duration_s=max_duration_s)
+    seeds = list(seeds)
+    results: list[EpisodeResult] = []
+
+    def produced(result: EpisodeResult) -> None:
+        results.append(result)
+        if on_episode is not None:
+            on_episode(result)
+
+    if batched and isinstance(controller, BatchController):
+        envs: dict[int, DivePlaneVectorEnv] = {}  # by number of sub-environments
         try:
-            return _run(controller, env, seed, episode, keep_trajectory, options)
+            for start in range(0, len(seeds), MAX_BATCH):
+                wave = seeds[start:start + MAX_BATCH]
+                with compile_notice():  # (the first make, reset and step of a process may compile the physics)
+                    if len(wave) not in envs:
+                        envs[len(wave)] = make_vector_env(controller, scenario, len(wave), vehicle=vehicle,
+                                                          max_duration_s=max_duration_s)
+                for result in _run_batch(controller, envs[len(wave)], wave, first_episode + start,
+                                         keep_trajectories - start, options):
+                    produced(result)
         finally:
-            env.close()
-    return _run(controller, env_id_or_scenario, seed, episode, keep_trajectory, options)
+            for vector_env in envs.values():
+                vector_env.close()
+        return results
+    with compile_notice():
+        env = make_env(controller, scenario, vehicle=vehicle, max_duration_s=max_duration_s)
+    try:
+        for i, seed in enumerate(seeds):
+            produced(_run_single(controller, env, seed, first_episode + i, i < keep_trajectories, options))
+    finally:
+        env.close()
+    return results
 
 
-def _run(
+def _run_single(
     controller: Controller,
     env: gym.Env,  # type: ignore[type-arg]
     seed: int,
     episode: int,
     keep: bool,
-    options: dict[str, Any] | None = None,
+    options: dict[str, Any] | None,
 ) -> EpisodeResult:
+    """One episode in ``env``, made by :func:`make_env` for ``controller``."""
     base: Any = env.unwrapped  # a DivePlaneEnv: its episode, vehicle and limits
-    if (base.control, base.alpha) != (controller.control, float(controller.alpha)):
-        raise ValueError(
-            f"the environment has control={base.control!r}, alpha={base.alpha!r}; controller "
-            f"{controller.name!r} drives control={controller.control!r}, alpha={controller.alpha!r}"
-        )
-    obs, info = env.reset(seed=seed, options=options)
+    notice = compile_notice()
+    with notice:
+        obs, info = env.reset(seed=seed, options=options)
     controller.reset(info, base.base_vehicle)
     recorder = TrajectoryRecorder(info)
-    reason = ""
     while True:
         action = controller.act(obs)
-        obs, _, terminated, truncated, info = env.step(action)
+        with notice:
+            obs, _, terminated, truncated, info = env.step(action)
+        notice.settled()  # (the kernels of a reset and a step are loaded now)
         recorder.record(action, info)
         if terminated or truncated:
-            reason = info["termination_reason"] if terminated else ""
             break
-    scheduled = float(base.episode.duration_s)
     limit = env.spec.max_episode_steps if env.spec is not None else None
-    if limit is not None:
-        scheduled = min(scheduled, limit * float(base.dt))
-    trajectory = recorder.finish(reason, float(base.plane_limit_rad), scheduled)
-    metrics = trajectory.metrics()
+    duration_s = _scheduled(float(base.episode.duration_s), limit, float(base.dt))
+    trajectory = recorder.finish(info["termination_reason"] if terminated else "", float(base.plane_limit_rad),
+                                 duration_s)
+    return _result(controller, base.scenario.name, seed, episode, trajectory, keep)
+
+
+def _run_batch(
+    controller: BatchController,
+    env: DivePlaneVectorEnv,
+    seeds: list[int],
+    first_episode: int,
+    keep: int,
+    options: dict[str, Any] | None,
+) -> list[EpisodeResult]:
+    """One episode per sub-environment of ``env`` (one per seed), stepped until the last has ended;
+    the first ``keep`` keep their trajectories."""
+    config = env.config
+    notice = compile_notice()
+    with notice:
+        obs, info = env.reset(seed=seeds, options=options)
+    drawn = env.episodes  # (before an ended sub-environment resets to another episode)
+    columns = {key: value.tolist() for key, value in info.items() if not key.startswith("_")}
+    controller.reset_batch([{key: column[i] for key, column in columns.items()} for i in range(len(seeds))],
+                           config.base_vehicle)
+    recorder = TrajectoryRecorder(info)
+    running = np.ones(len(seeds), dtype=bool)
+    steps = np.zeros(len(seeds), dtype=int)
+    reasons = [""] * len(seeds)
+    step = 0
+    while running.any():
+        actions = controller.act_batch(obs)
+        with notice:
+            obs, _, terminated, truncated, info = env.step(actions)
+        notice.settled()
+        step += 1
+        recorder.record(actions, info)
+        ended = running & (terminated | truncated)
+        for i in np.flatnonzero(ended).tolist():
+            steps[i] = step
+            reasons[i] = info["termination_reason"][i] if terminated[i] else ""
+        running &= ~ended
+    results = []
+    for i, (seed, draw) in enumerate(zip(seeds, drawn)):
+        assert draw is not None
+        duration_s = _scheduled(float(draw.duration_s), env.max_episode_steps, float(config.dt))
+        trajectory = recorder.trajectory(i, int(steps[i]), reasons[i], float(config.plane_limit_rad), duration_s)
+        results.append(_result(controller, env.scenario.name, seed, first_episode + i, trajectory, i < keep))
+    return results
+
+
+def _scheduled(duration_s: float, max_episode_steps: int | None, dt: float) -> float:
+    """The scheduled length of an episode [s]: its scenario's, or the step limit's if shorter."""
+    return duration_s if max_episode_steps is None else min(duration_s, max_episode_steps * dt)
+
+
+def _result(controller: Controller, scenario: str, seed: int, episode: int, trajectory: Trajectory,
+            keep: bool) -> EpisodeResult:
     return EpisodeResult(
         controller=controller.name,
-        scenario=base.scenario.name,
+        scenario=scenario,
         episode=episode,
         seed=seed,
         control=controller.control,
@@ -279,9 +451,9 @@ def _run(
         critical_speed_mps=trajectory.critical_speed_mps,
         depth_command_m=trajectory.depth_command_m,
         initial_depth_error_m=float(trajectory.depth_error_m[0]),
-        episode_duration_s=scheduled,
+        episode_duration_s=trajectory.episode_duration_s,
         steps=trajectory.steps,
-        metrics=metrics,
+        metrics=trajectory.metrics(),
         trajectory=trajectory if keep else None,
     )
 
@@ -353,6 +525,7 @@ def evaluate(
     vehicle: str | Vehicle = "suboff",
     keep_trajectories: int = 1,
     on_episode: Callable[[EpisodeResult], None] | None = None,
+    batched: bool = True,
 ) -> list[EpisodeResult]:
     """Run every controller on the same episodes of every scenario of ``suite``.
 
@@ -367,7 +540,8 @@ def evaluate(
     seed : int
         Base seed: episode ``i`` of each scenario is ``reset(seed=seed + i)`` for every controller.
     progress : bool
-        Show a progress bar (tqdm, on stderr) over all episodes.
+        Show the progress over all episodes on stderr: a bar on a terminal, otherwise a log line
+        every 5% (:class:`~subenv.evaluation.progress.Progress`).
     vehicle : str or Vehicle
         The vehicle of every environment; loaded once and shared, so a controller that designs
         itself per design model does so once.
@@ -376,6 +550,8 @@ def evaluate(
         (for plots); 0 keeps none.
     on_episode : callable, optional
         Called with each result as it is produced.
+    batched : bool
+        Run the episodes of a scenario together (controllers that can; see :func:`run_episodes`).
 
     Returns
     -------
@@ -391,24 +567,22 @@ def evaluate(
         raise ValueError(f"seed={seed!r} is invalid: must be an integer >= 0")
     design_vehicle = vehicle if isinstance(vehicle, Vehicle) else load_vehicle(vehicle)
 
-    from tqdm.auto import tqdm
-
-    total = len(ctrls) * len(the_suite.scenarios) * n
     results: list[EpisodeResult] = []
-    with tqdm(total=total, desc="evaluate", unit="episode", disable=not progress, dynamic_ncols=True) as bar:
+
+    def done(result: EpisodeResult) -> None:
+        results.append(result)
+        bar.update(1)
+        if on_episode is not None:
+            on_episode(result)
+
+    bar = Progress(len(ctrls) * len(the_suite.scenarios) * n, enabled=progress)
+    try:
         for controller in ctrls:
             for scenario in the_suite.scenarios:
-                bar.set_description(f"{controller.name} on {scenario}")
-                env = make_env(controller, scenario, vehicle=design_vehicle,
-                               max_duration_s=the_suite.max_duration_s)
-                try:
-                    for i in range(n):
-                        result = _run(controller, env, seed + i, i, keep=i < keep_trajectories)
-                        results.append(result)
-                        if on_episode is not None:
-                            on_episode(result)
-                        bar.update(1)
-                finally:
-                    env.close()
+                bar.describe(f"{controller.name} on {scenario}")
+                run_episodes(controller, scenario, range(seed, seed + n), vehicle=design_vehicle,
+                             max_duration_s=the_suite.max_duration_s, keep_trajectories=keep_trajectories,
+                             on_episode=done, batched=batched)
+    finally:
+        bar.close()
     return results
-

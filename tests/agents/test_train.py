@@ -236,7 +236,8 @@ def test_depth_integral_is_the_same_in_training_and_in_the_controller(tmp_path) 
 
     fed: list[np.ndarray] = []
     predict = agent.predict
-    agent.predict = lambda obs: (fed.append(np.array(obs)), predict(obs))[1]  # type: ignore[method-assign]
+    # (the controller predicts on batches: one row per episode, here one)
+    agent.predict = lambda obs: (fed.extend(np.array(obs, ndmin=2)), predict(obs))[1]  # type: ignore[method-assign]
     controller = AgentController(agent)
     stack = make_vec_env(replace(config, normalize=None), 1, seed=11)  # training's stack, raw observations
     expected = [stack.reset()[0]]
