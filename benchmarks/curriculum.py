@@ -3,7 +3,7 @@
     .venv/bin/python benchmarks/curriculum.py                       # PPO, 1.5M steps, seeds 0 1 2
     .venv/bin/python benchmarks/curriculum.py --algo ppo -n 3000000 --seeds 0 1 2 3
 
-Trains every (seed, curriculum on/off) pair with ``python -m agents.train`` (two runs at a time,
+Trains every (seed, curriculum on/off) pair with ``python -m subenv_agents.train`` (two runs at a time,
 one torch thread each, on a 2-core machine), then evaluates every final model with the harness
 of ``subenv evaluate`` on the ``reversal`` suite (LowSpeed, NearCritical, SpeedTransient) and the
 whole ``default`` suite, the same episodes for every model, and prints one table: success rate
@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-# agents/ is a folder of the repository, not part of the installed wheel: run from any directory.
+# subenv_agents is this checkout's (not an installed copy's): run from any directory.
 REPO = Path(__file__).resolve().parents[1]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
@@ -31,7 +31,7 @@ if str(REPO) not in sys.path:
 
 def _train(args: argparse.Namespace, root: Path, seed: int, curriculum: bool) -> Path:
     run = root / f"{'with' if curriculum else 'without'}_seed{seed}"
-    cmd = [sys.executable, "-m", "agents.train", "--algo", args.algo, "--env", args.env, "-n", str(args.n_timesteps),
+    cmd = [sys.executable, "-m", "subenv_agents.train", "--algo", args.algo, "--env", args.env, "-n", str(args.n_timesteps),
            "--seed", str(seed), "--run-dir", str(run), "--curriculum" if curriculum else "--no-curriculum",
            "--save-freq", "0", "--eval-freq", "0", "-q", "--no-progress"]
     with (root / f"{run.name}.log").open("w") as log:
@@ -50,9 +50,9 @@ def main() -> None:
     parser.add_argument("--out", type=Path)
     args = parser.parse_args()
 
-    from agents.controller import AgentController
     from subenv.evaluation import evaluate
     from subenv.evaluation.results import summarize
+    from subenv_agents.controller import AgentController
 
     root = (args.out or Path("results/benchmarks/curriculum") / time.strftime("%Y%m%d-%H%M%S")).resolve()
     root.mkdir(parents=True, exist_ok=False)

@@ -20,20 +20,16 @@ episodes both runs share have equal results. Rates are episodes of the default s
 from __future__ import annotations
 
 import argparse
-import importlib
 import math
 import sys
 import time
 from pathlib import Path
 
-# baselines/ and agents/ are folders of the repository, not part of the installed wheel, and subenv is
-# this checkout's: run from any directory.
+# subenv and its controller packages are this checkout's, run from any directory; the controllers
+# are those its installation declares (entry points: ./dev reinstalls when pyproject.toml changes).
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 from subenv.evaluation import EpisodeResult, controller_names, evaluate, get_suite
-
-importlib.import_module("baselines")  # registers the classical controllers
-importlib.import_module("agents")  # registers the shipped agents (where Stable-Baselines3 is installed)
 
 
 def timed(controller: str, scenarios: tuple[str, ...], episodes: int, batched: bool) -> tuple[float, list[EpisodeResult]]:

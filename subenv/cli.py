@@ -1,8 +1,11 @@
-"""The ``subenv`` command line.
+"""The ``subenv`` command line: the submarine depth-control benchmark's commands.
 
-``subenv demo`` (the README's main job for now) flies the thesis's pole-placement design
-(Riedel 1993 Ch. II.B, computed here from the linear model) once above and once below the
-critical speed, prints a summary and writes a plot.
+``subenv evaluate`` (the main job) compares the installed controllers on a suite of scenarios;
+``subenv demo`` flies the thesis's pole-placement design (Riedel 1993 Ch. II.B, computed here from
+the linear model) once above and once below the critical speed, prints a summary and writes a plot.
+The command line is the composition root: it finds the controllers through their entry points
+(:func:`subenv.evaluation.discover_controllers`) and ``--plugins``, and forwards ``subenv train``
+to ``subenv_agents.train`` by name, so that the library imports neither package.
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ import numpy as np
 
 import subenv  # noqa: F401  (registers the environments)
 from subenv.analysis import THESIS_POLES, critical_speed, thesis_gain
+from subenv.extras import MissingExtra, require
 from subenv.thesis import THESIS_DESIGN_SPEED_MPS
 from subenv.units import mps_to_fps
 
@@ -93,6 +97,8 @@ def demo(args: argparse.Namespace) -> int:
     env.close()
     if not (args.low_speed > 0 and math.isfinite(args.low_speed)):
         raise SystemExit(f"--low-speed={args.low_speed!r} is invalid: must be a number > 0 (m/s)")
+    if not args.no_plot:
+        require("plot", "the plot (or pass --no-plot)", "matplotlib")
     runs = [
         fly(args.env, THESIS_DESIGN_SPEED_MPS, args.seed, f"{THESIS_DESIGN_SPEED_MPS:.3f} m/s (design speed)"),
         fly(args.low_env, args.low_speed, args.seed, f"{args.low_speed:.3f} m/s"),
@@ -120,6 +126,7 @@ def analyze(args: argparse.Namespace) -> int:
         vehicle = load_vehicle(args.vehicle)
     except (ValueError, OSError) as exc:
         raise SystemExit(f"subenv analyze: --vehicle {args.vehicle!r}: {exc}") from None
+    require("plot", "the report's figures", "matplotlib")
     try:
         out = write_report(args.out, vehicle, overwrite=args.force)
     except (FileExistsError, OutputDirError) as exc:
@@ -129,33 +136,55 @@ def analyze(args: argparse.Namespace) -> int:
     return 0
 
 
-DEFAULT_PLUGINS = ("baselines", "agents")
-"""Packages imported by ``subenv evaluate`` to register their controllers (the repository's own)."""
-
-
-def _load_plugins(names: Sequence[str], explicit: bool) -> None:
-    """Import controller packages by name; they register themselves with subenv.evaluation."""
+def _load_plugins(names: Sequence[str]) -> None:
+    """Import modules on the path by name; they register their controllers with subenv.evaluation."""
     for name in names:
         try:
             importlib.import_module(name)
         except ModuleNotFoundError as exc:
-            if explicit or exc.name != name:
-                raise SystemExit(f"subenv evaluate: cannot import controller package {name!r}: {exc}") from None
-            print(f"(controller package {name!r} not importable here; run from the repository root with "
-                  "'python -m subenv evaluate')", file=sys.stderr)
+            raise SystemExit(f"subenv evaluate: cannot import controller package {name!r}: {exc}") from None
+
+
+def _installed_controllers(requested: Sequence[str] | None) -> None:
+    """Register the installed controllers; a requested one that cannot load is an error, the others a note.
+
+    A declared controller whose optional dependencies are missing (the shipped agents without the
+    ``rl`` extra) is skipped with one line on stderr per reason when every controller runs.
+    """
+    from subenv.evaluation import discover_controllers
+
+    unavailable = discover_controllers()
+    for name in requested or ():
+        if name in unavailable:
+            raise SystemExit(f"subenv evaluate: controller {name!r} cannot load: {unavailable[name]}")
+    if requested is None:
+        by_reason: dict[str, list[str]] = {}
+        for name, reason in unavailable.items():
+            by_reason.setdefault(reason, []).append(name)
+        for reason, names in by_reason.items():
+            print(f"(skipped {', '.join(names)}: {reason})", file=sys.stderr)
 
 
 def evaluate(args: argparse.Namespace) -> int:
     from subenv.atomic import OutputDirError
-    from subenv.evaluation import DEFAULT_SEED, DEFAULT_SUITE, controller_names, run_comparison, suite_names
+    from subenv.evaluation import (
+        DEFAULT_SEED,
+        DEFAULT_SUITE,
+        ENTRY_POINT_GROUP,
+        controller_names,
+        run_comparison,
+        suite_names,
+    )
 
-    _load_plugins(args.plugins or DEFAULT_PLUGINS, explicit=args.plugins is not None)
+    _load_plugins(args.plugins or ())
+    _installed_controllers(None if args.list else args.controllers)
     if args.list:
         print("controllers:", ", ".join(controller_names()) or "(none registered)")
         print("suites:", ", ".join(suite_names()))
         return 0
     if not controller_names():
-        raise SystemExit("subenv evaluate: no controllers are registered (see --plugins)")
+        raise SystemExit(f"subenv evaluate: no controllers are registered: install a package that declares some "
+                         f"in the {ENTRY_POINT_GROUP!r} entry-point group, or see --plugins")
     suite = DEFAULT_SUITE if args.suite is None else args.suite[0] if len(args.suite) == 1 else args.suite
     out = args.out or f"results/evaluation/{time.strftime('%Y%m%d-%H%M%S')}"
     try:
@@ -174,15 +203,19 @@ def evaluate(args: argparse.Namespace) -> int:
 
 
 def train(argv: Sequence[str]) -> int:
-    """``subenv train ...`` is ``python -m agents.train ...``: the repository's agents package trains."""
-    try:
-        module = importlib.import_module("agents.train")
-    except ModuleNotFoundError as exc:
-        raise SystemExit(
-            f"subenv train: cannot import the repository's agents package ({exc}); run it from a clone of the "
-            "repository with the 'rl' extra installed: python -m subenv train ..."
-        ) from None
+    """``subenv train ...`` is ``python -m subenv_agents.train ...`` (imported by name: the composition root)."""
+    require("rl", "subenv train", "stable_baselines3", "yaml")
+    module = importlib.import_module("subenv_agents.train")
     return int(module.main(list(argv)))
+
+
+def list_environments(args: argparse.Namespace) -> int:
+    from subenv.scenarios import get_scenario, scenario_names
+
+    for name in scenario_names():
+        print(f"subenv/{name}-v0: {get_scenario(name).description}")
+    print("subenv/DivePlane-v0: the Randomized scenario")
+    return 0
 
 
 def _path(text: str) -> str:
@@ -201,25 +234,12 @@ def _names(text: str) -> list[str]:
     return names
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="subenv", description=__doc__.split("\n\n")[0])
-    sub = parser.add_subparsers(dest="command")
-    p_demo = sub.add_parser("demo", help="fly the thesis controller above and below the critical speed")
-    p_demo.add_argument("--env", default="subenv/Nominal-v0", help="environment id (default: %(default)s)")
-    p_demo.add_argument("--low-env", default="subenv/LowSpeed-v0",
-                        help="environment id for the low-speed run (default: %(default)s)")
-    p_demo.add_argument("--low-speed", type=float, default=0.45,
-                        help="the speed below critical to fly, m/s (default: %(default)s)")
-    p_demo.add_argument("--seed", type=int, default=0, help="reset seed (default: %(default)s)")
-    p_demo.add_argument("--out", type=_path, default="results/demo.png", help="plot file (default: %(default)s)")
-    p_demo.add_argument("--no-plot", action="store_true", help="print the summary only")
-    sub.add_parser("list", help="list the environment ids and scenarios")
-    p_analyze = sub.add_parser("analyze", help="write the reproduction report of Riedel (1993)")
-    p_analyze.add_argument("--out", type=_path, default="results/analysis", help="report folder (default: %(default)s)")
-    p_analyze.add_argument("--vehicle", default="suboff", help="vehicle name or file (default: %(default)s)")
-    p_analyze.add_argument("--force", action="store_true",
-                           help="replace the folder if it holds an earlier report (it has the marker file)")
-    p_eval = sub.add_parser("evaluate", help="compare controllers on a suite of scenarios (the main job)")
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="subenv", description="Submarine depth control at low speed: a Gymnasium benchmark.",
+        epilog="'subenv <command> --help' gives a command's options.")
+    sub = parser.add_subparsers(dest="command", title="commands", metavar="<command>")
+    p_eval = sub.add_parser("evaluate", help="compare the controllers on a suite of scenarios (the main job)")
     p_eval.add_argument("--controllers", type=_names, help="comma-separated controller names (default: all registered)")
     p_eval.add_argument("--suite", type=_names, help="suite name or comma-separated scenario names (default: 'default')")
     p_eval.add_argument("--episodes", type=int, help="episodes per scenario and controller (default: the suite's)")
@@ -231,32 +251,44 @@ def main(argv: Sequence[str] | None = None) -> int:
     p_eval.add_argument("--no-plots", action="store_true", help="write tables only")
     p_eval.add_argument("--no-progress", action="store_true",
                         help="no progress on stderr (a bar on a terminal, otherwise a line every 5%%)")
-    p_eval.add_argument("--plugins", type=_names, help=f"comma-separated packages that register controllers "
-                                          f"(default: {','.join(DEFAULT_PLUGINS)})")
+    p_eval.add_argument("--plugins", type=_names,
+                        help="comma-separated modules on the path that register controllers when imported "
+                             "(installed packages declare theirs as entry points and need none)")
     p_eval.add_argument("--list", action="store_true", help="list the controllers and suites, and exit")
-    sub.add_parser("train", add_help=False,
-                   help="train a Stable-Baselines3 agent (python -m agents.train; 'subenv train --help')")
-    argv = list(sys.argv[1:] if argv is None else argv)
-    if argv[:1] == ["train"]:
-        return train(argv[1:])
-    args = parser.parse_args(argv)
-    if args.command == "evaluate":
-        return evaluate(args)
-    if args.command in (None, "demo"):
-        if args.command is None:
-            args = parser.parse_args(["demo", *(argv or [])])
-        return demo(args)
-    if args.command == "analyze":
-        return analyze(args)
-    if args.command == "list":
-        from subenv.scenarios import get_scenario, scenario_names
+    p_demo = sub.add_parser("demo", help="fly the thesis controller above and below the critical speed")
+    p_demo.add_argument("--env", default="subenv/Nominal-v0", help="environment id (default: %(default)s)")
+    p_demo.add_argument("--low-env", default="subenv/LowSpeed-v0",
+                        help="environment id for the low-speed run (default: %(default)s)")
+    p_demo.add_argument("--low-speed", type=float, default=0.45,
+                        help="the speed below critical to fly, m/s (default: %(default)s)")
+    p_demo.add_argument("--seed", type=int, default=0, help="reset seed (default: %(default)s)")
+    p_demo.add_argument("--out", type=_path, default="results/demo.png", help="plot file (default: %(default)s)")
+    p_demo.add_argument("--no-plot", action="store_true", help="print the summary only")
+    p_analyze = sub.add_parser("analyze", help="write the report that reproduces Riedel (1993)")
+    p_analyze.add_argument("--out", type=_path, default="results/analysis", help="report folder (default: %(default)s)")
+    p_analyze.add_argument("--vehicle", default="suboff", help="vehicle name or file (default: %(default)s)")
+    p_analyze.add_argument("--force", action="store_true",
+                           help="replace the folder if it holds an earlier report (it has the marker file)")
+    sub.add_parser("list", help="list the environment ids and their scenarios")
+    sub.add_parser("train", add_help=False, help="train a Stable-Baselines3 agent (needs the 'rl' extra)")
+    return parser
 
-        for name in scenario_names():
-            print(f"subenv/{name}-v0: {get_scenario(name).description}")
-        print("subenv/DivePlane-v0: the Randomized scenario")
-        return 0
-    parser.error(f"unknown command {args.command!r}")
-    return 2
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run a command; without one, print the help on stderr and return 2 (argparse's usage-error status)."""
+    parser = _parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    try:
+        if argv[:1] == ["train"]:
+            return train(argv[1:])
+        args = parser.parse_args(argv)
+        if args.command is None:
+            parser.print_help(sys.stderr)
+            return 2
+        commands = {"evaluate": evaluate, "demo": demo, "analyze": analyze, "list": list_environments}
+        return commands[args.command](args)
+    except MissingExtra as exc:
+        raise SystemExit(f"subenv {argv[0]}: {exc}") from None
 
 
 if __name__ == "__main__":

@@ -24,6 +24,28 @@ os.environ["NUMBA_NUM_THREADS"] = str(max(2, int(os.environ.get("NUMBA_NUM_THREA
 _MEASURED: list[tuple[str, str]] = []
 
 
+def pytest_configure(config: pytest.Config) -> None:
+    """Register the controllers as this checkout's ``pyproject.toml`` declares them.
+
+    The installed metadata, from which :func:`subenv.evaluation.controller_names` would read them,
+    may be another checkout's or older than the declarations (an editable install keeps the entry
+    points it was installed with; ./dev reinstalls when pyproject.toml changes). The installed path
+    itself is tested from a wheel in ``tests/test_packaging.py``.
+    """
+    from importlib.metadata import EntryPoint
+
+    from subenv.evaluation import ENTRY_POINT_GROUP, discover_controllers
+
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # Python 3.10
+        import tomli as tomllib  # type: ignore[no-redef]
+
+    pyproject = tomllib.loads((Path(__file__).resolve().parents[1] / "pyproject.toml").read_text())
+    declared = pyproject["project"]["entry-points"][ENTRY_POINT_GROUP]
+    discover_controllers(EntryPoint(name, value, ENTRY_POINT_GROUP) for name, value in declared.items())
+
+
 def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addoption("--run-slow", action="store_true", help="also run tests marked slow (minutes)")
 

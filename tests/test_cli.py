@@ -1,4 +1,4 @@
-"""The ``subenv`` command: the demonstration the README's main command runs."""
+"""The ``subenv`` command: its commands, their help, and their one-line errors."""
 
 from __future__ import annotations
 
@@ -7,7 +7,9 @@ import errno
 import os
 import shutil
 import stat
+import sys
 from importlib import resources
+from importlib.metadata import EntryPoint
 from pathlib import Path
 
 import pytest
@@ -15,8 +17,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import subenv.analysis.report
+import subenv.cli
 import subenv.evaluation.comparison
 from subenv.cli import main
+from subenv.evaluation import controller
 
 
 def test_demo_prints_the_summary_and_writes_the_plot(tmp_path: Path, capsys):
@@ -228,3 +232,60 @@ def test_evaluate_arguments_are_refused_in_one_line_or_reach_the_work(options, t
         assert exit_.code == 2 or (isinstance(exit_.code, str) and "\n" not in exit_.code.strip()), exit_.code
         return
     pytest.fail(f"{argv} neither ran nor was refused")
+
+
+COMMANDS = ("evaluate", "demo", "analyze", "list", "train")
+
+
+def test_help_lists_every_command_in_one_line(capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["--help"])
+    assert exit_.value.code == 0
+    lines = capsys.readouterr().out.splitlines()
+    section = lines[lines.index("commands:") + 2:]  # after the "<command>" line
+    section = section[:section.index("")]
+    assert [line.split()[0] for line in section] == list(COMMANDS)  # no help wraps onto a second line
+
+
+def test_no_command_prints_the_help_as_a_usage_error(capsys):
+    assert main([]) == 2  # argparse's status for a usage error
+    printed = capsys.readouterr()
+    assert printed.out == "" and "commands:" in printed.err
+    assert all(f"    {command} " in printed.err for command in COMMANDS)
+
+
+@pytest.mark.parametrize("command", [["demo"], ["analyze"], ["evaluate", "--suite", "tiny", "--controllers", "thesis"]],
+                         ids=["demo", "analyze", "evaluate"])
+def test_a_missing_matplotlib_is_one_line_naming_the_extra(tmp_path: Path, monkeypatch, no_work, command):
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # as if not installed: `import matplotlib` fails
+    monkeypatch.setattr(subenv.cli, "fly", lambda *args: pytest.fail("demo flew before checking for matplotlib"))
+    with pytest.raises(SystemExit) as exit_:
+        main([*command, "--out", str(tmp_path / "out")])
+    message = str(exit_.value.code)
+    assert message.startswith(f"subenv {command[0]}: ") and "\n" not in message
+    assert "the 'plot' extra is needed for " in message and 'pip install "subenv[plot]"' in message
+    assert "./dev installs every extra" in message
+    assert not (tmp_path / "out").exists()
+
+
+def test_controllers_that_cannot_load_are_skipped_with_a_note(tmp_path: Path, monkeypatch, capsys):
+    """The shipped agents without the rl extra: a one-line note when every controller runs, an error
+    when one is asked for by name."""
+    monkeypatch.setitem(sys.modules, "stable_baselines3", None)
+    monkeypatch.delitem(sys.modules, "subenv_agents.shipped", raising=False)
+    monkeypatch.setattr(controller, "_REGISTRY", {"thesis": controller._REGISTRY["thesis"]})
+    monkeypatch.setattr(controller, "_UNAVAILABLE", {})
+    monkeypatch.setattr(controller, "entry_points", lambda group: [])  # only the declarations below
+    group = controller.ENTRY_POINT_GROUP
+    declared = [EntryPoint(name, f"subenv_agents.shipped:{name}", group) for name in ("ppo", "sac")]
+    unavailable = controller.discover_controllers(declared)
+    assert sorted(unavailable) == ["ppo", "sac"] and controller.controller_names() == ["thesis"]
+    assert unavailable["ppo"].startswith("the 'rl' extra is needed for the shipped agents: pip install \"subenv[rl]\"")
+
+    monkeypatch.setattr(subenv.evaluation.comparison, "evaluate", lambda *a, **k: pytest.fail("reached the work"))
+    assert main(["evaluate", "--list"]) == 0
+    printed = capsys.readouterr()
+    assert "controllers: thesis\n" in printed.out
+    assert printed.err == f"(skipped ppo, sac: {unavailable['ppo']})\n"
+    with pytest.raises(SystemExit, match=r"^subenv evaluate: controller 'sac' cannot load: the 'rl' extra is needed"):
+        main(["evaluate", "--controllers", "thesis,sac", "--out", str(tmp_path / "out")])

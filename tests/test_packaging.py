@@ -1,29 +1,66 @@
-"""A wheel built from the repository installs into a clean venv and its environments make."""
+"""The wheel: what it holds, and what a user gets who installs it into a clean venv outside the clone.
+
+The environments, the classical controllers and the shipped agents (found through the
+``subenv.controllers`` entry points), the SPDX license, and one-line messages for the extras that
+are not installed (matplotlib for plots, Stable-Baselines3 for the agents).
+"""
 
 from __future__ import annotations
 
+import csv
 import subprocess
 import sys
 import venv
 import zipfile
 from pathlib import Path
 
+import pytest
+
+import subenv_baselines
+from subenv.evaluation import ENTRY_POINT_GROUP
+from subenv_agents import shipped_models
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib  # type: ignore[no-redef]
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def test_wheel_installs_into_a_clean_venv(tmp_path: Path):
+def test_every_controller_is_declared_as_an_entry_point():
+    """pyproject.toml declares each classical controller and each shipped model, by its name."""
+    declared = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["entry-points"][ENTRY_POINT_GROUP]
+    expected = {name: f"{cls.__module__}:{cls.__qualname__}" for name, cls in subenv_baselines.CONTROLLERS.items()}
+    expected |= {name: f"subenv_agents.shipped:{name}" for name in shipped_models()}
+    assert declared == expected
+
+
+def _run(*command: str | Path, cwd: Path, ok: bool = True) -> subprocess.CompletedProcess[str]:
+    done = subprocess.run([str(c) for c in command], check=False, capture_output=True, text=True, cwd=cwd)
+    assert (done.returncode == 0) == ok, (done.returncode, done.stdout, done.stderr)
+    return done
+
+
+@pytest.mark.wheel
+def test_wheel_installs_into_a_clean_venv_and_evaluates(tmp_path: Path):
     dist = tmp_path / "dist"
-    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
-                    "-w", str(dist), str(ROOT)], check=True)
+    _run(sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w", dist, ROOT, cwd=tmp_path)
     (wheel,) = dist.glob("subenv-*.whl")
-    names = zipfile.ZipFile(wheel).namelist()
-    assert "subenv/vehicles/data/suboff.toml" in names and "subenv/py.typed" in names
-    assert not any(n.startswith(("baselines/", "agents/", "tests/")) for n in names)
+    archive = zipfile.ZipFile(wheel)
+    names = archive.namelist()
+    for name in ("subenv/vehicles/data/suboff.toml", "subenv/py.typed", "subenv_baselines/thesis.py",
+                 "subenv_agents/shipped.py", "subenv_agents/hyperparams/ppo.yml", "subenv_agents/models/ppo/model.zip",
+                 "subenv_agents/models/sac/vecnormalize.pkl", "subenv-0.1.0.dist-info/licenses/LICENSE"):
+        assert name in names, name
+    assert not any(n.startswith(("tests/", "benchmarks/", "baselines/", "agents/")) for n in names)
+    metadata = archive.read("subenv-0.1.0.dist-info/METADATA").decode()
+    assert "License-Expression: MIT" in metadata.splitlines()
 
     env_dir = tmp_path / "venv"
     venv.EnvBuilder(with_pip=True).create(env_dir)
-    python = env_dir / "bin" / "python"
-    subprocess.run([str(python), "-m", "pip", "install", "-q", "--no-compile", str(wheel)], check=True)
+    python, subenv = env_dir / "bin" / "python", env_dir / "bin" / "subenv"
+    _run(python, "-m", "pip", "install", "-q", "--no-compile", wheel, cwd=tmp_path)  # no extras
     code = (
         "import gymnasium as gym, subenv, pathlib\n"
         "assert 'site-packages' in pathlib.Path(subenv.__file__).as_posix()\n"
@@ -32,5 +69,24 @@ def test_wheel_installs_into_a_clean_venv(tmp_path: Path):
         "obs, r, te, tr, info = env.step(env.action_space.sample())\n"
         "print(obs.shape, round(info['critical_speed_mps'], 3) > 0)\n"
     )
-    out = subprocess.run([str(python), "-c", code], capture_output=True, text=True, check=True, cwd=tmp_path)
-    assert out.stdout.strip() == "(8,) True"
+    assert _run(python, "-c", code, cwd=tmp_path).stdout.strip() == "(8,) True"
+
+    listed = _run(subenv, "evaluate", "--list", cwd=tmp_path)
+    controllers = listed.stdout.splitlines()[0].removeprefix("controllers: ").split(", ")
+    assert sorted(controllers) == sorted(subenv_baselines.CONTROLLERS)  # without the rl extra: no agents
+    assert listed.stderr.startswith("(skipped ppo, sac: the 'rl' extra is needed for the shipped agents: "
+                                    'pip install "subenv[rl]" (or pip install "stable-baselines3>=2.3" ')
+    assert listed.stderr.count("\n") == 1
+
+    out = tmp_path / "evaluation"
+    evaluate = ("evaluate", "--suite", "tiny", "--episodes", "1", "--controllers", "thesis", "--no-progress", "--out", out)
+    refused = _run(subenv, *evaluate, cwd=tmp_path, ok=False)  # matplotlib is not installed
+    assert refused.returncode == 1 and refused.stderr.count("\n") == 1 and not out.exists()
+    assert refused.stderr.startswith("subenv evaluate: the 'plot' extra is needed for the plots: "
+                                     'pip install "subenv[plot]" (or pip install "matplotlib>=3.7"; ')
+    _run(subenv, *evaluate, "--no-plots", cwd=tmp_path)
+    rows = list(csv.DictReader((out / "results.csv").open()))
+    assert [row["controller"] for row in rows] == ["thesis", "thesis"]  # the tiny suite: two scenarios, one episode
+
+    bare = _run(subenv, cwd=tmp_path, ok=False)
+    assert bare.returncode == 2 and "commands:" in bare.stderr

@@ -349,7 +349,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
 
         The episode under way is not changed; the next ``reset`` draws from the new scenario. This
         is how a training curriculum moves the distribution of speeds and loadings
-        (``agents.curriculum``); everything else of the environment (spaces, reward, limits)
+        (``subenv_agents.curriculum``); everything else of the environment (spaces, reward, limits)
         stays as it was made.
         """
         self.config = self.config.replace(scenario=scenario)

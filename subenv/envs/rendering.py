@@ -42,6 +42,8 @@ import numpy as np
 import numpy.typing as npt
 from typing_extensions import Self
 
+from subenv.extras import missing_extra_message
+
 if TYPE_CHECKING:  # pragma: no cover - typing only
     import pygame
 
@@ -108,7 +110,6 @@ _DASH_ON_PX: Final = 9.0
 _DASH_OFF_PX: Final = 6.0
 _FONT_SIZE: Final = 18
 _MIN_SIZE: Final = 32
-_DEPENDENCY_MESSAGE: Final = 'pygame is not installed, run `pip install "subenv[render]"`'
 
 
 # --------------------------------------------------------------------------------------------
@@ -249,7 +250,7 @@ def _import_pygame() -> Any:
     except ImportError as exc:
         from gymnasium.error import DependencyNotInstalled
 
-        raise DependencyNotInstalled(_DEPENDENCY_MESSAGE) from exc
+        raise DependencyNotInstalled(missing_extra_message("render", "rendering")) from exc
     return pygame
 
 

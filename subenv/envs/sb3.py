@@ -26,6 +26,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium.vector import AutoresetMode
 
+from subenv.extras import MissingExtra, missing_extra_message
+
 try:
     from stable_baselines3.common.vec_env.base_vec_env import (
         VecEnv,
@@ -34,9 +36,7 @@ try:
         VecEnvStepReturn,
     )
 except ImportError as error:  # pragma: no cover - depends on the installation
-    raise ImportError(
-        "subenv.envs.sb3 needs stable-baselines3: install the 'rl' extra, pip install \"subenv[rl]\""
-    ) from error
+    raise MissingExtra(missing_extra_message("rl", "subenv.envs.sb3"), name="stable_baselines3") from error
 
 __all__ = ["SB3VecEnv", "make_sb3_vec_env"]
 

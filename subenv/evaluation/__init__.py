@@ -14,12 +14,14 @@
 
 from subenv.evaluation.comparison import DEFAULT_OUT_DIR, Comparison, run_comparison, write_comparison
 from subenv.evaluation.controller import (
+    ENTRY_POINT_GROUP,
     BatchController,
     Controller,
     ControllerFactory,
     SingleRowMixin,
     check_batch,
     controller_names,
+    discover_controllers,
     make_controller,
     register_controller,
 )
@@ -38,6 +40,7 @@ __all__ = [
     "DEFAULT_OUT_DIR",
     "DEFAULT_SEED",
     "DEFAULT_SUITE",
+    "ENTRY_POINT_GROUP",
     "BatchController",
     "Comparison",
     "Controller",
@@ -49,6 +52,7 @@ __all__ = [
     "Trajectory",
     "check_batch",
     "controller_names",
+    "discover_controllers",
     "episode_metrics",
     "evaluate",
     "get_suite",

@@ -13,21 +13,43 @@ a controller without the batch methods is run one episode at a time. :class:`Sin
 gives a batch controller its single-episode ``reset`` and ``act``, so that there is one copy of
 the control law.
 
-Other packages (``baselines``, ``agents``) register factories with :func:`register_controller`
-when they are imported; ``subenv`` itself imports neither.
+Controllers come from other packages, never from ``subenv`` itself (which imports none of them):
+
+- an installed package declares each of its controllers in the ``subenv.controllers`` entry-point
+  group, the name being the controller's and the value a zero-argument factory (a class will do)::
+
+      [project.entry-points."subenv.controllers"]
+      my_pid = "my_package.pid:DepthPID"
+
+  :func:`controller_names` and :func:`make_controller` load them the first time they are called
+  (:func:`discover_controllers`); this is how the classical baselines (``subenv_baselines``) and the
+  shipped agents (``subenv_agents``) of this distribution arrive;
+- a module on the path calls :func:`register_controller` when it is imported (``subenv evaluate
+  --plugins``).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
-from typing import Any, Literal, Protocol, runtime_checkable
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from importlib.metadata import EntryPoint, entry_points
+from typing import Any, Final, Literal, Protocol, runtime_checkable
 
 import numpy as np
 
 from subenv.vehicles.vehicle import Vehicle
 
-__all__ = ["BatchController", "Controller", "ControllerFactory", "SingleRowMixin", "check_batch", "controller_names",
-           "make_controller", "register_controller"]
+__all__ = [
+    "ENTRY_POINT_GROUP",
+    "BatchController",
+    "Controller",
+    "ControllerFactory",
+    "SingleRowMixin",
+    "check_batch",
+    "controller_names",
+    "discover_controllers",
+    "make_controller",
+    "register_controller",
+]
 
 ControlMode = Literal["dual", "independent"]
 
@@ -108,6 +130,12 @@ def check_batch(observations: np.ndarray, rows: int) -> np.ndarray:
 ControllerFactory = Callable[[], Controller]
 _REGISTRY: dict[str, ControllerFactory] = {}
 
+ENTRY_POINT_GROUP: Final = "subenv.controllers"
+"""The entry-point group in which installed packages declare their controllers (name = factory)."""
+
+_UNAVAILABLE: dict[str, str] | None = None
+"""Declared controllers that could not be loaded, with the reason; None until the first discovery."""
+
 
 def register_controller(name: str, factory: ControllerFactory, *, overwrite: bool = False) -> None:
     """Make a controller available by name to :func:`make_controller` and ``subenv evaluate``."""
@@ -116,13 +144,52 @@ def register_controller(name: str, factory: ControllerFactory, *, overwrite: boo
     _REGISTRY[name] = factory
 
 
+def discover_controllers(declared: Iterable[EntryPoint] | None = None) -> dict[str, str]:
+    """Register the controllers declared as entry points, and say which could not be loaded.
+
+    Parameters
+    ----------
+    declared : iterable of importlib.metadata.EntryPoint, optional
+        The declarations to load (default, and what :func:`controller_names` uses the first time:
+        the :data:`ENTRY_POINT_GROUP` of every installed distribution). A name that is already
+        registered keeps its factory.
+
+    Returns
+    -------
+    dict of str to str
+        The declared controllers whose module could not be imported (an optional dependency not
+        installed), by name, with the error: every declaration so far. They are skipped, not
+        registered; the message of the error is the package's advice (which extra to install).
+    """
+    global _UNAVAILABLE
+    unavailable = {} if _UNAVAILABLE is None else _UNAVAILABLE
+    for point in entry_points(group=ENTRY_POINT_GROUP) if declared is None else declared:
+        if point.name in _REGISTRY:
+            continue
+        try:
+            register_controller(point.name, point.load())
+        except ImportError as exc:
+            unavailable[point.name] = str(exc)
+        else:
+            unavailable.pop(point.name, None)
+    _UNAVAILABLE = unavailable
+    return dict(unavailable)
+
+
+def _discover_once() -> None:
+    if _UNAVAILABLE is None:
+        discover_controllers()
+
+
 def controller_names() -> list[str]:
-    """Names of the registered controllers, in registration order."""
+    """Names of the registered controllers, in registration order (the installed ones on first use)."""
+    _discover_once()
     return list(_REGISTRY)
 
 
 def make_controller(name: str) -> Controller:
     """A new controller by registered name; a ValueError lists the known names."""
+    _discover_once()
     try:
         factory = _REGISTRY[name]
     except KeyError:

@@ -228,7 +228,7 @@ def episode_success(
     """Whether an episode succeeded: :attr:`EpisodeMetrics.success`, from what a running episode can keep.
 
     :func:`episode_metrics` calls this with the whole record; a training callback that sees one step
-    at a time (``agents.curriculum``) keeps only the time of the last sample off depth.
+    at a time (``subenv_agents.curriculum``) keeps only the time of the last sample off depth.
 
     Parameters
     ----------

@@ -21,6 +21,7 @@ from subenv.evaluation.controller import Controller
 from subenv.evaluation.metrics import DEPTH_TOLERANCE_M, HOLD_WINDOW_S
 from subenv.evaluation.results import CONFIDENCE_LEVEL, by_speed_ratio, representative_episodes
 from subenv.evaluation.rollout import EpisodeResult, Trajectory, run_episode
+from subenv.extras import require
 from subenv.vehicles.vehicle import Vehicle
 
 __all__ = [
@@ -47,11 +48,8 @@ _OUTCOME_COLORS: Final = {
 
 
 def require_matplotlib() -> None:
-    """Raise ImportError with the install hint if matplotlib is missing."""
-    try:
-        import matplotlib  # noqa: F401
-    except ImportError as exc:
-        raise ImportError("the evaluation plots need matplotlib: pip install 'subenv[plot]'") from exc
+    """Raise :class:`~subenv.extras.MissingExtra` (an ImportError naming the ``plot`` extra) without matplotlib."""
+    require("plot", "the plots", "matplotlib")
 
 
 def save_figure(fig: Any, path: str | os.PathLike[str], image_format: str = "png") -> Path:

@@ -471,8 +471,8 @@ def resolve_controllers(controllers: Sequence[Controller | str] | None) -> list[
         names = controller_names()
         if not names:
             raise ValueError(
-                "no controllers are registered: import a package that registers some (e.g. baselines) "
-                "or call subenv.evaluation.register_controller"
+                "no controllers are registered: install a package that declares some in the "
+                "'subenv.controllers' entry-point group, or call subenv.evaluation.register_controller"
             )
         controllers = names
     if isinstance(controllers, str):

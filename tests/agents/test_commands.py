@@ -1,4 +1,4 @@
-"""The command lines: subenv train forwards to agents.train; agents.evaluate compares with the baselines."""
+"""The command lines: subenv train forwards to subenv_agents.train; subenv_agents.evaluate compares."""
 
 from __future__ import annotations
 
@@ -13,11 +13,11 @@ import pytest
 
 pytest.importorskip("stable_baselines3")
 
-from agents import shipped_models
-from agents.evaluate import main as evaluate_main
-from agents.policy import RUN_ID_ATTRIBUTE, load_agent
-from agents.train import main as train_main
 from subenv.cli import main as subenv_main
+from subenv_agents import shipped_models
+from subenv_agents.evaluate import main as evaluate_main
+from subenv_agents.policy import RUN_ID_ATTRIBUTE, load_agent
+from subenv_agents.train import main as train_main
 
 _SMALL = ["-n", "512", "--eval-freq", "0", "--save-freq", "0", "-q", "--no-progress",
           "-params", "n_envs:2", "n_steps:256", "batch_size:128", "n_epochs:1", "depth_integral:false"]
@@ -80,7 +80,7 @@ def test_a_broken_model_folder_is_named_in_one_line(tmp_path, breakage) -> None:
     with pytest.raises(SystemExit) as exc:
         evaluate_main([str(folder), "--suite", "tiny", "--episodes", "1", "--out", str(tmp_path / "e"), "--no-plots"])
     text = str(exc.value)
-    assert re.search(r"agents\.evaluate: '" + re.escape(str(folder)) + "/" + message, text), text
+    assert re.search(r"subenv_agents\.evaluate: '" + re.escape(str(folder)) + "/" + message, text), text
     assert "\n" not in text
     assert not (tmp_path / "e").exists()
 
@@ -124,6 +124,6 @@ def test_train_refuses_bad_input_in_one_line_and_leaves_no_folder(tmp_path, args
         train_main(["--algo", "ppo", "-f", str(logs), "-n", "512", "--eval-freq", "0", "--save-freq", "0", "-q",
                     "--no-progress", *args])
     text = str(exc.value)
-    assert re.search(r"^agents\.train: " + message, text), text
+    assert re.search(r"^subenv_agents\.train: " + message, text), text
     assert "\n" not in text
     assert not logs.exists()  # not even an empty logs/ppo/

@@ -7,7 +7,14 @@ import pytest
 pytest.importorskip("yaml")
 pytest.importorskip("stable_baselines3")
 
-from agents.config import ALGORITHMS, HYPERPARAMS_DIR, AgentConfig, load_config, model_kwargs, parse_overrides
+from subenv_agents.config import (
+    ALGORITHMS,
+    HYPERPARAMS_DIR,
+    AgentConfig,
+    load_config,
+    model_kwargs,
+    parse_overrides,
+)
 
 
 @pytest.mark.parametrize("algo", ALGORITHMS)

@@ -10,8 +10,11 @@ import pytest
 
 pytest.importorskip("stable_baselines3")
 
-from agents.config import CurriculumConfig
-from agents.curriculum import (
+from subenv.analysis import critical_speed
+from subenv.analysis.curriculum import DEFAULT_STAGES
+from subenv.scenarios import get_scenario
+from subenv_agents.config import CurriculumConfig
+from subenv_agents.curriculum import (
     STATE_FILE,
     CurriculumCallback,
     CurriculumSchedule,
@@ -19,9 +22,6 @@ from agents.curriculum import (
     stage_scenarios,
     write_state,
 )
-from subenv.analysis import critical_speed
-from subenv.analysis.curriculum import DEFAULT_STAGES
-from subenv.scenarios import get_scenario
 
 
 def test_schedule_advances_only_on_a_full_window_at_threshold() -> None:

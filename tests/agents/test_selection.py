@@ -8,17 +8,17 @@ import pytest
 
 pytest.importorskip("stable_baselines3")
 
-from agents.config import load_config
-from agents.policy import load_agent
-from agents.selection import (
+from subenv.evaluation import DEFAULT_SEED
+from subenv_agents.config import load_config
+from subenv_agents.policy import load_agent
+from subenv_agents.selection import (
     SELECTED_DIR,
     SELECTION_SCENARIOS,
     VALIDATION_SEED,
     SelectionCallback,
     validation_score,
 )
-from agents.train import train
-from subenv.evaluation import DEFAULT_SEED
+from subenv_agents.train import train
 
 _SMALL = {"n_timesteps": 2048, "n_envs": 4, "n_steps": 128, "batch_size": 128, "n_epochs": 2,
           "policy_kwargs": {"net_arch": [8]}, "depth_integral": {"time_constant_s": 50.0}}

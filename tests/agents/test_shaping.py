@@ -9,8 +9,8 @@ import pytest
 
 pytest.importorskip("stable_baselines3")
 
-from agents.shaping import DEPTH_ERROR_KEY, DepthBandBonusVecEnv, PlaneEffortL1VecEnv
 from subenv.envs.sb3 import make_sb3_vec_env
+from subenv_agents.shaping import DEPTH_ERROR_KEY, DepthBandBonusVecEnv, PlaneEffortL1VecEnv
 
 
 @pytest.mark.parametrize("reference_speed", [None, 0.5])

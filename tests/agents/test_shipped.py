@@ -9,11 +9,11 @@ import pytest
 
 pytest.importorskip("stable_baselines3")
 
-import agents
-from agents import shipped_models
-from agents.card import BASELINE, REVERSAL_SCENARIOS, evaluation_record, total_training_time_s
-from agents.policy import load_agent
+import subenv_agents
 from subenv.evaluation import controller_names, evaluate, make_controller
+from subenv_agents import shipped_models
+from subenv_agents.card import BASELINE, REVERSAL_SCENARIOS, evaluation_record, total_training_time_s
+from subenv_agents.policy import load_agent
 
 SHIPPED = shipped_models()
 
@@ -34,7 +34,7 @@ def test_model_folder_is_complete_and_loads_in_one_call(name: str) -> None:
     agent = load_agent(folder)
     assert agent.obs_mean is not None and agent.config.algo == record["algo"]
     observation = np.zeros(agent.observation_space.shape)
-    assert agents.load_agent(folder).predict(observation).shape == agent.action_space.shape
+    assert subenv_agents.load_agent(folder).predict(observation).shape == agent.action_space.shape
 
 
 @pytest.mark.parametrize("name", sorted(SHIPPED))
@@ -47,8 +47,6 @@ def test_shipped_model_is_a_registered_controller(name: str) -> None:
 @pytest.fixture(scope="module")
 def reversal_results():  # type: ignore[no-untyped-def]
     """The reversal suite (100 episodes per scenario, seeds 10000 + i) for every shipped model and the baseline."""
-    import baselines  # noqa: F401
-
     controllers = [make_controller(n) for n in sorted(SHIPPED)] + [make_controller(BASELINE)]
     return evaluation_record(evaluate(controllers, list(REVERSAL_SCENARIOS), episodes=100, progress=False))
 

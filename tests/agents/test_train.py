@@ -11,11 +11,12 @@ import pytest
 pytest.importorskip("stable_baselines3")
 pytest.importorskip("yaml")
 
-from agents.card import lineage, total_training_time_s
-from agents.config import ALGORITHMS, algorithm_class, load_config
-from agents.controller import AgentController
-from agents.curriculum import write_state
-from agents.policy import (
+from subenv.evaluation import evaluate
+from subenv_agents.card import lineage, total_training_time_s
+from subenv_agents.config import ALGORITHMS, algorithm_class, load_config
+from subenv_agents.controller import AgentController
+from subenv_agents.curriculum import write_state
+from subenv_agents.policy import (
     CHECKPOINT_DIR,
     CONFIG_FILE,
     MODEL_FILE,
@@ -24,8 +25,7 @@ from agents.policy import (
     model_folder,
     training_run,
 )
-from agents.train import main, train
-from subenv.evaluation import evaluate
+from subenv_agents.train import main, train
 
 # Small enough for the default suite: a few thousand steps, small networks.
 _SMALL = {
@@ -226,7 +226,7 @@ def test_depth_integral_is_the_same_in_training_and_in_the_controller(tmp_path) 
     """The controller feeds the agent exactly the observations the training stack gave it."""
     from dataclasses import replace
 
-    from agents.train import make_vec_env
+    from subenv_agents.train import make_vec_env
 
     config = _config("ppo", depth_integral={"time_constant_s": 50.0}, n_timesteps=1024)
     run = train(config, seed=0, run_dir=tmp_path / "run", eval_freq=0, save_freq=0, verbose=0)
@@ -261,7 +261,7 @@ def test_training_stack_adds_the_band_bonus_on_the_true_depth_error() -> None:
     depth error and adds the bonus exactly where it is inside the band."""
     from dataclasses import replace
 
-    from agents.train import make_vec_env
+    from subenv_agents.train import make_vec_env
 
     config = replace(_config("ppo", n_timesteps=1024), normalize=None)
     banded_config = replace(_config("ppo", n_timesteps=1024, depth_band_bonus={"half_width_m": 1.0, "bonus": 0.25}),

@@ -6,15 +6,15 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-import baselines
-from baselines._common import GainSchedule
-from baselines.lqr import lqi_gain
-from baselines.reversal_aware import ReversalAware
-from baselines.scheduled import GainScheduledPolePlacement
-from baselines.thesis import ThesisPolePlacement
+import subenv_baselines
 from subenv.analysis import critical_speed, linear_model, place_gain
 from subenv.evaluation import Controller, controller_names, make_controller
 from subenv.units import FOOT_M
+from subenv_baselines._common import GainSchedule
+from subenv_baselines.lqr import lqi_gain
+from subenv_baselines.reversal_aware import ReversalAware
+from subenv_baselines.scheduled import GainScheduledPolePlacement
+from subenv_baselines.thesis import ThesisPolePlacement
 
 SCENARIOS = ["Nominal", "LowSpeed", "NearCritical", "SpeedTransient", "PeriscopeDepth", "BallastOffset"]
 HOLD_S = 60.0
@@ -42,9 +42,9 @@ def _episode(controller: Controller, scenario: str, seed: int, options: dict | N
 
 def test_all_four_are_registered_and_implement_the_protocol():
     assert {"thesis", "scheduled", "lqr", "reversal_aware"} <= set(controller_names())
-    for name in baselines.CONTROLLERS:
+    for name in subenv_baselines.CONTROLLERS:
         assert isinstance(make_controller(name), Controller)
-    # The error names every registered controller (the shipped agents too, once agents/ is imported).
+    # The error names every registered controller (the shipped agents too, with the rl extra).
     with pytest.raises(ValueError, match=r"controller='pid' is unknown: must be one of \[") as error:
         make_controller("pid")
     assert all(f"'{name}'" in str(error.value) for name in controller_names())
@@ -114,7 +114,7 @@ def test_reversal_aware_changes_and_holds_depth_across_the_speed_range(speed, of
 
 
 @pytest.mark.parametrize("scenario", SCENARIOS)
-@pytest.mark.parametrize("name", list(baselines.CONTROLLERS))
+@pytest.mark.parametrize("name", list(subenv_baselines.CONTROLLERS))
 def test_every_controller_on_every_scenario_class(name, scenario):
     outcomes = [_episode(make_controller(name), scenario, seed)[0] for seed in (0, 1)]
     expected = {

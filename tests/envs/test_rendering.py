@@ -315,8 +315,10 @@ def test_missing_pygame_raises_dependency_not_installed(
     frame: Frame, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.setitem(sys.modules, "pygame", None)  # makes `import pygame` fail
-    with pytest.raises(DependencyNotInstalled, match="pip install"):
+    message = r'the .render. extra is needed for rendering: pip install "subenv\[render\]"'
+    with pytest.raises(DependencyNotInstalled, match=message) as error:
         render_rgb(frame)
+    assert "./dev installs every extra" in str(error.value) and "\n" not in str(error.value)
     with pytest.raises(DependencyNotInstalled):
         HumanWindow()
 

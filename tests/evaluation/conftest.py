@@ -50,8 +50,6 @@ def small_run() -> SmallRun:
     """``thesis`` and ``reversal_aware`` on four scenarios, 4 episodes each, no trajectories kept (a few
     seconds). The seeds (10003-10006) give the thesis controller every kind of failure in few episodes:
     wrong branch (on BallastOffset two that then broach), broached, steady offset, unsettled."""
-    import baselines  # noqa: F401  (registers the classical controllers)
-
     controllers = {name: make_controller(name) for name in ("thesis", "reversal_aware")}
     scenarios = ["LowSpeed", "PeriscopeDepth", "SpeedTransient", "BallastOffset"]
     results = evaluate(list(controllers.values()), scenarios, episodes=4, seed=DEFAULT_SEED + 3, progress=False,

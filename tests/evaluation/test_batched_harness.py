@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-import baselines
+import subenv_baselines
 from subenv.envs import OBSERVATION_NAMES
 from subenv.evaluation import BatchController, Controller, EpisodeResult, make_controller, run_episodes
 from subenv.vehicles import Vehicle
@@ -56,7 +56,7 @@ def assert_batched_as_one_at_a_time(make: Any, scenario: str, **kwargs: Any) -> 
     return results
 
 
-@pytest.mark.parametrize("name", list(baselines.CONTROLLERS))
+@pytest.mark.parametrize("name", list(subenv_baselines.CONTROLLERS))
 def test_every_baseline_gets_the_one_at_a_time_results_bit_for_bit(name: str) -> None:
     assert isinstance(make_controller(name), BatchController)
     lengths = [tuple(r.steps for r in assert_batched_as_one_at_a_time(lambda: make_controller(name), scenario))
@@ -109,8 +109,8 @@ def test_a_batch_of_the_wrong_size_is_refused(name: str, suboff: Vehicle) -> Non
 @pytest.mark.parametrize("name", ["ppo", "sac"])
 def test_the_shipped_agents_get_the_one_at_a_time_results(name: str) -> None:
     pytest.importorskip("stable_baselines3")
-    from agents import shipped_models
-    from agents.controller import AgentController
+    from subenv_agents import shipped_models
+    from subenv_agents.controller import AgentController
 
     folder = shipped_models()[name]
     assert isinstance(AgentController(folder), BatchController)

@@ -1,6 +1,6 @@
 """The harness end to end: rollouts with test controllers, suites, bad input, the results folder.
 
-The controllers here are defined in the test (``subenv`` must not depend on ``baselines``): one
+The controllers here are defined in the test (``subenv`` must not depend on ``subenv_baselines``): one
 that never moves its planes, and the thesis's full-state feedback placed at 5 fps from
 :func:`subenv.analysis.thesis_gain`, which holds depth at the design speed and, below the
 critical speed, ends on the pitched, plane-saturated equilibrium (Riedel 1993 Ch. III).

@@ -32,8 +32,8 @@ from typing import Any
 import numpy as np
 from stable_baselines3.common.vec_env import VecEnvWrapper
 
-from agents.config import DepthBandBonusConfig
 from subenv.envs import OBSERVATION_NAMES
+from subenv_agents.config import DepthBandBonusConfig
 
 __all__ = ["DEPTH_ERROR_KEY", "DepthBandBonusVecEnv", "PlaneEffortL1VecEnv"]
 

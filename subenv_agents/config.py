@@ -1,6 +1,6 @@
 """Hyperparameters: per-algorithm YAML files in the rl-baselines3-zoo layout, loaded into typed configs.
 
-``agents/hyperparams/<algo>.yml`` maps environment ids to settings, with a ``default`` entry for
+``subenv_agents/hyperparams/<algo>.yml`` maps environment ids to settings, with a ``default`` entry for
 any id that has none of its own (rl-zoo's layout, with that one addition)::
 
     default:
@@ -9,10 +9,10 @@ any id that has none of its own (rl-zoo's layout, with that one addition)::
       n_envs: 16                  # sub-environments of the native vector env
       normalize: {norm_obs: true, norm_reward: true, gamma: 0.995}   # or true / false
       env_kwargs: {control: independent}                           # DivePlaneEnv's arguments
-      curriculum: {threshold: 0.8, window: 100}                    # or false (see agents.curriculum)
-      depth_integral: {time_constant_s: 100.0}                     # or false (see agents.features)
-      plane_effort_l1: 0.5                                         # training-only (see agents.shaping)
-      depth_band_bonus: {half_width_m: 0.3, bonus: 0.5}            # or false; training-only (agents.shaping)
+      curriculum: {threshold: 0.8, window: 100}                    # or false (see subenv_agents.curriculum)
+      depth_integral: {time_constant_s: 100.0}                     # or false (see subenv_agents.features)
+      plane_effort_l1: 0.5                                         # training-only (see subenv_agents.shaping)
+      depth_band_bonus: {half_width_m: 0.3, bonus: 0.5}            # or false; training-only (subenv_agents.shaping)
       policy_kwargs: {net_arch: [64, 64], activation_fn: tanh}
       learning_rate: lin_3.0e-4   # "lin_<x>": linear decay from x to 0, as in rl-zoo
       n_steps: 256                # ... any other argument of the algorithm's constructor
@@ -52,7 +52,7 @@ HYPERPARAMS_DIR: Final = Path(__file__).parent / "hyperparams"
 """Where ``<algo>.yml`` files are looked up by default."""
 
 ALGORITHMS: Final = ("ppo", "sac", "td3")
-"""The Stable-Baselines3 algorithms ``agents.train`` trains."""
+"""The Stable-Baselines3 algorithms ``subenv_agents.train`` trains."""
 
 DEFAULT_KEY: Final = "default"
 
@@ -89,7 +89,7 @@ class NormalizeConfig:
 
 @dataclass(frozen=True)
 class CurriculumConfig:
-    """The speed curriculum (:mod:`agents.curriculum`).
+    """The speed curriculum (:mod:`subenv_agents.curriculum`).
 
     Stages are ``(name, low, high)`` speed bands in units of the critical speed, easy (fast) to
     hard; stage k draws speeds from its own low end up to the first stage's high end, and the
@@ -132,7 +132,7 @@ class CurriculumConfig:
 
 @dataclass(frozen=True)
 class DepthIntegralConfig:
-    """The depth-error integral observation (:mod:`agents.features`): leak time constant [s] and clipping [m s]."""
+    """The depth-error integral observation (:mod:`subenv_agents.features`): leak time constant [s] and clipping [m s]."""
 
     time_constant_s: float = 100.0
     limit_ms: float = 200.0
@@ -146,7 +146,7 @@ class DepthIntegralConfig:
 
 @dataclass(frozen=True)
 class DepthBandBonusConfig:
-    """The training-only depth-band bonus (:mod:`agents.shaping`): ``bonus`` for every step that ends
+    """The training-only depth-band bonus (:mod:`subenv_agents.shaping`): ``bonus`` for every step that ends
     within ``half_width_m`` [m] of the ordered depth."""
 
     half_width_m: float = 0.3
@@ -179,11 +179,11 @@ class AgentConfig:
     curriculum: CurriculumConfig | None = None
     depth_integral: DepthIntegralConfig | None = None
     plane_effort_l1: float = 0.0
-    """Weight of the training-only L1 penalty on the plane commands (:mod:`agents.shaping`); 0: none."""
+    """Weight of the training-only L1 penalty on the plane commands (:mod:`subenv_agents.shaping`); 0: none."""
     plane_effort_reference_speed_mps: float | None = None
     """With it, the L1 weight scales with the speed u of the step: weight * u / this (None: constant)."""
     depth_band_bonus: DepthBandBonusConfig | None = None
-    """The training-only bonus for steps that end near the ordered depth (:mod:`agents.shaping`); None: none."""
+    """The training-only bonus for steps that end near the ordered depth (:mod:`subenv_agents.shaping`); None: none."""
     policy_kwargs: dict[str, Any] = field(default_factory=dict)
     algo_kwargs: dict[str, Any] = field(default_factory=dict)
 
@@ -240,7 +240,7 @@ def load_config(
     env_id : str
         A registered id (``subenv/LowSpeed-v0``, ...); its entry in the file, else ``default``.
     path : path, optional
-        The YAML file; default ``agents/hyperparams/<algo>.yml``.
+        The YAML file; default ``subenv_agents/hyperparams/<algo>.yml``.
     overrides : mapping, optional
         Keys replacing the file's (``--hyperparams`` of the training command), checked alike.
     entry_key : str, optional

@@ -28,12 +28,12 @@ from typing import Any
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
-from agents.config import CurriculumConfig
 from subenv.analysis.curriculum import DEFAULT_STAGES, speed_curriculum
 from subenv.evaluation.metrics import DEPTH_TOLERANCE_M, episode_success
 from subenv.evaluation.results import atomic_write_text
 from subenv.scenarios import Scenario
 from subenv.vehicles import Vehicle
+from subenv_agents.config import CurriculumConfig
 
 __all__ = ["CurriculumCallback", "CurriculumSchedule", "stage_scenarios"]
 

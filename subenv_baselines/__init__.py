@@ -8,23 +8,23 @@
 
 Every controller designs itself from :mod:`subenv.analysis` (linear model, critical speed) at its
 first reset, for the design vehicle the harness passes; none uses numbers typed in.
+
+They reach :func:`subenv.evaluation.make_controller` and ``subenv evaluate`` through the
+``subenv.controllers`` entry points of ``pyproject.toml`` (one per name of :data:`CONTROLLERS`),
+the way any installed package adds its controllers; importing this package registers nothing.
+(The name is prefixed: a top-level ``baselines`` is OpenAI Baselines' on PyPI.)
 """
 
-from baselines.lqr import ScheduledLQR
-from baselines.reversal_aware import ReversalAware
-from baselines.scheduled import GainScheduledPolePlacement
-from baselines.thesis import ThesisPolePlacement
-from subenv.evaluation import controller_names, register_controller
+from subenv_baselines.lqr import ScheduledLQR
+from subenv_baselines.reversal_aware import ReversalAware
+from subenv_baselines.scheduled import GainScheduledPolePlacement
+from subenv_baselines.thesis import ThesisPolePlacement
 
-CONTROLLERS = {
+CONTROLLERS: dict[str, type] = {
     "thesis": ThesisPolePlacement,
     "scheduled": GainScheduledPolePlacement,
     "lqr": ScheduledLQR,
     "reversal_aware": ReversalAware,
 }
-
-for _name, _cls in CONTROLLERS.items():
-    if _name not in controller_names():
-        register_controller(_name, _cls)
 
 __all__ = ["CONTROLLERS", "GainScheduledPolePlacement", "ReversalAware", "ScheduledLQR", "ThesisPolePlacement"]

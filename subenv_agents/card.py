@@ -1,13 +1,13 @@
-"""Ship a trained run as a model in ``agents/models/<name>/``, with its model card and evaluation.
+"""Ship a trained run as a model in ``subenv_agents/models/<name>/``, with its model card and evaluation.
 
 ::
 
-    python -m agents.card results/agents/ppo/subenv-DivePlane-v0_1 --name ppo
+    python -m subenv_agents.card results/agents/ppo/subenv-DivePlane-v0_1 --name ppo
 
 Copies the run's ``model.zip``, ``vecnormalize.pkl``, ``config.yml`` and ``train.json``, evaluates
 the agent next to the ``reversal_aware`` baseline with the harness of ``subenv evaluate`` (the
 default suite, 100 episodes per scenario, seeds 10000 + i) and on the held-out scenarios of
-:mod:`agents.generalisation` (50 episodes each), and writes ``evaluation.json`` (the numbers) and
+:mod:`subenv_agents.generalisation` (50 episodes each), and writes ``evaluation.json`` (the numbers) and
 ``MODEL_CARD.md`` (how the model was trained, on what, and the tables). The folder appears
 complete or not at all. ``tests/agents/test_shipped.py`` re-runs the reversal suite and checks
 that it reproduces ``evaluation.json``.
@@ -24,12 +24,12 @@ from typing import Any, Final
 
 import yaml
 
-from agents import MODELS_DIR
-from agents.controller import AgentController
-from agents.generalisation import HELD_OUT, evaluate_held_out
-from agents.policy import CONFIG_FILE, MODEL_FILE, VECNORMALIZE_FILE, training_run
-from agents.selection import SELECTED_DIR, SELECTION_SCENARIOS
 from subenv.evaluation.results import atomic_output_dir, atomic_write_bytes, atomic_write_text
+from subenv_agents import MODELS_DIR
+from subenv_agents.controller import AgentController
+from subenv_agents.generalisation import HELD_OUT, evaluate_held_out
+from subenv_agents.policy import CONFIG_FILE, MODEL_FILE, VECNORMALIZE_FILE, training_run
+from subenv_agents.selection import SELECTED_DIR, SELECTION_SCENARIOS
 
 __all__ = ["BASELINE", "REVERSAL_SCENARIOS", "evaluation_record", "lineage", "main", "ship", "total_training_time_s"]
 
@@ -102,12 +102,11 @@ def total_training_time_s(train_record: dict[str, Any]) -> float:
 
 def ship(run_dir: Path, name: str, episodes: int = 100, held_out_episodes: int = 50, force: bool = False,
          selected: bool = True) -> Path:
-    """Copy, evaluate and document ``run_dir`` as ``agents/models/<name>``; returns the folder.
+    """Copy, evaluate and document ``run_dir`` as ``subenv_agents/models/<name>``; returns the folder.
 
     With ``selected`` (and a ``selected/`` folder in the run: ``--select-freq``) the policy that
-    did best on the validation episodes is shipped (:mod:`agents.selection`), else the final one.
+    did best on the validation episodes is shipped (:mod:`subenv_agents.selection`), else the final one.
     """
-    import baselines  # noqa: F401  (registers the baseline compared against)
     from subenv.evaluation import DEFAULT_SEED, evaluate, make_controller
 
     target = MODELS_DIR / name
@@ -142,7 +141,7 @@ def _integral(config: dict[str, Any]) -> str:
     if not integral:
         return ""
     return (f"; it also observes the leaky integral of the depth error (time constant "
-            f"{integral['time_constant_s']:g} s, `agents/features.py`), which `load_agent`/`AgentController` append")
+            f"{integral['time_constant_s']:g} s, `subenv_agents/features.py`), which `load_agent`/`AgentController` append")
 
 
 def _policy(train: dict[str, Any], selection: dict[str, Any] | None) -> str:
@@ -150,7 +149,7 @@ def _policy(train: dict[str, Any], selection: dict[str, Any] | None) -> str:
         return f"- Policy: the final one, after {train['timesteps']:,} steps."
     best = selection["best"]
     return (f"- Policy: the best of {selection['evaluations']} validations, one every {selection['freq']:,} steps "
-            f"and one at the end (`agents/selection.py`): at step {best['timestep']:,}, "
+            f"and one at the end (`subenv_agents/selection.py`): at step {best['timestep']:,}, "
             f"{100 * best['success_rate']:.1f}% success and {best['plane_rms_rad']:.4f} rad plane RMS on "
             f"{selection['episodes']} episodes each of {', '.join(selection['scenarios'])} with the seeds "
             f"{selection['validation_seed']} + i (not the evaluation's below); the validations are part of the training time.")
@@ -165,7 +164,7 @@ def _steps(train: dict[str, Any], parents: list[dict[str, Any]]) -> str:
 
 
 def _shaping(config: dict[str, Any], continued: bool) -> str:
-    """The card's line on the training-only reward terms (:mod:`agents.shaping`), if the config has any."""
+    """The card's line on the training-only reward terms (:mod:`subenv_agents.shaping`), if the config has any."""
     terms = []
     if config.get("plane_effort_l1"):
         speed = config.get("plane_effort_reference_speed_mps")
@@ -178,7 +177,7 @@ def _shaping(config: dict[str, Any], continued: bool) -> str:
     if not terms:
         return ""
     where = " of the last run (`config.yml`)" if continued else ""
-    return f"- Reward shaping, training only (`agents/shaping.py`){where}: {' and '.join(terms)}.\n"
+    return f"- Reward shaping, training only (`subenv_agents/shaping.py`){where}: {' and '.join(terms)}.\n"
 
 
 def _card(name: str, train: dict[str, Any], config: dict[str, Any], suite: dict[str, Any], held: dict[str, Any], met: bool,
@@ -199,13 +198,13 @@ def _card(name: str, train: dict[str, Any], config: dict[str, Any], suite: dict[
 A {train['algo'].upper()} agent (Stable-Baselines3 {train['versions']['stable_baselines3']}) for depth
 keeping, trained on {envs} with the environment arguments
 `{config['env_kwargs']}` (`control: independent`: stern and bow planes driven separately){_integral(config)}.
-Registered as the controller `{name}` of `subenv evaluate` (`import agents`); load it with
-`agents.load_agent("agents/models/{name}")` (the model and its VecNormalize statistics together).
+Registered as the controller `{name}` of `subenv evaluate` (a `subenv.controllers` entry point); load it with
+`subenv_agents.load_agent("subenv_agents/models/{name}")` (the model and its VecNormalize statistics together).
 
 ## Training
 
 - Command: {command}
-- Seed: {train['seed']}; {train['n_envs']} sub-environments of the native vector env; {_steps(train, parents)}; hyperparameters in `config.yml` (resolved from `agents/hyperparams/{train['algo']}.yml`).
+- Seed: {train['seed']}; {train['n_envs']} sub-environments of the native vector env; {_steps(train, parents)}; hyperparameters in `config.yml` (resolved from `subenv_agents/hyperparams/{train['algo']}.yml`).
 - Training time: {total_s:.0f} s ({total_s / 60:.1f} min) of wall-clock time on {train['machine']}
   ({train['torch_threads']} torch thread), the learning itself (model set-up and the final save not
   counted); `train.json` has the record.
@@ -227,21 +226,21 @@ SpeedTransient): **{'met' if met else 'not met'}**. {detail}.
 ## Generalisation (held out of training)
 
 {held_out_episodes} episodes per scenario, noise-free, on speeds and loadings outside the training
-ranges (`agents/generalisation.py`), next to the baseline:
+ranges (`subenv_agents/generalisation.py`), next to the baseline:
 
 {chr(10).join(f'- `{s.name}`: {s.description}' for s in HELD_OUT)}
 
 {_table(held, [s.name for s in HELD_OUT])}
 
-Reproduce: `python -m agents.card <run folder> --name {name} --force` re-evaluates and rewrites this card;
-`python -m agents.evaluate agents/models/{name} --suite default` gives the full tables.
+Reproduce: `python -m subenv_agents.card <run folder> --name {name} --force` re-evaluates and rewrites this card;
+`python -m subenv_agents.evaluate subenv_agents/models/{name} --suite default` gives the full tables.
 """
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m agents.card", description=__doc__.split("\n\n")[0])
-    parser.add_argument("run", type=Path, help="the run folder (python -m agents.train's)")
-    parser.add_argument("--name", required=True, help="the model's name: agents/models/<name>, the controller name")
+    parser = argparse.ArgumentParser(prog="python -m subenv_agents.card", description=__doc__.split("\n\n")[0])
+    parser.add_argument("run", type=Path, help="the run folder (python -m subenv_agents.train's)")
+    parser.add_argument("--name", required=True, help="the model's name: subenv_agents/models/<name>, the controller name")
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--held-out-episodes", type=int, default=50)
     parser.add_argument("--force", action="store_true", help="replace an existing model of that name")
@@ -251,7 +250,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         folder = ship(args.run, args.name, args.episodes, args.held_out_episodes, args.force, selected=not args.final)
     except (FileExistsError, FileNotFoundError, ValueError) as exc:
-        raise SystemExit(f"agents.card: {exc}") from None
+        raise SystemExit(f"subenv_agents.card: {exc}") from None
     print((folder / "MODEL_CARD.md").read_text())
     return 0
 

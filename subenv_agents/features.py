@@ -3,7 +3,7 @@
 A policy that maps the observation to the planes is a proportional-derivative controller at
 best: wherever a steady state off the ordered depth exists with the planes free (below the
 critical speed they do; :func:`subenv.analysis.equilibria`), it can settle there, 0.5-1 m off
-depth. The classical baselines remove that offset with integral action (``baselines.lqr``, LQR
+depth. The classical baselines remove that offset with integral action (``subenv_baselines.lqr``, LQR
 with the depth-error integral as a state). The agents get the same information as one more
 observation component::
 
@@ -12,7 +12,7 @@ observation component::
 with e_k the observed depth error (component 0) after step k, dt the control period, T the leak
 time constant (the leak keeps I stationary under noise and disturbances). The training stack
 appends it with :class:`DepthIntegralVecEnv`; the evaluation controller
-(:class:`agents.controller.AgentController`) computes the same sequence with :class:`DepthIntegral`,
+(:class:`subenv_agents.controller.AgentController`) computes the same sequence with :class:`DepthIntegral`,
 so an agent sees the same numbers in training and in evaluation.
 """
 
@@ -25,7 +25,7 @@ import numpy as np
 from gymnasium import spaces
 from stable_baselines3.common.vec_env import VecEnvWrapper
 
-from agents.config import DepthIntegralConfig
+from subenv_agents.config import DepthIntegralConfig
 
 __all__ = ["DepthIntegral", "DepthIntegralVecEnv", "augmented_space"]
 

@@ -2,10 +2,10 @@
 
 ::
 
-    python -m agents.evaluate results/agents/ppo/subenv-DivePlane-v0_1 --suite reversal
-    python -m agents.evaluate agents/models/ppo agents/models/sac --against reversal_aware,lqr
+    python -m subenv_agents.evaluate results/agents/ppo/subenv-DivePlane-v0_1 --suite reversal
+    python -m subenv_agents.evaluate subenv_agents/models/ppo subenv_agents/models/sac --against reversal_aware,lqr
 
-Each path is a run folder, a shipped model folder or a model file (:func:`agents.load_agent`);
+Each path is a run folder, a shipped model folder or a model file (:func:`subenv_agents.load_agent`);
 the agent is named after its folder unless ``NAME=PATH`` is given. The results folder is the same
 as ``subenv evaluate``'s (leaderboard, summary, per-episode table, plots).
 """
@@ -19,7 +19,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from agents.controller import AgentController
+from subenv_agents.controller import AgentController
 
 __all__ = ["agent_controllers", "main"]
 
@@ -38,10 +38,9 @@ def agent_controllers(specs: Sequence[str]) -> list[AgentController]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    import baselines  # noqa: F401  (registers the classical controllers)
     from subenv.evaluation import DEFAULT_SEED, run_comparison
 
-    parser = argparse.ArgumentParser(prog="python -m agents.evaluate", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(prog="python -m subenv_agents.evaluate", description=__doc__.split("\n\n")[0])
     parser.add_argument("agents", nargs="+", metavar="[NAME=]PATH", help="run folders, model folders or model files")
     parser.add_argument("--against", default="reversal_aware",
                         help="comma-separated registered controllers to compare with ('' for none; default: %(default)s)")
@@ -60,7 +59,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         comparison = run_comparison(controllers, suite, args.episodes, out, overwrite=args.force, seed=args.seed,
                                     progress=sys.stderr.isatty(), plots=not args.no_plots)
     except (ValueError, FileExistsError, FileNotFoundError) as exc:
-        raise SystemExit(f"agents.evaluate: {exc}") from None
+        raise SystemExit(f"subenv_agents.evaluate: {exc}") from None
     print(comparison.leaderboard)
     print(f"\n{len(comparison.results)} episodes in {comparison.elapsed_s:.1f} s; results in {comparison.out_dir}/")
     return 0

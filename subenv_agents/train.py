@@ -2,15 +2,15 @@
 
 ::
 
-    python -m agents.train --algo ppo --env subenv/DivePlane-v0 --seed 0
+    python -m subenv_agents.train --algo ppo --env subenv/DivePlane-v0 --seed 0
     subenv train --algo sac --env subenv/LowSpeed-v0 -n 200000          # the same command
 
-Hyperparameters come from ``agents/hyperparams/<algo>.yml`` (:mod:`agents.config`). Training runs
+Hyperparameters come from ``subenv_agents/hyperparams/<algo>.yml`` (:mod:`subenv_agents.config`). Training runs
 on the native vector environment (:func:`subenv.envs.sb3.make_sb3_vec_env`) wrapped in
 ``VecMonitor`` and ``VecNormalize``. A run folder ``<log-folder>/<algo>/<env>_<k>/`` receives::
 
     model.zip, vecnormalize.pkl   the final model and its normalisation statistics (load both with
-                                  agents.load_agent(folder))
+                                  subenv_agents.load_agent(folder))
     config.yml                    the resolved hyperparameters (algo, env_id, hyperparams)
     train.json                    seed, steps, wall time, threads, versions, curriculum advances
     progress.csv                  SB3's training log (and tensorboard/ if TensorBoard is installed)
@@ -18,7 +18,7 @@ on the native vector environment (:func:`subenv.envs.sb3.make_sb3_vec_env`) wrap
     checkpoints/rl_model_<N>_steps.zip and rl_model_vecnormalize_<N>_steps.pkl
     curriculum.json               the curriculum's stage, the stage it started at and its advances
     selected/, selection.json     with --select-freq: the policy that did best on validation episodes
-                                  (agents.selection), loadable on its own, and the record of every check
+                                  (subenv_agents.selection), loadable on its own, and the record of every check
 
 ``--trained-agent`` continues a run from its model, a checkpoint or its selected policy into a new
 folder, with that model's statistics and the curriculum stage training was at when it was saved.
@@ -43,8 +43,16 @@ from typing import Any, Final
 
 import yaml
 
-from agents.config import ALGORITHMS, AgentConfig, algorithm_class, load_config, model_kwargs, parse_overrides
-from agents.policy import (
+from subenv.evaluation.results import atomic_write_text
+from subenv_agents.config import (
+    ALGORITHMS,
+    AgentConfig,
+    algorithm_class,
+    load_config,
+    model_kwargs,
+    parse_overrides,
+)
+from subenv_agents.policy import (
     CHECKPOINT_DIR,
     CONFIG_FILE,
     MODEL_FILE,
@@ -57,7 +65,6 @@ from agents.policy import (
     statistics_file,
     training_run,
 )
-from subenv.evaluation.results import atomic_write_text
 
 __all__ = ["DEFAULT_ENV_ID", "EVAL_SEED_OFFSET", "TrainResult", "main", "make_vec_env", "train"]
 
@@ -85,8 +92,8 @@ def make_vec_env(config: AgentConfig, n_envs: int, seed: int, curriculum: bool =
     plane-effort penalty and the depth-error integral observation, ``VecMonitor`` and (if configured) ``VecNormalize``."""
     from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
 
-    from agents.shaping import DEPTH_ERROR_KEY, DepthBandBonusVecEnv, PlaneEffortL1VecEnv
     from subenv.envs.sb3 import make_sb3_vec_env
+    from subenv_agents.shaping import DEPTH_ERROR_KEY, DepthBandBonusVecEnv, PlaneEffortL1VecEnv
 
     info_keys: tuple[str, ...] = _INFO_KEYS_CURRICULUM if curriculum else ()
     if config.depth_band_bonus is not None and DEPTH_ERROR_KEY not in info_keys:
@@ -97,7 +104,7 @@ def make_vec_env(config: AgentConfig, n_envs: int, seed: int, curriculum: bool =
     if config.plane_effort_l1 > 0:
         venv = PlaneEffortL1VecEnv(venv, config.plane_effort_l1, config.plane_effort_reference_speed_mps)
     if config.depth_integral is not None:
-        from agents.features import DepthIntegralVecEnv
+        from subenv_agents.features import DepthIntegralVecEnv
 
         venv = DepthIntegralVecEnv(venv, config.depth_integral, venv.get_attr("config")[0].dt)
     venv = VecMonitor(venv)
@@ -142,7 +149,7 @@ def train(
     command : str, optional
         The command line that started the run, recorded in ``train.json``.
     select_freq, select_episodes : int
-        Environment steps between validations of the policy (:mod:`agents.selection`; 0: none),
+        Environment steps between validations of the policy (:mod:`subenv_agents.selection`; 0: none),
         and validation episodes per scenario; the best policy goes to ``<run>/selected/``.
     """
     import torch
@@ -150,7 +157,7 @@ def train(
     from stable_baselines3.common.logger import configure
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from agents.curriculum import CurriculumCallback, read_stage, stage_scenarios, write_state
+    from subenv_agents.curriculum import CurriculumCallback, read_stage, stage_scenarios, write_state
 
     for name, value in (("seed", seed), ("eval_freq", eval_freq), ("eval_episodes", eval_episodes),
                         ("save_freq", save_freq), ("select_freq", select_freq), ("select_episodes", select_episodes)):
@@ -220,7 +227,7 @@ def train(
                                           verbose=0))
         selection = None
         if select_freq:
-            from agents.selection import SelectionCallback
+            from subenv_agents.selection import SelectionCallback
 
             selection = SelectionCallback(config, run_dir, select_freq, select_episodes, verbose=verbose)
             callbacks.append(selection)
@@ -288,7 +295,7 @@ def _quote(arg: str) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m agents.train",
+        prog="python -m subenv_agents.train",
         description="Train a Stable-Baselines3 agent (PPO, SAC, TD3) on a subenv environment.")
     parser.add_argument("--algo", required=True, choices=ALGORITHMS, help="the algorithm")
     parser.add_argument("--env", default=DEFAULT_ENV_ID, help="environment id (default: %(default)s)")
@@ -296,7 +303,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0, help="seed of the model and the environments (default: 0)")
     parser.add_argument("-f", "--log-folder", default=DEFAULT_LOG_FOLDER, help="default: %(default)s")
     parser.add_argument("--run-dir", help="the run folder itself (default: <log-folder>/<algo>/<env>_<k>)")
-    parser.add_argument("-conf", "--conf-file", help="hyperparameter YAML (default: agents/hyperparams/<algo>.yml)")
+    parser.add_argument("-conf", "--conf-file", help="hyperparameter YAML (default: subenv_agents/hyperparams/<algo>.yml)")
     parser.add_argument("-params", "--hyperparams", nargs="+", default=[], metavar="KEY:VALUE",
                         help="override hyperparameters, e.g. learning_rate:1e-4 'policy_kwargs:{net_arch: [32, 32]}'")
     parser.add_argument("--curriculum", action=argparse.BooleanOptionalAction, default=None,
@@ -326,9 +333,9 @@ def main(argv: list[str] | None = None) -> int:
                        trained_agent=args.trained_agent, eval_freq=args.eval_freq, eval_episodes=args.eval_episodes,
                        save_freq=args.save_freq, progress=progress, verbose=0 if args.quiet else 1,
                        threads=args.threads, select_freq=args.select_freq, select_episodes=args.select_episodes,
-                       command=" ".join(["python -m agents.train", *map(_quote, argv_list)]))
+                       command=" ".join(["python -m subenv_agents.train", *map(_quote, argv_list)]))
     except (ValueError, FileExistsError, FileNotFoundError) as exc:
-        raise SystemExit(f"agents.train: {exc}") from None
+        raise SystemExit(f"subenv_agents.train: {exc}") from None
     print(f"trained {config.algo} on {config.env_id} for {result.timesteps} steps in {result.wall_time_s:.0f} s "
           f"(seed {args.seed}); run folder {result.run_dir}/")
     if result.final_stage is not None:

@@ -6,7 +6,7 @@ branch again, or stops bothering with the weak low-speed planes). Instead of shi
 the last update left, :class:`SelectionCallback` evaluates the current deterministic policy
 every ``freq`` steps, and once more at the end, with the harness of ``subenv evaluate`` on
 validation episodes, and keeps the best one in ``<run>/selected/`` (``model.zip``,
-``vecnormalize.pkl``, ``config.yml``: a folder :func:`agents.load_agent` reads).
+``vecnormalize.pkl``, ``config.yml``: a folder :func:`subenv_agents.load_agent` reads).
 
 "Best" is the target of the shipped agents: the highest success rate over the
 :data:`SELECTION_SCENARIOS` (the low-speed, near-critical and speed-transient episodes), ties
@@ -26,8 +26,9 @@ from typing import Any, Final
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
-from agents.config import AgentConfig
-from agents.policy import (
+from subenv.evaluation.results import atomic_output_dir, atomic_write_bytes, atomic_write_text
+from subenv_agents.config import AgentConfig
+from subenv_agents.policy import (
     CONFIG_FILE,
     MODEL_FILE,
     SELECTED_DIR,
@@ -36,7 +37,6 @@ from agents.policy import (
     save_model,
     save_statistics,
 )
-from subenv.evaluation.results import atomic_output_dir, atomic_write_bytes, atomic_write_text
 
 __all__ = ["SELECTED_DIR", "SELECTION_SCENARIOS", "VALIDATION_SEED", "SelectionCallback", "validation_score"]
 
@@ -51,8 +51,8 @@ def validation_score(agent: TrainedAgent, scenarios: Sequence[str], episodes: in
                      seed: int = VALIDATION_SEED) -> dict[str, float]:
     """Success rate (mean over ``scenarios``) and mean plane RMS [rad] of ``agent``'s deterministic
     policy on ``episodes`` validation episodes per scenario."""
-    from agents.controller import AgentController
     from subenv.evaluation import evaluate
+    from subenv_agents.controller import AgentController
 
     results = evaluate([AgentController(agent, name="candidate")], list(scenarios), episodes=episodes, seed=seed,
                        progress=False, keep_trajectories=0)

@@ -8,12 +8,12 @@ from typing import Any, Final
 import numpy as np
 from scipy.linalg import solve_continuous_are
 
-from baselines._common import GainSchedule, feedback_state, row_dot, speeds
 from subenv.analysis import linear_model
 from subenv.analysis.linear import Allocation
 from subenv.dynamics import CONTROL_PERIOD_S
 from subenv.evaluation import SingleRowMixin, check_batch
 from subenv.vehicles import Vehicle
+from subenv_baselines._common import GainSchedule, feedback_state, row_dot, speeds
 
 # Bryson's rule: each state weighted by the inverse square of its acceptable size.
 ACCEPTABLE: Final = {"pitch_rad": 0.1, "heave_mps": 0.1, "pitch_rate_radps": 0.05, "depth_error_m": 1.0,
@@ -77,7 +77,7 @@ class ScheduledLQR(SingleRowMixin):
     A modern reference: the optimal gain for the thesis's plane allocation at every speed, so it
     carries the reversed depth gain below the critical speed. At u_cr itself the depth mode is
     uncontrollable with this allocation (Fig. 3-14), so close to it the gains grow and the loop
-    weakens; compare :class:`baselines.reversal_aware.ReversalAware`, which moves u_cr away.
+    weakens; compare :class:`subenv_baselines.reversal_aware.ReversalAware`, which moves u_cr away.
     """
 
     name = "lqr"

@@ -7,10 +7,10 @@ from typing import Any
 
 import numpy as np
 
-from baselines._common import GainSchedule, feedback_state, row_dot, speeds
 from subenv.analysis import THESIS_POLES, place_gain
 from subenv.evaluation import SingleRowMixin
 from subenv.vehicles import Vehicle
+from subenv_baselines._common import GainSchedule, feedback_state, row_dot, speeds
 
 DEFAULT_POINTS = np.linspace(0.15, 2.0, 38)
 """Scheduling speeds [m/s], every 0.05 m/s; for SUBOFF u_cr = 0.5785 m/s lies between two points."""

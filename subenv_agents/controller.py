@@ -8,11 +8,11 @@ from typing import Any
 
 import numpy as np
 
-from agents.features import DepthIntegral
-from agents.policy import TrainedAgent, load_agent
 from subenv.dynamics import CONTROL_PERIOD_S
 from subenv.evaluation import SingleRowMixin, check_batch
 from subenv.vehicles import Vehicle
+from subenv_agents.features import DepthIntegral
+from subenv_agents.policy import TrainedAgent, load_agent
 
 __all__ = ["AgentController"]
 
@@ -22,10 +22,10 @@ _DYNAMICS_KWARGS = ("vehicle", "dt", "substeps", "plane_rate_limit_radps", "max_
 
 
 class AgentController(SingleRowMixin):
-    """A trained agent (:func:`agents.load_agent`) behind the :class:`~subenv.evaluation.Controller` protocol.
+    """A trained agent (:func:`subenv_agents.load_agent`) behind the :class:`~subenv.evaluation.Controller` protocol.
 
     Acts deterministically on the environment's observations (one episode, or a batch: one row
-    per episode): appends each episode's depth-error integral (:mod:`agents.features`) if the
+    per episode): appends each episode's depth-error integral (:mod:`subenv_agents.features`) if the
     agent observes it, then normalises as in training.
     ``control`` and ``alpha`` are those the agent was trained with.
 

@@ -8,12 +8,12 @@ from typing import Any, Final
 import numpy as np
 from scipy.optimize import brentq
 
-from baselines._common import GainSchedule, speeds
-from baselines.lqr import ACCEPTABLE, DEFAULT_POINTS, DepthIntegrator, lqi_command, lqi_gain
 from subenv.analysis import critical_speed
 from subenv.dynamics import CONTROL_PERIOD_S
 from subenv.evaluation import SingleRowMixin, check_batch
 from subenv.vehicles import Vehicle
+from subenv_baselines._common import GainSchedule, speeds
+from subenv_baselines.lqr import ACCEPTABLE, DEFAULT_POINTS, DepthIntegrator, lqi_command, lqi_gain
 
 ALLOCATIONS: Final = (-1.0, 1.0)
 """The bow/stern allocations it chooses between: the extremes move u_cr furthest (Fig. 3-9)."""
@@ -41,7 +41,7 @@ class ReversalAware(SingleRowMixin):
        planes are driven independently (``control="independent"``) as stern = delta,
        bow = alpha delta.
     2. **Gains.** LQR with integral action on (theta, w, q, e, int e) for the chosen allocation,
-       designed at every 0.02 m/s and interpolated (:func:`baselines.lqr.lqi_gain`): the depth
+       designed at every 0.02 m/s and interpolated (:func:`subenv_baselines.lqr.lqi_gain`): the depth
        gains carry the sign each regime needs (reversed below u_cr(alpha)), the integral removes
        the steady error of excess buoyancy (surface suction) and ballast offsets. When the
        allocation switches, the integrator is rescaled so that its contribution to the command

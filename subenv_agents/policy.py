@@ -1,7 +1,7 @@
 """Trained agents: a model and its normalisation statistics loaded together, acting in NumPy.
 
-:func:`load_agent` takes a run folder (what ``python -m agents.train`` writes, or a shipped
-model in ``agents/models/``) or a model file, and returns a :class:`TrainedAgent` that holds the
+:func:`load_agent` takes a run folder (what ``python -m subenv_agents.train`` writes, or a shipped
+model in ``subenv_agents/models/``) or a model file, and returns a :class:`TrainedAgent` that holds the
 Stable-Baselines3 model, the ``VecNormalize`` statistics it was trained with and its config.
 ``agent.predict(obs)`` normalises the raw observation and returns the deterministic action.
 
@@ -25,8 +25,8 @@ from typing import Any, Final
 import numpy as np
 from gymnasium import spaces
 
-from agents.config import AgentConfig, load_config, read_yaml_file
 from subenv.evaluation.results import atomic_write_bytes
+from subenv_agents.config import AgentConfig, load_config, read_yaml_file
 
 __all__ = ["CHECKPOINT_DIR", "CONFIG_FILE", "MODEL_FILE", "RUN_ID_ATTRIBUTE", "SELECTED_DIR", "VECNORMALIZE_FILE",
            "NumpyActor", "TrainedAgent", "load_agent", "mark_run", "model_folder", "save_model", "save_statistics",
@@ -39,7 +39,7 @@ CONFIG_FILE: Final = "config.yml"
 CHECKPOINT_DIR: Final = "checkpoints"
 """A run's sub-folder of SB3 checkpoints, ``rl_model_<N>_steps.zip``."""
 SELECTED_DIR: Final = "selected"
-"""A run's sub-folder with the policy that did best on validation episodes (:mod:`agents.selection`)."""
+"""A run's sub-folder with the policy that did best on validation episodes (:mod:`subenv_agents.selection`)."""
 RUN_ID_ATTRIBUTE: Final = "subenv_run_id"
 """The attribute, saved with a run's models and statistics, that ties them together (:func:`mark_run`)."""
 _CHECKPOINT = re.compile(r"^(?P<prefix>.+)_(?P<steps>\d+)_steps\.zip$")
@@ -160,7 +160,7 @@ class TrainedAgent:
     def predict(self, obs: np.ndarray) -> np.ndarray:
         """The deterministic action for an observation (shape (obs_dim,)) or a batch (n, obs_dim), as the
         model observes it: the environment's, with the depth-error integral appended if the agent
-        has one (:class:`agents.controller.AgentController` appends it for you)."""
+        has one (:class:`subenv_agents.controller.AgentController` appends it for you)."""
         obs = np.asarray(obs)
         single = obs.ndim == 1
         if obs.shape[-1:] != self.observation_space.shape:
@@ -227,7 +227,7 @@ def load_agent(path: str | Path, env: Any = None, device: str = "cpu") -> Traine
         The model or its statistics were saved without a run id (before :func:`mark_run`), so
         that they belong together cannot be checked.
     """
-    from agents.config import algorithm_class
+    from subenv_agents.config import algorithm_class
 
     path = Path(path)
     model_file = path / MODEL_FILE if path.is_dir() else path

@@ -7,10 +7,10 @@ from typing import Any
 
 import numpy as np
 
-from baselines._common import feedback_state, row_dot
 from subenv.analysis import thesis_gain
 from subenv.evaluation import SingleRowMixin
 from subenv.vehicles import Vehicle
+from subenv_baselines._common import feedback_state, row_dot
 
 
 class ThesisPolePlacement(SingleRowMixin):
