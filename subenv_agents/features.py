@@ -21,13 +21,14 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 from stable_baselines3.common.vec_env import VecEnvWrapper
 
 from subenv_agents.config import DepthIntegralConfig
 
-__all__ = ["DepthIntegral", "DepthIntegralVecEnv", "augmented_space"]
+__all__ = ["DepthIntegral", "DepthIntegralEnv", "DepthIntegralVecEnv", "augmented_space"]
 
 _DEPTH_ERROR = 0  # index of the depth error in subenv's observation (subenv.envs.OBSERVATION_NAMES)
 
@@ -94,3 +95,23 @@ class DepthIntegralVecEnv(VecEnvWrapper):  # type: ignore[misc]
         self.integral.update(obs)
         self.integral.reset(dones)  # those observations start new episodes: I_0 = 0
         return self.integral.append(obs, self.integral.value), rewards, dones, infos
+
+
+class DepthIntegralEnv(gym.Wrapper):  # type: ignore[type-arg]
+    """A Gymnasium wrapper that appends the depth-error integral to one environment's observations, as
+    :class:`DepthIntegralVecEnv` does in training (``TrainedAgent.make_env`` uses it)."""
+
+    def __init__(self, env: gym.Env, config: DepthIntegralConfig, dt_s: float) -> None:  # type: ignore[type-arg]
+        super().__init__(env)
+        self.observation_space = augmented_space(env.observation_space, config)  # type: ignore[arg-type]
+        self.integral = DepthIntegral(1, dt_s, config)
+
+    def reset(self, **kwargs: Any) -> tuple[np.ndarray, dict[str, Any]]:
+        obs, info = self.env.reset(**kwargs)
+        self.integral.reset()
+        return self.integral.append(obs[None], self.integral.value)[0], info
+
+    def step(self, action: Any) -> tuple[np.ndarray, Any, bool, bool, dict[str, Any]]:
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        self.integral.update(obs[None])
+        return self.integral.append(obs[None], self.integral.value)[0], reward, terminated, truncated, info

@@ -171,6 +171,22 @@ class TrainedAgent:
         action = self.actor(self.normalize(obs.reshape(1, -1) if single else obs))
         return action[0] if single else action
 
+    def make_env(self, **overrides: Any) -> Any:
+        """The environment the agent was trained on (``gym.make`` of its id and ``env_kwargs``, with
+        ``overrides`` such as ``render_mode``), its observations as the agent takes them (the
+        depth-error integral appended where the agent observes it): ``agent.predict(obs)`` acts on them.
+        """
+        import gymnasium as gym
+
+        import subenv  # noqa: F401  (registers the ids)
+
+        env = gym.make(self.config.env_id, **{**self.config.env_kwargs, **overrides})
+        if self.config.depth_integral is None:
+            return env
+        from subenv_agents.features import DepthIntegralEnv
+
+        return DepthIntegralEnv(env, self.config.depth_integral, env.unwrapped.config.dt)
+
     @property
     def env_observation_space(self) -> spaces.Box:
         """The environment's observation space the agent was trained on (without the appended

@@ -83,3 +83,29 @@ def test_shipped_ppo_uses_less_plane_effort_than_the_baseline(reversal_results) 
     """What the README claims for the shipped PPO: lower plane RMS than reversal_aware on every reversal scenario."""
     for scenario in REVERSAL_SCENARIOS:
         assert reversal_results["ppo"][scenario]["plane_rms_rad"] < reversal_results[BASELINE][scenario]["plane_rms_rad"]
+
+
+@pytest.mark.parametrize("name", sorted(SHIPPED))
+def test_a_shipped_agent_makes_its_env_and_acts_on_its_observations_as_the_harness_does(name: str) -> None:
+    """The README's episode loop: ``agent.make_env()`` is the env the agent was trained on, its
+    observations as the agent takes them, so ``agent.predict(obs)`` acts in one call; the actions are
+    the evaluation controller's (which appends the depth-error integral itself) on the plain env."""
+    import gymnasium as gym
+
+    from subenv_agents.controller import AgentController
+
+    agent = load_agent(SHIPPED[name])
+    env = agent.make_env()
+    plain = gym.make(agent.config.env_id, **agent.config.env_kwargs)
+    controller = AgentController(agent)
+    obs, _ = env.reset(seed=5)
+    plain_obs, info = plain.reset(seed=5)
+    controller.reset(info, plain.unwrapped.vehicle)
+    assert env.observation_space.shape == agent.observation_space.shape
+    for _ in range(60):
+        action = agent.predict(obs)
+        np.testing.assert_array_equal(action, controller.act(plain_obs))
+        obs, _, terminated, truncated, _ = env.step(action)
+        plain_obs, *_ = plain.step(action)
+        if terminated or truncated:
+            break
