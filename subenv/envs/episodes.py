@@ -143,16 +143,11 @@ def episode_fields(config: DivePlaneConfig, draw: EpisodeConfig, loading: Loadin
                                                        command)
     if len(knots) > tr.MAX_KNOTS:
         raise ValueError(f"the speed profile has {len(knots)} knots; the environment takes at most {tr.MAX_KNOTS}")
-    knot_time: Any = [0.0] * tr.MAX_KNOTS
-    knot_speed: Any = [0.0] * tr.MAX_KNOTS
-    if isinstance(draw.depth_command_m, np.ndarray):  # a batch: a row of knots per episode
-        knot_time = np.zeros((len(draw.depth_command_m), tr.MAX_KNOTS))
-        knot_speed = np.zeros_like(knot_time)
+    # One row of knots, or one per episode of a batch.
+    shape = (len(draw.depth_command_m), tr.MAX_KNOTS) if isinstance(draw.depth_command_m, np.ndarray) else tr.MAX_KNOTS
+    knot_time, knot_speed = np.zeros(shape), np.zeros(shape)
     for k, (t, u) in enumerate(knots):
-        if isinstance(knot_time, list):
-            knot_time[k], knot_speed[k] = t, u
-        else:
-            knot_time[:, k], knot_speed[:, k] = t, u
+        knot_time[..., k], knot_speed[..., k] = t, u
     episode = {
         "params": loading.params, "n_knots": len(knots), "knot_time_s": knot_time, "knot_speed_mps": knot_speed,
         "depth_command_m": command, "disturbance_std_N": draw.disturbance_std_N, "sensor_noise": draw.sensor_noise,
