@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import importlib.util
 import math
 import sys
 import time
@@ -137,8 +138,29 @@ def analyze(args: argparse.Namespace) -> int:
 
 
 def _load_plugins(names: Sequence[str]) -> None:
-    """Import modules on the path by name; they register their controllers with subenv.evaluation."""
+    """Import each plugin: a Python file (``depth_p.py``) or a module importable from the current
+    directory or the path (``my_package.controllers``); it registers its controllers with
+    :func:`subenv.evaluation.register_controller` when imported."""
+    if "" not in sys.path and str(Path.cwd()) not in sys.path:
+        sys.path.insert(0, str(Path.cwd()))  # (as `python -m` does: a module beside the user is found)
     for name in names:
+        if name.endswith(".py"):
+            path = Path(name)
+            if not path.is_file():
+                raise SystemExit(f"subenv evaluate: --plugins: no Python file {name!r} here")
+            module_name = path.stem
+            spec = importlib.util.spec_from_file_location(module_name, path)
+            if spec is None or spec.loader is None or not module_name.isidentifier():
+                raise SystemExit(f"subenv evaluate: --plugins: {name!r} cannot be imported: its name must be a "
+                                 "Python identifier ending in .py")
+            module = importlib.util.module_from_spec(spec)
+            sys.modules[module_name] = module  # (the importlib recipe: dataclasses and pickling find it)
+            try:
+                spec.loader.exec_module(module)
+            except BaseException:
+                del sys.modules[module_name]
+                raise
+            continue
         try:
             importlib.import_module(name)
         except ModuleNotFoundError as exc:
@@ -252,8 +274,9 @@ def _parser() -> argparse.ArgumentParser:
     p_eval.add_argument("--no-progress", action="store_true",
                         help="no progress on stderr (a bar on a terminal, otherwise a line every 5%%)")
     p_eval.add_argument("--plugins", type=_names,
-                        help="comma-separated modules on the path that register controllers when imported "
-                             "(installed packages declare theirs as entry points and need none)")
+                        help="comma-separated Python files (depth_p.py) or modules (here or on the path) that "
+                             "register controllers when imported; installed packages declare theirs as entry "
+                             "points and need none")
     p_eval.add_argument("--list", action="store_true", help="list the controllers and suites, and exit")
     p_demo = sub.add_parser("demo", help="fly the thesis controller above and below the critical speed")
     p_demo.add_argument("--env", default="subenv/Nominal-v0", help="environment id (default: %(default)s)")

@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
+from tqdm import tqdm
 
 from subenv.analysis.curriculum import DEFAULT_STAGES, speed_curriculum
 from subenv.evaluation.metrics import DEPTH_TOLERANCE_M, episode_success
@@ -184,7 +185,7 @@ class CurriculumCallback(BaseCallback):
         self.training_env.env_method("set_scenario", self.scenarios[stage])
         self.advances.append((self.num_timesteps, stage))
         if self.verbose:
-            print(f"curriculum: stage {stage} ({self.scenarios[stage].name}) at {self.num_timesteps} steps")
+            tqdm.write(f"curriculum: stage {stage} ({self.scenarios[stage].name}) at {self.num_timesteps} steps")
         if self.state_dir is not None:
             write_state(self.state_dir, stage, self.advances, self.start_stage)
 

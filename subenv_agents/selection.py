@@ -25,6 +25,7 @@ from typing import Any, Final
 
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
+from tqdm import tqdm
 
 from subenv.evaluation.results import atomic_output_dir, atomic_write_bytes, atomic_write_text
 from subenv_agents.config import AgentConfig
@@ -126,7 +127,7 @@ class SelectionCallback(BaseCallback):
             self.best = score
             self._save(venv)
         if self.verbose:
-            print(f"selection at {self.num_timesteps} steps: success {100 * score['success_rate']:.1f}%, plane RMS "
+            tqdm.write(f"selection at {self.num_timesteps} steps: success {100 * score['success_rate']:.1f}%, plane RMS "
                   f"{score['plane_rms_rad']:.4f} rad (best: {self.best['timestep']})")
         self._write_record()
 

@@ -115,6 +115,35 @@ def make_vec_env(config: AgentConfig, n_envs: int, seed: int, curriculum: bool =
     return venv
 
 
+def steps_per_iteration(model: Any) -> int:
+    """The environment steps ``model.learn`` takes between two checks of its step count: it stops at
+    the end of the iteration that reaches the total, so a run trains a whole number of these.
+
+    On-policy (PPO): a rollout, ``n_envs * n_steps``; off-policy (SAC, TD3): ``n_envs * train_freq``
+    (with ``train_freq`` in episodes, a vector step, ``n_envs``: such a run may take more).
+    """
+    from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
+    from stable_baselines3.common.type_aliases import TrainFrequencyUnit
+
+    if isinstance(model, OnPolicyAlgorithm):
+        return int(model.n_steps * model.n_envs)
+    freq = model.train_freq
+    return int(model.n_envs * (freq.frequency if freq.unit == TrainFrequencyUnit.STEP else 1))
+
+
+def trained_steps(requested: int, per_iteration: int) -> int:
+    """The steps a run of ``requested`` steps trains: rounded up to whole iterations of ``per_iteration``."""
+    return -(-requested // per_iteration) * per_iteration
+
+
+def _iteration(model: Any) -> str:
+    from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
+
+    if isinstance(model, OnPolicyAlgorithm):
+        return f"rollouts of {model.n_envs} envs x n_steps {model.n_steps}"
+    return f"{model.n_envs} envs x train_freq {model.train_freq.frequency} {model.train_freq.unit.value}"
+
+
 def train(
     config: AgentConfig,
     seed: int = 0,
@@ -143,6 +172,12 @@ def train(
     eval_freq, save_freq : int
         Environment steps between evaluations (``eval_episodes`` episodes) and between checkpoints;
         0 disables either.
+    progress : bool
+        Steps trained on stderr (:class:`subenv_agents.progress.TrainingProgress`): a bar on a
+        terminal, otherwise a line every 5%.
+    verbose : int
+        1: SB3's log tables on stdout (above the bar), and a line when ``config.n_timesteps`` is
+        rounded up to whole iterations (:func:`steps_per_iteration`); 0: neither.
     threads : int or None
         ``torch.set_num_threads`` (None leaves torch's default). One thread is fastest for these
         small networks and leaves the other core to a second run.
@@ -158,6 +193,7 @@ def train(
     from stable_baselines3.common.vec_env import VecNormalize
 
     from subenv_agents.curriculum import CurriculumCallback, read_stage, stage_scenarios, write_state
+    from subenv_agents.progress import TrainingProgress
 
     for name, value in (("seed", seed), ("eval_freq", eval_freq), ("eval_episodes", eval_episodes),
                         ("save_freq", save_freq), ("select_freq", select_freq), ("select_episodes", select_episodes)):
@@ -211,7 +247,12 @@ def train(
         model.set_logger(configure(str(run_dir), formats))
 
         n_envs = venv.num_envs
-        callbacks: list[Any] = []
+        chunk = steps_per_iteration(model)
+        planned = trained_steps(config.n_timesteps, chunk)
+        if planned != config.n_timesteps and verbose:
+            print(f"training {planned} steps: {config.n_timesteps} rounded up to whole iterations of {chunk} steps "
+                  f"({_iteration(model)})", file=sys.stderr)
+        callbacks: list[Any] = [TrainingProgress(planned, enabled=progress)]
         curriculum_callback = None
         if curriculum is not None:
             vehicle = venv.get_attr("config")[0].base_vehicle
@@ -245,8 +286,7 @@ def train(
                 folder.rmdir()
         raise
     start = time.perf_counter()
-    model.learn(config.n_timesteps, callback=CallbackList(callbacks), progress_bar=progress,
-                reset_num_timesteps=trained_agent is None)
+    model.learn(config.n_timesteps, callback=CallbackList(callbacks), reset_num_timesteps=trained_agent is None)
     wall = time.perf_counter() - start
 
     save_model(model, run_dir / MODEL_FILE)
@@ -299,7 +339,9 @@ def main(argv: list[str] | None = None) -> int:
         description="Train a Stable-Baselines3 agent (PPO, SAC, TD3) on a subenv environment.")
     parser.add_argument("--algo", required=True, choices=ALGORITHMS, help="the algorithm")
     parser.add_argument("--env", default=DEFAULT_ENV_ID, help="environment id (default: %(default)s)")
-    parser.add_argument("-n", "--n-timesteps", type=int, help="environment steps (default: the config's)")
+    parser.add_argument("-n", "--n-timesteps", type=int,
+                        help="environment steps, rounded up to whole iterations (PPO: rollouts of n_envs x n_steps; "
+                             "SAC, TD3: n_envs x train_freq) (default: the config's)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the model and the environments (default: 0)")
     parser.add_argument("-f", "--log-folder", default=DEFAULT_LOG_FOLDER, help="default: %(default)s")
     parser.add_argument("--run-dir", help="the run folder itself (default: <log-folder>/<algo>/<env>_<k>)")
@@ -316,8 +358,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="steps between validations that keep the best policy in <run>/selected/ (0: none)")
     parser.add_argument("--select-episodes", type=int, default=30, help="validation episodes per scenario")
     parser.add_argument("--threads", type=int, default=1, help="torch threads (default: 1)")
-    parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
-                        help="progress bar (default: when stderr is a terminal)")
+    parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=True,
+                        help="progress on stderr: a bar on a terminal, otherwise a line every 5%% (default: on)")
     parser.add_argument("-q", "--quiet", action="store_true", help="no training log on stdout")
     argv_list = list(sys.argv[1:] if argv is None else argv)
     args = parser.parse_args(argv_list)
@@ -328,10 +370,9 @@ def main(argv: list[str] | None = None) -> int:
         if args.curriculum is not None:
             overrides["curriculum"] = args.curriculum
         config = load_config(args.algo, args.env, args.conf_file, overrides)
-        progress = args.progress if args.progress is not None else sys.stderr.isatty()
         result = train(config, seed=args.seed, log_folder=args.log_folder, run_dir=args.run_dir,
                        trained_agent=args.trained_agent, eval_freq=args.eval_freq, eval_episodes=args.eval_episodes,
-                       save_freq=args.save_freq, progress=progress, verbose=0 if args.quiet else 1,
+                       save_freq=args.save_freq, progress=args.progress, verbose=0 if args.quiet else 1,
                        threads=args.threads, select_freq=args.select_freq, select_episodes=args.select_episodes,
                        command=" ".join(["python -m subenv_agents.train", *map(_quote, argv_list)]))
     except (ValueError, FileExistsError, FileNotFoundError) as exc:

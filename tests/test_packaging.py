@@ -88,5 +88,13 @@ def test_wheel_installs_into_a_clean_venv_and_evaluates(tmp_path: Path):
     rows = list(csv.DictReader((out / "results.csv").open()))
     assert [row["controller"] for row in rows] == ["thesis", "thesis"]  # the tiny suite: two scenarios, one episode
 
+    # The README's own controller, saved beside the user and run from the wheel's command.
+    readme = (ROOT / "README.md").read_text("utf-8")
+    (tmp_path / "depth_p.py").write_text(readme.split("```python\n# depth_p.py\n", 1)[1].split("```", 1)[0])
+    mine = tmp_path / "mine"
+    _run(subenv, "evaluate", "--plugins", "depth_p.py", "--controllers", "depth_p,thesis", "--suite", "tiny",
+         "--episodes", "1", "--no-plots", "--no-progress", "--out", mine, cwd=tmp_path)
+    assert [row["controller"] for row in csv.DictReader((mine / "results.csv").open())] == ["depth_p"] * 2 + ["thesis"] * 2
+
     bare = _run(subenv, cwd=tmp_path, ok=False)
     assert bare.returncode == 2 and "commands:" in bare.stderr

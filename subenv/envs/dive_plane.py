@@ -13,6 +13,7 @@ from numba import typed
 
 from subenv import _validation as check
 from subenv.envs import transition as tr
+from subenv.envs._compiling import first_call
 from subenv.envs._interrupts import interrupts_deferred
 from subenv.envs.config import OBSERVATION_NAMES, ControlMode, DivePlaneConfig
 from subenv.envs.episodes import Loadings, check_options, draw_episode, write_episode
@@ -205,11 +206,16 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         self._rngs_source: np.random.Generator | None = None
         self._history: list[tuple[float, float, float]] = []
         self._window: Any = None
+        # The first reset and step may load (or, with a cold cache, compile) the transition's kernels:
+        # they run under the compile notice (subenv.envs._compiling), the later ones without a test more.
+        self._first_calls = {"reset", "step"}
 
     # --- Gymnasium API ----------------------------------------------------------------------
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        if "reset" in self._first_calls:
+            return first_call(self._first_calls, "reset", self.reset, seed=seed, options=options)
         checked = check_options(self.config, options)
         previous = (self._np_random, self._np_random_seed)
         super().reset(seed=seed)
@@ -234,6 +240,8 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         return self._obs_row.copy(), step_info(self._report.ravel().tolist())
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, SupportsFloat, bool, bool, dict[str, Any]]:
+        if "step" in self._first_calls:
+            return first_call(self._first_calls, "step", self.step, action)
         if self.episode is None:
             raise gym.error.ResetNeeded("Cannot call step() before reset()")
         a = np.ascontiguousarray(check.real_array("action", action)).reshape(1, -1)

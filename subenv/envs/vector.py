@@ -14,6 +14,7 @@ from numba import typed
 
 from subenv import _validation as check
 from subenv.envs import transition as tr
+from subenv.envs._compiling import first_call
 from subenv.envs._interrupts import interrupts_deferred
 from subenv.envs.config import DivePlaneConfig
 from subenv.envs.episodes import (
@@ -185,6 +186,9 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         # (time, depth, ordered depth) of each sub-environment's episode so far, for render()
         self._histories: list[list[tuple[float, float, float]]] = [[] for _ in range(n)] if render_mode else []
         self._interrupted = False  # a step or reset was left midway (KeyboardInterrupt): reset() before stepping
+        # The first reset and step may load (or, with a cold cache, compile) the kernels: under the
+        # compile notice (subenv.envs._compiling), as DivePlaneEnv's.
+        self._first_calls = {"reset", "step"}
 
     # --- Gymnasium API ----------------------------------------------------------------------
     def reset(
@@ -196,6 +200,8 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         ``s`` (sub-environment ``i`` is seeded with ``s + i``) or one seed per sub-environment.
         Other ``options`` are :class:`~subenv.envs.DivePlaneEnv`'s, applied to every reset one.
         """
+        if "reset" in self._first_calls:
+            return first_call(self._first_calls, "reset", self.reset, seed=seed, options=options)
         n = self.num_envs
         seeds = _seeds(seed, n)
         options = dict(options or {})
@@ -264,6 +270,8 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
     def step(
         self, actions: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        if "step" in self._first_calls:
+            return first_call(self._first_calls, "step", self.step, actions)
         if not self._ready:
             if not self._started.all():
                 raise _reset_needed(np.flatnonzero(~self._started))

@@ -31,7 +31,7 @@ import numpy as np
 from subenv.envs import DivePlaneVectorEnv
 from subenv.evaluation.controller import BatchController, Controller, make_controller
 from subenv.evaluation.metrics import EpisodeMetrics, episode_metrics
-from subenv.evaluation.progress import Progress, compile_notice
+from subenv.evaluation.progress import Progress
 from subenv.evaluation.suites import DEFAULT_SEED, Suite, check_scenarios, get_suite, suite_names
 from subenv.scenarios.registry import scenario_names
 from subenv.scenarios.scenario import Scenario
@@ -337,10 +337,9 @@ def run_episodes(
         try:
             for start in range(0, len(seeds), MAX_BATCH):
                 wave = seeds[start:start + MAX_BATCH]
-                with compile_notice():  # (the first make, reset and step of a process may compile the physics)
-                    if len(wave) not in envs:
-                        envs[len(wave)] = make_vector_env(controller, scenario, len(wave), vehicle=vehicle,
-                                                          max_duration_s=max_duration_s)
+                if len(wave) not in envs:
+                    envs[len(wave)] = make_vector_env(controller, scenario, len(wave), vehicle=vehicle,
+                                                      max_duration_s=max_duration_s)
                 for result in _run_batch(controller, envs[len(wave)], wave, first_episode + start,
                                          keep_trajectories - start, options):
                     produced(result)
@@ -348,8 +347,7 @@ def run_episodes(
             for vector_env in envs.values():
                 vector_env.close()
         return results
-    with compile_notice():
-        env = make_env(controller, scenario, vehicle=vehicle, max_duration_s=max_duration_s)
+    env = make_env(controller, scenario, vehicle=vehicle, max_duration_s=max_duration_s)
     try:
         for i, seed in enumerate(seeds):
             produced(_run_single(controller, env, seed, first_episode + i, i < keep_trajectories, options))
@@ -368,16 +366,12 @@ def _run_single(
 ) -> EpisodeResult:
     """One episode in ``env``, made by :func:`make_env` for ``controller``."""
     base: Any = env.unwrapped  # a DivePlaneEnv: its episode, vehicle and limits
-    notice = compile_notice()
-    with notice:
-        obs, info = env.reset(seed=seed, options=options)
+    obs, info = env.reset(seed=seed, options=options)
     controller.reset(info, base.base_vehicle)
     recorder = TrajectoryRecorder(info)
     while True:
         action = controller.act(obs)
-        with notice:
-            obs, _, terminated, truncated, info = env.step(action)
-        notice.settled()  # (the kernels of a reset and a step are loaded now)
+        obs, _, terminated, truncated, info = env.step(action)
         recorder.record(action, info)
         if terminated or truncated:
             break
@@ -399,9 +393,7 @@ def _run_batch(
     """One episode per sub-environment of ``env`` (one per seed), stepped until the last has ended;
     the first ``keep`` keep their trajectories."""
     config = env.config
-    notice = compile_notice()
-    with notice:
-        obs, info = env.reset(seed=seeds, options=options)
+    obs, info = env.reset(seed=seeds, options=options)
     drawn = env.episodes  # (before an ended sub-environment resets to another episode)
     columns = {key: value.tolist() for key, value in info.items() if not key.startswith("_")}
     controller.reset_batch([{key: column[i] for key, column in columns.items()} for i in range(len(seeds))],
@@ -413,9 +405,7 @@ def _run_batch(
     step = 0
     while running.any():
         actions = controller.act_batch(obs)
-        with notice:
-            obs, _, terminated, truncated, info = env.step(actions)
-        notice.settled()
+        obs, _, terminated, truncated, info = env.step(actions)
         step += 1
         recorder.record(actions, info)
         ended = running & (terminated | truncated)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import pickle
 import re
 import shutil
@@ -39,6 +40,22 @@ def test_subenv_train_then_agents_evaluate(tmp_path, capsys) -> None:  # type: i
         evaluate_main([str(tmp_path / "missing"), "--suite", "tiny", "--out", str(tmp_path / "e2")])
     with pytest.raises(SystemExit, match="exists"):
         evaluate_main([str(run), "--suite", "tiny", "--episodes", "1", "--out", str(out), "--no-plots"])
+
+
+def test_n_is_rounded_up_to_whole_rollouts_and_progress_shows_in_a_log(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    """-n 700 with rollouts of 2 envs x 256 steps trains 1024 steps, says so, and counts them on stderr
+    in lines a log file keeps (no terminal here); SB3's tables go to stdout whole."""
+    run = tmp_path / "run"
+    small = [arg for arg in _SMALL if arg not in ("-q", "--no-progress")]
+    small[small.index("512")] = "700"
+    assert train_main(["--algo", "ppo", "--env", "subenv/LowSpeed-v0", "--run-dir", str(run), *small]) == 0
+    captured = capsys.readouterr()
+    assert "training 1024 steps: 700 rounded up to whole iterations of 512 steps" in captured.err
+    assert json.loads((run / "train.json").read_text())["timesteps"] == 1024
+    lines = [line for line in captured.err.splitlines() if line.startswith("train: ")]
+    assert lines[-1].startswith("train: 1024/1024 steps, 100%;") and len(lines) == 20, lines  # every 5%
+    tables = [line for line in captured.out.splitlines() if line.startswith("|    total_timesteps")]
+    assert [int(line.split("|")[2]) for line in tables] == [512, 1024]
 
 
 # --- broken folders and bad input: one-line errors naming the file (issue 18, finding 7) -----------

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import re
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -59,12 +61,24 @@ def trained(request, tmp_path_factory):  # type: ignore[no-untyped-def]
     return algo, runs
 
 
-def test_run_folder_holds_model_statistics_config_and_logs(trained) -> None:  # type: ignore[no-untyped-def]
+def _readme_run_folder() -> set[str]:
+    """The names the README's run-folder list gives (``checkpoints/`` as ``checkpoints``)."""
+    text = (Path(__file__).resolve().parents[2] / "README.md").read_text("utf-8")
+    block = text[text.index("- **A run folder**"):].split("```text\n", 1)[1].split("```", 1)[0]
+    columns = [re.split(r" {2,}", line.strip())[0] for line in block.splitlines()]
+    names = {name.rstrip("/") for column in columns if column and not column.startswith("(")
+             for name in column.split(", ")}
+    return names | {"tensorboard"}  # (named in progress.csv's line: made when TensorBoard is installed)
+
+
+def test_run_folder_holds_what_the_readme_lists(trained) -> None:  # type: ignore[no-untyped-def]
     algo, runs = trained
     run = runs[0]
     names = {p.name for p in run.run_dir.iterdir()}
-    assert {"model.zip", "vecnormalize.pkl", "config.yml", "train.json", "progress.csv", "evaluations.npz",
-            "best_model.zip", "checkpoints"} <= names
+    documented = _readme_run_folder()
+    # Everything a run with evaluations and checkpoints makes is listed; the listed ones it makes are there.
+    assert names <= documented, names - documented
+    assert documented - {"curriculum.json", "selected", "selection.json", "tensorboard"} == names - {"tensorboard"}
     assert any(p.name.startswith("rl_model_vecnormalize_") for p in (run.run_dir / "checkpoints").iterdir())
     record = json.loads((run.run_dir / "train.json").read_text())
     assert record["algo"] == algo and record["seed"] == 3 and record["timesteps"] == run.timesteps

@@ -6,9 +6,10 @@ import io
 import re
 import time
 
+import gymnasium as gym
 import pytest
 
-from subenv.evaluation import progress
+from subenv.envs import _compiling as compiling
 from subenv.evaluation.progress import COMPILE_NOTICE, LOG_LINES, Progress
 
 
@@ -64,17 +65,35 @@ def test_disabled_prints_nothing() -> None:
 
 
 def test_the_compile_notice_shows_once_while_the_first_calls_are_slow(monkeypatch, capsys) -> None:
-    monkeypatch.setattr(progress, "NOTICE_DELAY_S", 0.0)
-    notice = progress._CompileNotice()
+    monkeypatch.setattr(compiling, "NOTICE_DELAY_S", 0.0)
+    notice = compiling._CompileNotice()
     with notice:  # a first call that lasts until the notice is out, as a compilation outlasts the delay
         deadline = time.monotonic() + 30.0
-        while notice.pending and time.monotonic() < deadline:
+        while not notice.said and time.monotonic() < deadline:
             time.sleep(0.01)
     with notice:  # said once: no timer now
         assert notice._timer is None
     assert capsys.readouterr().err == COMPILE_NOTICE + "\n"
 
-    settled = progress._CompileNotice()
-    settled.settled()  # the kernels are loaded: the blocks arm nothing
-    with settled:
-        assert settled._timer is None
+
+@pytest.mark.parametrize("vector", [False, True])
+def test_a_plain_env_says_it_compiles_on_its_first_reset_and_step_only(vector, monkeypatch) -> None:
+    """gym.make / make_vec users see the notice too: each env's first reset and first step run under
+    it (a slow kernel call stands in for a compilation), the later calls go straight to the kernels."""
+    entered: list[str] = []
+
+    class Recording:
+        def __enter__(self) -> None:
+            entered.append("enter")
+
+        def __exit__(self, *exc: object) -> None:
+            entered.append("exit")
+
+    monkeypatch.setattr(compiling, "compile_notice", Recording)
+    env = (gym.make_vec("subenv/LowSpeed-v0", num_envs=2, vectorization_mode="vector_entry_point") if vector
+           else gym.make("subenv/LowSpeed-v0"))
+    env.reset(seed=0)
+    for _ in range(3):
+        env.step(env.action_space.sample())
+    env.reset(seed=1)
+    assert entered == ["enter", "exit"] * 2  # the first reset, the first step
