@@ -9,6 +9,8 @@
 - :mod:`~subenv.analysis.bifurcation`: cusps and bifurcation sets (eqs 4.7, 4.37, 4.39, 4.43-4.45, 5.1-5.2).
 - :mod:`~subenv.analysis.reversal`: level-flight trim through the critical speed (Fig. 5-2).
 - :mod:`~subenv.analysis.curriculum`: speed stages relative to the critical speed.
+- :mod:`~subenv.analysis.hopf`: beyond the thesis (its Ch. VI): the Hopf bifurcation of level flight at
+  speed, its criticality, and the periodic orbits born there.
 - :mod:`~subenv.analysis.report`: the reproduction report (``subenv analyze``).
 """
 
@@ -32,21 +34,25 @@ from subenv.analysis.design import (
     thesis_gain,
 )
 from subenv.analysis.equilibria import Equilibrium, equilibria, steady_state_residual, symmetric_pitchfork
+from subenv.analysis.hopf import HopfPoint, PeriodicOrbit, continue_periodic_orbits, hopf_points, periodic_orbit
 from subenv.analysis.linear import BOW_PLANES_ONLY, LinearModel, linear_model, numerical_jacobian
 from subenv.analysis.reversal import LevelFlightTrim, level_flight_trim
 
 __all__ = [
     "BOW_PLANES_ONLY",
-    "THESIS_POLES",
     "Branch",
     "ContinuationError",
     "Equilibrium",
+    "HopfPoint",
     "LevelFlightTrim",
     "LinearModel",
+    "PeriodicOrbit",
     "SpeedStage",
+    "THESIS_POLES",
     "approximate_cusp",
     "closed_loop_eigenvalues",
     "continue_equilibria",
+    "continue_periodic_orbits",
     "controllability_determinant",
     "controllability_losses",
     "critical_froude",
@@ -55,9 +61,11 @@ __all__ = [
     "exact_bifurcation_set",
     "exact_cusp",
     "froude_number",
+    "hopf_points",
     "level_flight_trim",
     "linear_model",
     "numerical_jacobian",
+    "periodic_orbit",
     "place_gain",
     "saturation_cusp",
     "saturation_cusp_closed_form",

@@ -28,6 +28,7 @@ from subenv.analysis.design import (
     thesis_gain,
 )
 from subenv.analysis.equilibria import DragMoment, Equilibrium, HullIntegral, equilibria, symmetric_pitchfork
+from subenv.analysis.hopf import HopfPoint, continue_periodic_orbits, hopf_points, level_flight_eigenvalues
 from subenv.analysis.linear import BOW_PLANES_ONLY, Allocation, plane_derivatives
 from subenv.analysis.reversal import level_flight_trim
 from subenv.atomic import atomic_output_dir
@@ -35,7 +36,8 @@ from subenv.units import FOOT_M, mps_to_fps
 from subenv.vehicles.loader import load_vehicle
 from subenv.vehicles.vehicle import Vehicle
 
-__all__ = ["REPORT_KIND", "ReportRow", "critical_speed_three_ways", "reproduce_numbers", "write_report"]
+__all__ = ["REPORT_KIND", "HopfFindings", "ReportRow", "critical_speed_three_ways", "env_growth_rate", "hopf_findings",
+           "reproduce_numbers", "write_report"]
 
 # Inputs the thesis used for its figures (not results): x_GB/L of Figs 4-1, 4-6, 4-11 and the
 # Froude numbers of the paths of Fig. 4-13.
@@ -159,6 +161,125 @@ def reproduce_numbers(vehicle: Vehicle) -> list[ReportRow]:
     return rows
 
 
+# --- beyond the thesis: the Hopf bifurcation at speed (its Ch. VI recommendation) ------------------
+
+_HOPF_ENV_SPEEDS: Final = (0.80, 0.82, 0.85, 0.87)
+"""Speeds [m/s] of the environment runs whose growth rates cross-check the Hopf speed (two each side)."""
+_ORBIT_SPEEDS: Final = np.arange(0.84, 1.005, 0.02)
+_HOPF_ENV_ID: Final = "subenv/Nominal-v0"  # (its scenario has no disturbance and no sensor noise)
+
+
+def env_growth_rate(speed_mps: float, env_id: str = _HOPF_ENV_ID, initial_pitch_rad: float = 1e-3) -> float:
+    """The growth rate [1/s] of the pitch oscillation in the environment with zero action (planes held
+    at zero), from a small initial pitch: the slope of log |theta| at its peaks over the episode.
+
+    An independent check of :func:`subenv.analysis.hopf.hopf_points`: the environment integrates the
+    nonlinear equations (drag included) with its own integrator; near level flight the slope is the
+    real part of the oscillatory pair of eigenvalues.
+    """
+    import gymnasium as gym
+
+    import subenv.envs  # noqa: F401  (registers the ids)
+
+    env = gym.make(env_id)
+    depth = 50.0
+    _, info = env.reset(seed=0, options={"speed": speed_mps, "depth_command": depth,
+                                         "initial_state": (initial_pitch_rad, 0.0, 0.0, depth)})
+    times, pitch = [info["time_s"]], [info["pitch_rad"]]
+    action = np.zeros(env.action_space.shape, dtype=np.float32)
+    while True:
+        _, _, terminated, truncated, info = env.step(action)
+        times.append(info["time_s"])
+        pitch.append(info["pitch_rad"])
+        if terminated or truncated:
+            break
+    env.close()
+    t, size = np.array(times), np.abs(np.array(pitch))
+    peaks = np.flatnonzero((size[1:-1] > size[:-2]) & (size[1:-1] >= size[2:])) + 1
+    return float(np.polyfit(t[peaks], np.log(size[peaks]), 1)[0])
+
+
+@dataclass(frozen=True)
+class HopfFindings:
+    """What the report says of the Hopf bifurcation of ``vehicle`` with the planes held."""
+
+    point: HopfPoint
+    env_speeds_mps: tuple[float, ...]
+    env_growth_rates: tuple[float, ...]
+    env_hopf_speed_mps: float
+    """Where the environment's growth rates cross zero (linear interpolation between the two speeds
+    around the crossing)."""
+    orbit_speeds_mps: tuple[float, ...]
+    orbit_amplitudes_rad: tuple[float, ...]
+    orbits_stable: bool
+    pitch_limit_speed_mps: float
+    """The speed at which the cycle's pitch amplitude reaches the environments' default pitch limit."""
+    splitting_speed_mps: float
+    """Above this speed the oscillatory pair has become two real eigenvalues (a monotonic divergence)."""
+
+
+def hopf_findings(vehicle: Vehicle) -> HopfFindings:
+    """The open-loop Hopf point, its environment cross-check and the cycles born there (the report's
+    Hopf section, and the environment docstring's account of zero action)."""
+    from subenv.envs.config import DivePlaneConfig
+
+    (point,) = hopf_points(vehicle)
+    rates = tuple(env_growth_rate(u) for u in _HOPF_ENV_SPEEDS)
+    k = next(i for i in range(len(rates) - 1) if rates[i] < 0.0 <= rates[i + 1])
+    u0, u1, g0, g1 = _HOPF_ENV_SPEEDS[k], _HOPF_ENV_SPEEDS[k + 1], rates[k], rates[k + 1]
+    orbits = continue_periodic_orbits(vehicle, _ORBIT_SPEEDS)
+    speeds = np.array([o.speed_mps for o in orbits])
+    amplitudes = np.array([o.pitch_amplitude_rad for o in orbits])
+    limit = DivePlaneConfig().max_pitch_rad
+    pitch_limit_speed = float(np.interp(limit, amplitudes, speeds)) if amplitudes.max() >= limit else math.nan
+
+    def pair_exists(u: float) -> float:
+        eigenvalues = level_flight_eigenvalues(vehicle, u)
+        return 1.0 if np.any(np.abs(eigenvalues.imag) > 1e-9) else -1.0
+
+    splitting = brentq(pair_exists, point.speed_mps, 3.0 * point.speed_mps, xtol=1e-6)
+    return HopfFindings(point=point, env_speeds_mps=_HOPF_ENV_SPEEDS, env_growth_rates=rates,
+                        env_hopf_speed_mps=u0 - g0 * (u1 - u0) / (g1 - g0), orbit_speeds_mps=tuple(speeds),
+                        orbit_amplitudes_rad=tuple(amplitudes), orbits_stable=all(o.stable for o in orbits),
+                        pitch_limit_speed_mps=pitch_limit_speed, splitting_speed_mps=float(splitting))
+
+
+def _hopf_markdown(vehicle: Vehicle, found: HopfFindings) -> list[str]:
+    p = found.point
+    rows = [
+        ("Hopf speed u_H, eigenvalues of level flight (planes held)", f"{p.speed_mps:.4f}", "m/s",
+         f"{p.speed_mps / critical_speed(vehicle):.3f} u_cr"),
+        ("u_H, where the environment's zero-action growth rates cross zero", f"{found.env_hopf_speed_mps:.4f}", "m/s",
+         "rates " + ", ".join(f"{g:+.4f}/s at {u:.2f}" for u, g in zip(found.env_speeds_mps, found.env_growth_rates))),
+        ("frequency at u_H (period)", f"{p.frequency_radps:.4f}", "rad/s", f"period {p.period_s:.1f} s"),
+        ("d Re(lambda) / du at u_H", f"{p.growth_slope:.4f}", "1/s per m/s", "level flight unstable above u_H"),
+        ("amplitude coefficient c2 (drag, averaged)", f"{p.amplitude_coefficient:.5f}", "1/(s rad)",
+         f"{p.criticality}: stable cycles above u_H, amplitude ~ -Re(lambda)/c2"),
+        ("cycle pitch amplitude at 0.84 m/s: continuation / normal form",
+         f"{math.degrees(found.orbit_amplitudes_rad[0]):.2f}", "deg",
+         f"normal form {math.degrees(p.predicted_amplitude_rad(vehicle, found.orbit_speeds_mps[0])):.2f} deg"),
+        ("speed at which the cycle reaches the 0.6 rad pitch limit", f"{found.pitch_limit_speed_mps:.3f}", "m/s",
+         "zero action ends on pitch_limit above it"),
+        ("speed above which the pair is real (divergence)", f"{found.splitting_speed_mps:.3f}", "m/s", ""),
+    ]
+    lines = ["| quantity | value | unit | note |", "|---|---:|---|---|"]
+    lines += [f"| {q} | {v} | {u} | {n} |" for q, v, u, n in rows]
+    return [
+        "## Beyond the thesis: the Hopf bifurcation at speed",
+        "",
+        "Riedel (1993) Ch. VI recommends a Hopf bifurcation analysis of the instability at high speed. With",
+        "the planes held at zero, level flight has an oscillatory pitch/heave mode that loses stability as the",
+        "speed rises (the destabilising Munk moment grows with u, the restoring moment W z_GB does not). The",
+        "hull's cross-flow drag is quadratic (v|v|), so the cubic first Lyapunov coefficient does not decide",
+        "the criticality: the averaged amplitude equation dr/dt = Re(lambda) r + c2 r^2 does",
+        "(`subenv.analysis.hopf`). The cycles are continued by shooting on the nonlinear equations, and the",
+        "Hopf speed is checked against growth rates measured in the environment.",
+        "",
+        *lines,
+        "",
+    ]
+
+
 # --- figures ----------------------------------------------------------------------------------
 
 def _fn_axis(vehicle: Vehicle, fn: np.ndarray) -> np.ndarray:
@@ -199,6 +320,8 @@ _TITLES: Final = {
     "fig5-3": "Depth gain of the pole placement repeated at each speed (Riedel 1993, Fig. 5-3)",
     "fig5-4": "Critical Froude number as the bow planes' share alpha grows (Riedel 1993, Fig. 5-4)",
     "fig5-7": "Saturation cusps with drag and excess buoyancy (supplementary; Riedel 1993, Fig. 5-7)",
+    "hopf": "Planes held at zero: growth of the pitch oscillation and amplitude of the cycles against speed\n"
+            "(the Hopf bifurcation Riedel 1993 Ch. VI asks for)",
 }
 """Each figure's title: what it shows, then the thesis figure it reproduces."""
 
@@ -420,6 +543,34 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
     }
 
 
+def _hopf_figure(fig: Any, vehicle: Vehicle, found: HopfFindings) -> str:
+    p = found.point
+    speeds = np.linspace(0.3, 1.2, 300)
+    growth = [max((e.real for e in level_flight_eigenvalues(vehicle, u) if abs(e.imag) > 1e-9), default=math.nan)
+              for u in speeds]
+    top, bottom = fig.subplots(2, 1, sharex=True)
+    top.plot(speeds, growth, lw=1.2, label="Re(lambda), oscillatory pair")
+    top.plot(found.env_speeds_mps, found.env_growth_rates, "o", color="C1", label="environment, zero action")
+    top.axhline(0.0, color="k", lw=0.5)
+    top.axvline(p.speed_mps, color="r", ls="--", lw=1, label=f"u_H = {p.speed_mps:.3f} m/s")
+    top.axvline(critical_speed(vehicle), color="0.5", ls=":", lw=1, label="u_cr (planes reverse)")
+    top.set(ylabel="growth rate [1/s]")
+    orbit_u = np.array(found.orbit_speeds_mps)
+    bottom.plot(orbit_u, np.degrees(found.orbit_amplitudes_rad), "o-", ms=3, label="stable cycles (shooting)")
+    near = np.linspace(p.speed_mps, orbit_u.max(), 100)
+    bottom.plot(near, [math.degrees(p.predicted_amplitude_rad(vehicle, float(u))) for u in near], "--",
+                label="normal form -Re(lambda)/c2")
+    bottom.axhline(math.degrees(0.6), color="k", ls=":", lw=1, label="environments' pitch limit (0.6 rad)")
+    bottom.axvline(p.speed_mps, color="r", ls="--", lw=1)
+    bottom.set(xlabel="speed [m/s]", ylabel="cycle pitch amplitude [deg]", ylim=(0.0, 70.0))
+    _legend_outside(top)
+    _legend_outside(bottom)
+    return (f"Beyond the thesis: with the planes held, level flight's pitch/heave oscillation grows above "
+            f"u_H = {p.speed_mps:.3f} m/s ({p.period_s:.0f} s period; the environment's measured growth rates "
+            f"agree). The bifurcation is {p.criticality}: stable cycles grow linearly with u - u_H (the quadratic "
+            f"drag's signature) and reach the pitch limit at {found.pitch_limit_speed_mps:.2f} m/s.")
+
+
 def _table(rows: list[ReportRow]) -> str:
     lines = ["| quantity | thesis value | computed value | difference | unit | note |",
              "|---|---:|---:|---:|---|---|"]
@@ -464,6 +615,13 @@ def write_report(out_dir: str | Path, vehicle: Vehicle | None = None, overwrite:
             fig.savefig(folder / f"{name}.png", dpi=100)
             plt.close(fig)
             captions.append((name, caption))
+        found = hopf_findings(vehicle)
+        fig = plt.figure(figsize=(8.5, 7), layout="constrained")
+        caption = _hopf_figure(fig, vehicle, found)
+        fig.suptitle(_TITLES["hopf"], fontsize="medium")
+        fig.savefig(folder / "hopf.png", dpi=100)
+        plt.close(fig)
+        captions.append(("hopf", caption))
         elapsed = time.perf_counter() - started
         text = [
             "# Reproduction of Riedel (1993) with subenv",
@@ -480,6 +638,7 @@ def write_report(out_dir: str | Path, vehicle: Vehicle | None = None, overwrite:
             "Equation 4.37 as printed is not dimensionless; Fig. 4-2 shows it evaluated as printed (u in fps) next",
             "to the dimensionally consistent form, which agrees with the exact folds of eq. 4.3.",
             "",
+            *_hopf_markdown(vehicle, found),
             "## Figures",
             "",
         ]

@@ -38,6 +38,16 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
     Speed is not controlled by the agent; the scenario sets it (constant or a deceleration
     through u_cr).
 
+    What zero action (planes held at zero) does depends on the speed, for SUBOFF
+    (:func:`subenv.analysis.hopf.hopf_points`, the report of ``subenv analyze``): the hull is
+    statically stable in pitch (z_GB > 0) but its Munk moment (M_w u w) destabilises it as u grows.
+    Below u_H = 0.836 m/s (1.45 u_cr) a pitch/heave disturbance dies out in a ~40 s oscillation;
+    above it the oscillation grows (a supercritical Hopf bifurcation) into a stable cycle whose
+    pitch amplitude grows linearly with u - u_H (the quadratic cross-flow drag limits it) and
+    reaches the 0.6 rad pitch limit at 0.93 m/s; above 1.64 m/s the motion diverges without
+    oscillating. So at the Nominal design speed (1.524 m/s) zero action ends on ``"pitch_limit"``
+    within a minute: the planes must act.
+
     ## Action Space
 
     ``Box(-1, 1, (1,), float32)`` with ``control="dual"``: the command delta = a * 0.4 rad drives

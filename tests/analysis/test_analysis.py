@@ -232,7 +232,8 @@ def test_report_is_written_completely_and_not_over_an_existing_folder(analysis_r
     assert f"report written to {out}/report.md" in analysis_report.printed  # the folder write_report returned
     text = (out / "report.md").read_text()
     assert "| u_cr, eq. 3.9 closed form | 1.8979 | 1.8979 |" in text
-    assert len(list(out.glob("*.png"))) == 14
+    assert len(list(out.glob("*.png"))) == 15  # the thesis's 14 and the Hopf figure
+    assert "## Beyond the thesis: the Hopf bifurcation at speed" in text and "supercritical" in text
     with pytest.raises(FileExistsError, match="exists: choose another output folder or pass overwrite=True"):
         write_report(out, suboff)
     assert [p.name for p in out.parent.iterdir()] == ["report"]  # no temporary folder left behind
