@@ -7,6 +7,8 @@ See ``subenv/vehicles/data/suboff.toml`` for the format.
 
 from __future__ import annotations
 
+import dataclasses
+import json
 import os
 import sys
 from collections.abc import Mapping
@@ -23,7 +25,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - exercised on Python 3.10 only
     import tomli as tomllib
 
-__all__ = ["available_vehicles", "load_vehicle"]
+__all__ = ["available_vehicles", "load_vehicle", "vehicle_from_dict", "vehicle_to_toml"]
 
 # Dimension of every key a vehicle file may hold, by section; "-" marks non-dimensional values.
 _SCHEMA: dict[str, dict[str, str]] = {
@@ -228,3 +230,70 @@ def vehicle_from_dict(data: Mapping[str, Any], origin: str = "<dict>") -> Vehicl
         raise ValueError(f"{where}: {exc}") from exc
 
 
+
+
+# Significant digits of the hull's stations and radius ratios in a written file: they are recovered
+# from x and b by a division, so their last bits are rounding noise (station 0.1 would read
+# 0.09999999999999964); 12 digits keep the file readable and the hull within 1e-12 of the vehicle's.
+_HULL_DIGITS = 12
+
+
+def vehicle_to_toml(vehicle: Vehicle, header: str = "") -> str:
+    """Write a vehicle as the text of a vehicle file in SI units, which :func:`load_vehicle` reads back.
+
+    Every number is written in full (``repr``), so the file loads to the same vehicle, except the hull's
+    stations and radius ratios, rounded to 12 significant digits (a relative change below 1e-12).
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+    header : str
+        Comment lines for the top of the file (each line gets a ``# ``): where the numbers come from.
+    """
+    def number(value: float) -> str:
+        return repr(float(value))
+
+    def numbers(values: list[float]) -> str:
+        return "[" + ", ".join(number(float(f"{v:.{_HULL_DIGITS}g}")) for v in values) + "]"
+
+    L = vehicle.length_m
+    breadth = vehicle.hull.breadth_m
+    max_breadth = max(breadth)
+    h, p = vehicle.hull, vehicle.planes
+    lines = [f"# {line}".rstrip() for line in header.splitlines()]
+    lines += [
+        "",
+        f"name = {json.dumps(vehicle.name)}",  # (a JSON string is a TOML basic string)
+        f"description = {json.dumps(vehicle.description)}",
+        f"source = {json.dumps(vehicle.source)}",
+        'units = "si"  # m, kg, N, s, rad',
+        "",
+        "[environment]",
+        f"water_density = {number(vehicle.water_density_kg_m3)}  # kg/m^3",
+        f"gravity = {number(vehicle.gravity_m_s2)}  # m/s^2",
+        "",
+        "[rigid_body]",
+        f"length = {number(L)}  # m",
+        f"weight = {number(vehicle.weight_N)}  # N",
+        f"buoyancy = {number(vehicle.buoyancy_N)}  # N",
+        f"inertia_y = {number(vehicle.inertia_y_kg_m2)}  # kg m^2",
+        f"x_G = {number(vehicle.x_G_m)}  # m",
+        f"z_G = {number(vehicle.z_G_m)}  # m",
+        f"x_B = {number(vehicle.x_B_m)}  # m",
+        f"z_B = {number(vehicle.z_B_m)}  # m",
+        "",
+        "[hydrodynamics]",
+        *(f"{f.name} = {number(getattr(vehicle.hydro, f.name))}" for f in dataclasses.fields(vehicle.hydro)),
+        f"crossflow_drag = {number(vehicle.crossflow_drag)}",
+        "",
+        "[planes]",
+        *(f"{name} = {number(getattr(p, name))}" for name in ("Z_delta_s", "M_delta_s", "Z_delta_b", "M_delta_b")),
+        f"limit = {number(p.limit_rad)}  # rad",
+        "",
+        "[hull]",
+        "# Stations: x = (10 - station) L / 20, forward positive; breadth = max_diameter * radius_ratio.",
+        f"max_diameter = {number(max_breadth)}  # m",
+        f"stations = {numbers([10.0 - 20.0 * x / L for x in h.x_m])}",
+        f"radius_ratio = {numbers([b / max_breadth for b in breadth])}",
+    ]
+    return "\n".join(lines) + "\n"

@@ -38,6 +38,19 @@ def test_gymnasium_check_env(env_id):
     gym_check_env(env.unwrapped, skip_render_check=True)
 
 
+@pytest.mark.parametrize("vehicle", subenv.available_vehicles())
+def test_every_shipped_vehicle_passes_the_checkers(vehicle):
+    """Each vehicle file (the Froude-scaled full-scale SUBOFF too) makes a valid env, Gymnasium's and SB3's."""
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+    env = gym.make("subenv/DivePlane-v0", vehicle=vehicle, disable_env_checker=True)
+    assert env.unwrapped.base_vehicle.name == vehicle
+    gym_check_env(env.unwrapped, skip_render_check=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sb3_check_env(gym.make("subenv/DivePlane-v0", vehicle=vehicle), warn=True)
+
+
 @pytest.mark.parametrize("env_id", ENV_IDS)
 def test_sb3_check_env_passes_without_warnings(env_id):
     from stable_baselines3.common.env_checker import check_env as sb3_check_env
