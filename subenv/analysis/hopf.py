@@ -42,8 +42,10 @@ from subenv.vehicles.vehicle import Vehicle
 __all__ = ["HopfPoint", "PeriodicOrbit", "continue_periodic_orbits", "hopf_points", "level_flight_eigenvalues",
            "periodic_orbit"]
 
-DEFAULT_SPEEDS_MPS: Final = np.linspace(0.05, 3.0, 296)
-"""Where :func:`hopf_points` looks for crossings (0.01 m/s apart; each is then refined by ``brentq``)."""
+DEFAULT_FROUDE_GRID: Final = np.linspace(0.008, 0.464, 457)
+"""Where :func:`hopf_points` looks for crossings by default: these length Froude numbers u / sqrt(g L),
+0.001 apart (for SUBOFF, 0.05 to 3.0 m/s), so that a vehicle of any size is searched over the same
+physics (Froude similarity); each crossing is then refined by ``brentq``."""
 _COMPLEX: Final = 1e-9
 """An eigenvalue with |imaginary part| above this [rad/s] is one of a complex pair."""
 _AVERAGING_AMPLITUDES: Final = (1e-4, 2e-4)
@@ -201,7 +203,7 @@ def hopf_points(
         Bow/stern allocation of the closed loop (Riedel 1993 eq. 2.58).
     speeds_mps : array, optional
         The grid searched for sign changes of the complex pairs' real part (default
-        :data:`DEFAULT_SPEEDS_MPS`); each is refined with ``brentq``.
+        :data:`DEFAULT_FROUDE_GRID` times sqrt(g L)); each is refined with ``brentq``.
 
     Returns
     -------
@@ -211,7 +213,8 @@ def hopf_points(
     _check_level_flight(vehicle)
     k = _check_gain(gain)
     alpha = check_alpha(alpha)
-    grid = DEFAULT_SPEEDS_MPS if speeds_mps is None else np.asarray(speeds_mps, dtype=float)
+    froude_speed = math.sqrt(vehicle.gravity_m_s2 * vehicle.length_m)
+    grid = DEFAULT_FROUDE_GRID * froude_speed if speeds_mps is None else np.asarray(speeds_mps, dtype=float)
     check.require("speeds_mps", speeds_mps, grid.ndim == 1 and grid.size >= 2 and bool(np.all(np.isfinite(grid)))
                   and bool(np.all(grid >= 0.0)) and bool(np.all(np.diff(grid) > 0.0)),
                   "an increasing array of at least 2 finite speeds >= 0")

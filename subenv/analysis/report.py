@@ -163,13 +163,16 @@ def reproduce_numbers(vehicle: Vehicle) -> list[ReportRow]:
 
 # --- beyond the thesis: the Hopf bifurcation at speed (its Ch. VI recommendation) ------------------
 
-_HOPF_ENV_SPEEDS: Final = (0.80, 0.82, 0.85, 0.87)
-"""Speeds [m/s] of the environment runs whose growth rates cross-check the Hopf speed (two each side)."""
-_ORBIT_SPEEDS: Final = np.arange(0.84, 1.005, 0.02)
+_HOPF_ENV_SPEEDS: Final = (0.955, 0.98, 1.015, 1.04)
+"""Speeds of the environment runs whose growth rates cross-check the Hopf speed, as multiples of it
+(two each side: for SUBOFF 0.80, 0.82, 0.85 and 0.87 m/s)."""
+_ORBIT_SPEEDS: Final = np.arange(1.004, 1.2, 0.024)
+"""Speeds of the continued cycles, as multiples of the Hopf speed (for SUBOFF 0.84 to 1.0 m/s)."""
 _HOPF_ENV_ID: Final = "subenv/Nominal-v0"  # (its scenario has no disturbance and no sensor noise)
 
 
-def env_growth_rate(speed_mps: float, env_id: str = _HOPF_ENV_ID, initial_pitch_rad: float = 1e-3) -> float:
+def env_growth_rate(speed_mps: float, env_id: str = _HOPF_ENV_ID, initial_pitch_rad: float = 1e-3,
+                    vehicle: Vehicle | None = None) -> float:
     """The growth rate [1/s] of the pitch oscillation in the environment with zero action (planes held
     at zero), from a small initial pitch: the slope of log |theta| at its peaks over the episode.
 
@@ -181,8 +184,8 @@ def env_growth_rate(speed_mps: float, env_id: str = _HOPF_ENV_ID, initial_pitch_
 
     import subenv.envs  # noqa: F401  (registers the ids)
 
-    env = gym.make(env_id)
-    depth = 50.0
+    env = gym.make(env_id, **({} if vehicle is None else {"vehicle": vehicle}))
+    depth = 5.0 * env.unwrapped.base_vehicle.length_m  # (deep: no surface for any hull)
     _, info = env.reset(seed=0, options={"speed": speed_mps, "depth_command": depth,
                                          "initial_state": (initial_pitch_rad, 0.0, 0.0, depth)})
     times, pitch = [info["time_s"]], [info["pitch_rad"]]
@@ -224,10 +227,11 @@ def hopf_findings(vehicle: Vehicle) -> HopfFindings:
     from subenv.envs.config import DivePlaneConfig
 
     (point,) = hopf_points(vehicle)
-    rates = tuple(env_growth_rate(u) for u in _HOPF_ENV_SPEEDS)
+    env_speeds = tuple(point.speed_mps * f for f in _HOPF_ENV_SPEEDS)
+    rates = tuple(env_growth_rate(u, vehicle=vehicle) for u in env_speeds)
     k = next(i for i in range(len(rates) - 1) if rates[i] < 0.0 <= rates[i + 1])
-    u0, u1, g0, g1 = _HOPF_ENV_SPEEDS[k], _HOPF_ENV_SPEEDS[k + 1], rates[k], rates[k + 1]
-    orbits = continue_periodic_orbits(vehicle, _ORBIT_SPEEDS)
+    u0, u1, g0, g1 = env_speeds[k], env_speeds[k + 1], rates[k], rates[k + 1]
+    orbits = continue_periodic_orbits(vehicle, point.speed_mps * _ORBIT_SPEEDS)
     speeds = np.array([o.speed_mps for o in orbits])
     amplitudes = np.array([o.pitch_amplitude_rad for o in orbits])
     limit = DivePlaneConfig().max_pitch_rad
@@ -238,7 +242,7 @@ def hopf_findings(vehicle: Vehicle) -> HopfFindings:
         return 1.0 if np.any(np.abs(eigenvalues.imag) > 1e-9) else -1.0
 
     splitting = brentq(pair_exists, point.speed_mps, 3.0 * point.speed_mps, xtol=1e-6)
-    return HopfFindings(point=point, env_speeds_mps=_HOPF_ENV_SPEEDS, env_growth_rates=rates,
+    return HopfFindings(point=point, env_speeds_mps=env_speeds, env_growth_rates=rates,
                         env_hopf_speed_mps=u0 - g0 * (u1 - u0) / (g1 - g0), orbit_speeds_mps=tuple(speeds),
                         orbit_amplitudes_rad=tuple(amplitudes), orbits_stable=all(o.stable for o in orbits),
                         pitch_limit_speed_mps=pitch_limit_speed, splitting_speed_mps=float(splitting))
@@ -255,7 +259,7 @@ def _hopf_markdown(vehicle: Vehicle, found: HopfFindings) -> list[str]:
         ("d Re(lambda) / du at u_H", f"{p.growth_slope:.4f}", "1/s per m/s", "level flight unstable above u_H"),
         ("amplitude coefficient c2 (drag, averaged)", f"{p.amplitude_coefficient:.5f}", "1/(s rad)",
          f"{p.criticality}: stable cycles above u_H, amplitude ~ -Re(lambda)/c2"),
-        ("cycle pitch amplitude at 0.84 m/s: continuation / normal form",
+        (f"cycle pitch amplitude at {found.orbit_speeds_mps[0]:.3g} m/s: continuation / normal form",
          f"{math.degrees(found.orbit_amplitudes_rad[0]):.2f}", "deg",
          f"normal form {math.degrees(p.predicted_amplitude_rad(vehicle, found.orbit_speeds_mps[0])):.2f} deg"),
         ("speed at which the cycle reaches the 0.6 rad pitch limit", f"{found.pitch_limit_speed_mps:.3f}", "m/s",
@@ -545,7 +549,7 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
 
 def _hopf_figure(fig: Any, vehicle: Vehicle, found: HopfFindings) -> str:
     p = found.point
-    speeds = np.linspace(0.3, 1.2, 300)
+    speeds = np.linspace(0.36, 1.44, 300) * p.speed_mps
     growth = [max((e.real for e in level_flight_eigenvalues(vehicle, u) if abs(e.imag) > 1e-9), default=math.nan)
               for u in speeds]
     top, bottom = fig.subplots(2, 1, sharex=True)

@@ -94,3 +94,14 @@ def test_a_loading_without_level_flight_is_refused() -> None:
     heavy = SUBOFF.variant(excess_buoyancy_N=-0.01 * SUBOFF.weight_N)
     with pytest.raises(ValueError, match="level flight"):
         hopf_points(heavy)
+
+
+def test_the_hopf_point_of_the_full_scale_boat_is_the_models_froude_scaled(hopf) -> None:  # type: ignore[no-untyped-def]
+    """Froude similarity (subenv.vehicles.froude_scaled): speeds x sqrt(lambda), rates x 1/sqrt(lambda);
+    the pitch amplitude, an angle, and so the criticality stay."""
+    full = load_vehicle("suboff_fullscale")
+    ratio = full.length_m / SUBOFF.length_m
+    (point,) = hopf_points(full)
+    assert point.speed_mps == pytest.approx(hopf.speed_mps * math.sqrt(ratio), rel=1e-9)
+    assert point.frequency_radps == pytest.approx(hopf.frequency_radps / math.sqrt(ratio), rel=1e-9)
+    assert point.amplitude_coefficient == pytest.approx(hopf.amplitude_coefficient / math.sqrt(ratio), rel=1e-6)
