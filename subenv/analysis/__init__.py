@@ -34,12 +34,19 @@ from subenv.analysis.design import (
     thesis_gain,
 )
 from subenv.analysis.equilibria import Equilibrium, equilibria, steady_state_residual, symmetric_pitchfork
-from subenv.analysis.hopf import HopfPoint, PeriodicOrbit, continue_periodic_orbits, hopf_points, periodic_orbit
+from subenv.analysis.hopf import (
+    HopfPoint,
+    PeriodicOrbit,
+    continue_periodic_orbits,
+    hopf_points,
+    periodic_orbit,
+)
 from subenv.analysis.linear import BOW_PLANES_ONLY, LinearModel, linear_model, numerical_jacobian
 from subenv.analysis.reversal import LevelFlightTrim, level_flight_trim
 
 __all__ = [
     "BOW_PLANES_ONLY",
+    "THESIS_POLES",
     "Branch",
     "ContinuationError",
     "Equilibrium",
@@ -48,7 +55,6 @@ __all__ = [
     "LinearModel",
     "PeriodicOrbit",
     "SpeedStage",
-    "THESIS_POLES",
     "approximate_cusp",
     "closed_loop_eigenvalues",
     "continue_equilibria",
