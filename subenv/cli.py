@@ -28,6 +28,7 @@ from subenv.analysis import THESIS_POLES, critical_speed, thesis_gain
 from subenv.extras import MissingExtra, require
 from subenv.thesis import THESIS_DESIGN_SPEED_MPS
 from subenv.units import mps_to_fps
+from subenv.vehicles import available_vehicles
 
 
 @dataclass
@@ -187,6 +188,23 @@ def _installed_controllers(requested: Sequence[str] | None) -> None:
             print(f"(skipped {', '.join(names)}: {reason})", file=sys.stderr)
 
 
+def _note_other_scale(vehicle_name: str) -> None:
+    """On a vehicle of another length the episodes are Froude-scaled, but what judges them is not."""
+    from subenv.scenarios import get_scenario
+    from subenv.vehicles import load_vehicle
+
+    try:
+        vehicle = load_vehicle(vehicle_name)
+    except ValueError as exc:
+        raise SystemExit(f"subenv evaluate: {exc}") from None
+    ratio = get_scenario("Nominal").length_ratio(vehicle.length_m)
+    if ratio != 1.0:
+        print(f"(--vehicle {vehicle_name}: the scenarios are Froude-scaled to its {vehicle.length_m:.4g} m (x{ratio:.4g}), "
+              "but the success criterion (0.5 m over the final 60 s), the classical baselines' gain schedules "
+              "(in m/s) and the trained agents are SUBOFF's: compare controllers on it, not numbers across "
+              "vehicles)", file=sys.stderr)
+
+
 def evaluate(args: argparse.Namespace) -> int:
     from subenv.atomic import OutputDirError
     from subenv.evaluation import (
@@ -208,12 +226,13 @@ def evaluate(args: argparse.Namespace) -> int:
         raise SystemExit(f"subenv evaluate: no controllers are registered: install a package that declares some "
                          f"in the {ENTRY_POINT_GROUP!r} entry-point group, or see --plugins")
     suite = DEFAULT_SUITE if args.suite is None else args.suite[0] if len(args.suite) == 1 else args.suite
+    _note_other_scale(args.vehicle)
     out = args.out or f"results/evaluation/{time.strftime('%Y%m%d-%H%M%S')}"
     try:
         comparison = run_comparison(
             args.controllers, suite, args.episodes, out, overwrite=args.force,
             seed=DEFAULT_SEED if args.seed is None else args.seed,
-            progress=not args.no_progress, plots=not args.no_plots,
+            progress=not args.no_progress, plots=not args.no_plots, vehicle=args.vehicle,
         )
     except (FileExistsError, OutputDirError) as exc:
         raise SystemExit(f"subenv evaluate: --out: {exc}") from None
@@ -277,6 +296,9 @@ def _parser() -> argparse.ArgumentParser:
                         help="comma-separated Python files (depth_p.py) or modules (here or on the path) that "
                              "register controllers when imported; installed packages declare theirs as entry "
                              "points and need none")
+    p_eval.add_argument("--vehicle", default="suboff",
+                        help="vehicle name or file (default: %(default)s); the scenarios are Froude-scaled to "
+                             "its length (shipped: " + ", ".join(available_vehicles()) + ")")
     p_eval.add_argument("--list", action="store_true", help="list the controllers and suites, and exit")
     p_demo = sub.add_parser("demo", help="fly the thesis controller above and below the critical speed")
     p_demo.add_argument("--env", default="subenv/Nominal-v0", help="environment id (default: %(default)s)")

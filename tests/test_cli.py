@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import errno
+import json
 import os
 import shutil
 import stat
@@ -147,7 +148,7 @@ def test_force_replaces_only_an_earlier_result_of_the_command(tmp_path: Path, no
 
 @pytest.mark.parametrize(
     ("vehicle", "reason"),
-    [("nope", r"vehicle='nope' is unknown: must be one of \['suboff'\]"),
+    [("nope", r"vehicle='nope' is unknown: must be one of \['suboff', 'suboff_fullscale'\]"),
      ("missing.toml", r"vehicle file 'missing.toml' does not exist")],
 )
 def test_analyze_with_a_bad_vehicle_is_a_one_line_error(tmp_path: Path, no_work, vehicle, reason):
@@ -289,3 +290,15 @@ def test_controllers_that_cannot_load_are_skipped_with_a_note(tmp_path: Path, mo
     assert printed.err == f"(skipped ppo, sac: {unavailable['ppo']})\n"
     with pytest.raises(SystemExit, match=r"^subenv evaluate: controller 'sac' cannot load: the 'rl' extra is needed"):
         main(["evaluate", "--controllers", "thesis,sac", "--out", str(tmp_path / "out")])
+
+
+def test_evaluate_takes_a_vehicle_and_says_what_is_not_scaled(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "full"
+    main(["evaluate", "--vehicle", "suboff_fullscale", "--controllers", "thesis", "--suite", "tiny", "--episodes", "1",
+          "--no-plots", "--no-progress", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert "--vehicle suboff_fullscale: the scenarios are Froude-scaled to its 102.3 m (x24)" in err
+    assert json.loads((out / "run.json").read_text())["vehicle"] == "suboff_fullscale"
+    with pytest.raises(SystemExit, match=r"vehicle='boat' is unknown: must be one of \['suboff', 'suboff_fullscale'\]"):
+        main(["evaluate", "--vehicle", "boat", "--out", str(tmp_path / "none")])
+    assert not (tmp_path / "none").exists()

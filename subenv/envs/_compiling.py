@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import sys
 import threading
-from types import TracebackType
 from collections.abc import Callable
+from types import TracebackType
 from typing import Any, Final
 
 __all__ = ["COMPILE_NOTICE", "NOTICE_DELAY_S", "compile_notice", "first_call"]

@@ -76,6 +76,13 @@ study may let the boat sink for hours (``tests/physics``), and the observation b
 in float32."""
 
 
+DEPTH_BAND_M: Final = 25.0
+"""``max_depth_error_m`` by default on the scenario's reference vehicle (SUBOFF, 4.26 m long: about
+six hull lengths); Froude-scaled on another."""
+DEPTH_SCALE_M: Final = 2.0
+"""``depth_scale_m`` by default on the scenario's reference vehicle; Froude-scaled on another."""
+
+
 @dataclass(frozen=True)
 class DivePlaneConfig:
     """Everything an environment is made with but its render mode, checked on construction.
@@ -93,8 +100,8 @@ class DivePlaneConfig:
     substeps: int = SUBSTEPS
     plane_rate_limit_radps: float | None = None
     max_pitch_rad: float = 0.6
-    max_depth_error_m: float = 25.0
-    depth_scale_m: float = 2.0
+    max_depth_error_m: float | None = None
+    depth_scale_m: float | None = None
     pitch_weight: float = 0.1
     effort_weight: float = 0.05
     termination_penalty: float = 100.0
@@ -121,9 +128,13 @@ class DivePlaneConfig:
             put(self, "plane_rate_limit_radps",
                 check.positive("plane_rate_limit_radps", self.plane_rate_limit_radps, upper=MAX_PLANE_RATE_RADPS))
         put(self, "max_pitch_rad", check.number("max_pitch_rad", self.max_pitch_rad, MIN_PITCH_LIMIT_RAD, math.pi / 2))
-        put(self, "max_depth_error_m",
-            check.positive("max_depth_error_m", self.max_depth_error_m, upper=MAX_DEPTH_BAND_M))
-        put(self, "depth_scale_m", check.positive("depth_scale_m", self.depth_scale_m, upper=MAX_DEPTH_BAND_M))
+        # None: the reference vehicle's value (SUBOFF's, for the shipped scenarios), Froude-scaled to
+        # this vehicle's length as the scenario's episodes are (Scenario.reference_length_m).
+        ratio = self.length_ratio
+        for name, reference in (("max_depth_error_m", DEPTH_BAND_M), ("depth_scale_m", DEPTH_SCALE_M)):
+            value = getattr(self, name)
+            put(self, name, check.positive(name, reference * ratio if value is None else value,
+                                           upper=MAX_DEPTH_BAND_M))
         for name in ("pitch_weight", "effort_weight", "termination_penalty"):
             put(self, name, check.number(name, getattr(self, name), 0.0, MAX_WEIGHT))
 
@@ -143,6 +154,13 @@ class DivePlaneConfig:
         """The scenario the episodes are drawn from (resolved)."""
         assert isinstance(self.scenario, Scenario)
         return self.scenario
+
+    @property
+    def length_ratio(self) -> float:
+        """lambda by which the scenario's episodes are Froude-scaled on this vehicle
+        (:attr:`Scenario.reference_length_m <subenv.scenarios.Scenario.reference_length_m>`; 1.0 on the
+        scenario's reference vehicle, or without one)."""
+        return self.base_scenario.length_ratio(self.base_vehicle.length_m)
 
     @property
     def plane_limit_rad(self) -> float:

@@ -112,7 +112,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
     ```python
     gym.make("subenv/DivePlane-v0", scenario="Randomized", vehicle="suboff", control="dual",
              alpha=0.0, dt=0.5, substeps=2, plane_rate_limit_radps=None, max_pitch_rad=0.6,
-             max_depth_error_m=25.0, depth_scale_m=2.0, pitch_weight=0.1, effort_weight=0.05,
+             max_depth_error_m=None, depth_scale_m=None, pitch_weight=0.1, effort_weight=0.05,
              termination_penalty=100.0, render_mode=None)
     ```
 
@@ -120,6 +120,13 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
       :class:`~subenv.scenarios.Scenario`. Each registered scenario also has its own id,
       ``subenv/<Name>-v0``; ``subenv/DivePlane-v0`` is ``Randomized``.
     - ``vehicle``: a shipped name, a vehicle file path, or a :class:`~subenv.vehicles.Vehicle`.
+      The shipped scenarios are SUBOFF's: on a vehicle of another length L every episode is
+      Froude-scaled by lambda = L / 4.26 m (depths, ``max_depth_error_m`` and ``depth_scale_m``
+      x lambda; speeds, times and durations x sqrt(lambda); :meth:`EpisodeConfig.froude_scaled
+      <subenv.scenarios.EpisodeConfig.froude_scaled>`), so ``suboff_fullscale`` flies the same
+      episodes at full scale. ``dt``, the sensor noise and the disturbance's 30 s time constant are
+      not scaled; the registered ids' ``max_episode_steps`` are SUBOFF's (the evaluation harness
+      scales them; with ``gym.make`` pass ``max_episode_steps`` for longer episodes).
     - ``control``: ``"dual"`` (one command, eq. 2.58) or ``"independent"`` (two).
     - ``alpha``: bow/stern allocation in [-1, 1] for ``"dual"``; must be 0 with
       ``"independent"``, whose reported critical speed is that of the stern planes.
@@ -129,8 +136,8 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
       (``tests/dynamics/test_integrator.py``).
     - ``plane_rate_limit_radps``: None (planes move at once) or the planes' largest rate, in
       (0, 1000] rad/s.
-    - ``max_pitch_rad`` in [0.01, pi/2], ``max_depth_error_m`` in (0, 1e5] m: the Episode End
-      limits. ``depth_scale_m`` in (0, 1e5] m, ``pitch_weight``, ``effort_weight`` and
+    - ``max_pitch_rad`` in [0.01, pi/2], ``max_depth_error_m`` in (0, 1e5] m (None: 25 m on
+      SUBOFF, see below): the Episode End limits. ``depth_scale_m`` in (0, 1e5] m (None: 2 m), ``pitch_weight``, ``effort_weight`` and
       ``termination_penalty`` in [0, 1e6]: the Rewards' terms. Within these bounds every reward
       and observation is finite; a value outside them raises ``ValueError``.
     - ``config``: instead of the arguments above, a :class:`~subenv.envs.DivePlaneConfig` (the
@@ -148,7 +155,9 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
     ## Version History
 
     - v0: initial version. (The transition's rewrite over named records, with one block integrator
-      for every step, kept every seeded rollout bit for bit.)
+      for every step, kept every seeded rollout bit for bit. The shipped scenarios are Froude-scaled
+      on vehicles of another length than SUBOFF's since 2026-12; on SUBOFF, and so for every id's
+      defaults, the seeded rollouts are unchanged.)
     """
 
 

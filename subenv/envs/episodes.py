@@ -33,7 +33,8 @@ from subenv.envs.config import (
 from subenv.scenarios.scenario import EpisodeConfig
 from subenv.vehicles.vehicle import Vehicle
 
-__all__ = ["OPTIONS", "Loading", "Loadings", "check_options", "draw_episode", "draw_episode_batch", "write_episode"]
+__all__ = ["OPTIONS", "Loading", "Loadings", "check_options", "draw_episode", "draw_episode_batch", "for_vehicle",
+           "write_episode"]
 
 OPTIONS: Final = ("speed", "depth_command", "initial_state")
 """The keys of ``reset(options=...)``."""
@@ -82,6 +83,12 @@ class Loadings:
         return found
 
 
+def for_vehicle(config: DivePlaneConfig, draw: EpisodeConfig) -> EpisodeConfig:
+    """The scenario's draw Froude-scaled to the vehicle's length (:attr:`DivePlaneConfig.length_ratio
+    <subenv.envs.config.DivePlaneConfig.length_ratio>`; the draw itself on the reference length)."""
+    return draw.froude_scaled(config.length_ratio)
+
+
 def draw_episode(config: DivePlaneConfig, rng: np.random.Generator, loadings: Loadings,
                  options: Mapping[str, Any] | None = None) -> tuple[EpisodeConfig, Loading, dict[str, Any], dict[str, Any]]:
     """One reset from ``rng``: the scenario's draw, then the initial heave force
@@ -90,7 +97,7 @@ def draw_episode(config: DivePlaneConfig, rng: np.random.Generator, loadings: Lo
     Returns the draw, its loading, and the episode's and the state's fields (:func:`episode_fields`).
     ``options`` must have passed :func:`check_options`.
     """
-    draw = config.base_scenario.sample(rng, config.base_vehicle.weight_N)
+    draw = for_vehicle(config, config.base_scenario.sample(rng, config.base_vehicle.weight_N))
     std = draw.disturbance_std_N
     disturbance = float(rng.normal(0.0, std)) if std > 0 else 0.0
     loading = loadings.of(draw)
@@ -106,7 +113,7 @@ def draw_episode_batch(config: DivePlaneConfig, uniforms: np.ndarray, disturbanc
 
     Returns as :func:`draw_episode`, with arrays (one value per episode) where the draw has them.
     """
-    draw = config.base_scenario.sample_batch(uniforms, config.base_vehicle.weight_N)
+    draw = for_vehicle(config, config.base_scenario.sample_batch(uniforms, config.base_vehicle.weight_N))
     loading = loadings.of(draw)
     return (draw, loading, *episode_fields(config, draw, loading, disturbances, None))
 

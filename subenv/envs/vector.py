@@ -22,6 +22,7 @@ from subenv.envs.episodes import (
     check_options,
     draw_episode,
     draw_episode_batch,
+    for_vehicle,
     write_episode,
 )
 from subenv.envs.info import step_infos
@@ -376,7 +377,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
             for i in np.flatnonzero(self._unbuilt).tolist():
                 scenario = self._unbuilt_scenario[i]
                 uniforms = self._unbuilt_uniforms[i, : scenario.uniforms_per_episode]
-                self._episodes[i] = scenario.episode_from_uniforms(uniforms, weight_N)
+                self._episodes[i] = for_vehicle(self.config, scenario.episode_from_uniforms(uniforms, weight_N))
             self._unbuilt[:] = False
         return list(self._episodes)
 
@@ -462,7 +463,9 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         scenario = self.config.base_scenario
         uniforms = np.empty((len(index), scenario.uniforms_per_episode))
         disturbances = np.empty(len(index))
-        tr.draw_reset_numbers(self._rngs, index, uniforms, scenario.disturbance_std_N, disturbances)
+        # (the initial disturbance drawn with the episode's standard deviation, Froude-scaled as it is)
+        std = scenario.disturbance_std_N * self.config.length_ratio**3
+        tr.draw_reset_numbers(self._rngs, index, uniforms, std, disturbances)
         _, loading, episode, state = draw_episode_batch(self.config, uniforms, disturbances, self._loadings)
         write_episode(self._episode, index, episode)
         write_episode(self._state, index, state)

@@ -168,7 +168,8 @@ def run_comparison(
     return comparison
 
 
-def _run_record(comparison: Comparison, controllers: Sequence[Controller] | None) -> dict[str, Any]:
+def _run_record(comparison: Comparison, controllers: Sequence[Controller] | None,
+                vehicle: str | Vehicle) -> dict[str, Any]:
     try:
         version = metadata.version("subenv")
     except metadata.PackageNotFoundError:
@@ -180,6 +181,7 @@ def _run_record(comparison: Comparison, controllers: Sequence[Controller] | None
         "suite": suite.name,
         "scenarios": list(suite.scenarios),
         "max_duration_s": suite.max_duration_s,
+        "vehicle": vehicle if isinstance(vehicle, str) else vehicle.name,
         "episodes": comparison.episodes,
         "seeds": [comparison.seed, comparison.seed + comparison.episodes - 1],
         "controllers": [
@@ -228,7 +230,7 @@ def _write_files(
     atomic_write_text(
         folder / "summary.md", summary_markdown(comparison.summary, title=f"Suite '{comparison.suite.name}'")
     )
-    atomic_write_text(folder / "run.json", json.dumps(_run_record(comparison, controllers), indent=2) + "\n")
+    atomic_write_text(folder / "run.json", json.dumps(_run_record(comparison, controllers, vehicle), indent=2) + "\n")
     if plots:
         from subenv.evaluation.plots import plot_metrics_vs_speed, plot_outcomes, replay_trajectory
 

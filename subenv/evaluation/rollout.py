@@ -33,7 +33,7 @@ from subenv.evaluation.controller import BatchController, Controller, make_contr
 from subenv.evaluation.metrics import EpisodeMetrics, episode_metrics
 from subenv.evaluation.progress import Progress
 from subenv.evaluation.suites import DEFAULT_SEED, Suite, check_scenarios, get_suite, suite_names
-from subenv.scenarios.registry import scenario_names
+from subenv.scenarios.registry import get_scenario, scenario_names
 from subenv.scenarios.scenario import Scenario
 from subenv.vehicles.loader import load_vehicle
 from subenv.vehicles.vehicle import Vehicle
@@ -220,9 +220,18 @@ def _env_args(
     else:
         env_id, kwargs = f"subenv/{_scenario_of(scenario)}-v0", {}
     kwargs |= {"control": controller.control, "alpha": controller.alpha, "vehicle": vehicle}
+    spec = gym.spec(env_id)
     if max_duration_s is not None:
-        dt = gym.spec(env_id).kwargs.get("dt", 0.5)
+        dt = spec.kwargs.get("dt", 0.5)
         kwargs["max_episode_steps"] = max(1, math.ceil(max_duration_s / dt - 1e-9))
+    else:
+        # On a vehicle of another length the episodes are Froude-scaled (Scenario.reference_length_m):
+        # their durations by sqrt(lambda), and the id's step limit (the reference vehicle's) with them.
+        the_scenario = scenario if isinstance(scenario, Scenario) else get_scenario(_scenario_of(scenario))
+        boat = vehicle if isinstance(vehicle, Vehicle) else load_vehicle(vehicle)
+        ratio = the_scenario.length_ratio(boat.length_m)
+        if ratio != 1.0 and spec.max_episode_steps is not None:
+            kwargs["max_episode_steps"] = math.ceil(spec.max_episode_steps * math.sqrt(ratio) - 1e-9)
     return env_id, kwargs
 
 

@@ -122,6 +122,29 @@ class EpisodeConfig:
     disturbance_std_N: float
     duration_s: float
 
+    def froude_scaled(self, length_ratio: float) -> EpisodeConfig:
+        """The same episode for a vehicle ``length_ratio`` times longer, at equal Froude number
+        (:func:`subenv.vehicles.froude_scaled`): lengths x lambda, speeds and times x sqrt(lambda),
+        rates x 1/sqrt(lambda), forces x lambda^3; angles, ratios (u / u_cr, ``z_GB_scale``, C_D)
+        and ``excess_buoyancy_N`` (drawn as a fraction of the scaled vehicle's weight) stay.
+        Works on a batch's draw too (arrays). A ratio of exactly 1 returns this episode itself."""
+        ratio = check.positive("length_ratio", length_ratio)
+        if ratio == 1.0:
+            return self
+        root = math.sqrt(ratio)
+        speed = 1.0 if self.speed_relative else root
+        pitch, heave, rate, depth = self.initial_state
+        return dataclasses.replace(
+            self,
+            speed_knots=tuple((t * root, u * speed) for t, u in self.speed_knots),
+            depth_command_m=self.depth_command_m * ratio,
+            initial_state=(pitch, heave * root, rate / root, depth * ratio),
+            z_GB_m=None if self.z_GB_m is None else self.z_GB_m * ratio,
+            x_GB_m=self.x_GB_m * ratio,
+            disturbance_std_N=self.disturbance_std_N * ratio**3,
+            duration_s=self.duration_s * root,
+        )
+
 
 @dataclass(frozen=True)
 class Scenario:
@@ -173,6 +196,12 @@ class Scenario:
         Episode length [s]; the episode is truncated at this time.
     components : tuple of str
         Names of scenarios to draw from (a mixture); empty for a plain scenario.
+    reference_length_m : float or None
+        The hull length [m] the scenario's absolute quantities (depths, m/s speeds, times, loadings,
+        disturbance) were chosen for. On a vehicle of another length L an environment Froude-scales
+        every episode by L / reference_length_m (:meth:`EpisodeConfig.froude_scaled`), so the
+        scenario means the same for a boat of any size; None (the default): the episodes are used as
+        drawn. The shipped scenarios give SUBOFF's length.
     """
 
     name: str
@@ -195,6 +224,7 @@ class Scenario:
     disturbance_std_N: float = 0.0
     duration_s: float = 300.0
     components: tuple[str, ...] = ()
+    reference_length_m: float | None = None
 
     def __post_init__(self) -> None:
         if not (self.name and self.name.isidentifier() and self.name[0].isupper()):
@@ -234,6 +264,8 @@ class Scenario:
             )
         if not (math.isfinite(self.duration_s) and self.duration_s > 0):
             raise ValueError(f"duration_s={self.duration_s!r} is invalid: must be a finite number > 0")
+        if self.reference_length_m is not None:
+            check.positive("reference_length_m", self.reference_length_m)
 
     @property
     def speed_relative(self) -> bool:
@@ -244,6 +276,11 @@ class Scenario:
     def initial_speed(self) -> Interval:
         """The initial speed's interval, in the scenario's unit (m/s, or u / u_cr)."""
         return self.speed_ratio if self.speed_ratio is not None else self.speed_mps  # type: ignore[return-value]
+
+    def length_ratio(self, length_m: float) -> float:
+        """lambda = ``length_m`` / :attr:`reference_length_m`, by which an environment Froude-scales the
+        episodes on a vehicle of that length (1.0 without a reference length)."""
+        return 1.0 if self.reference_length_m is None else length_m / self.reference_length_m
 
     def replace(self, **changes: object) -> Scenario:
         """A copy with some fields changed (``dataclasses.replace``), validated again."""
