@@ -189,7 +189,7 @@ def _installed_controllers(requested: Sequence[str] | None) -> None:
 
 
 def _note_other_scale(vehicle_name: str) -> None:
-    """On a vehicle of another length the episodes are Froude-scaled, but what judges them is not."""
+    """On a vehicle of another length the comparison is Froude-scaled, but the agents are not."""
     from subenv.scenarios import get_scenario
     from subenv.vehicles import load_vehicle
 
@@ -199,10 +199,9 @@ def _note_other_scale(vehicle_name: str) -> None:
         raise SystemExit(f"subenv evaluate: {exc}") from None
     ratio = get_scenario("Nominal").length_ratio(vehicle.length_m)
     if ratio != 1.0:
-        print(f"(--vehicle {vehicle_name}: the scenarios are Froude-scaled to its {vehicle.length_m:.4g} m (x{ratio:.4g}), "
-              "but the success criterion (0.5 m over the final 60 s), the classical baselines' gain schedules "
-              "(in m/s) and the trained agents are SUBOFF's: compare controllers on it, not numbers across "
-              "vehicles)", file=sys.stderr)
+        print(f"(--vehicle {vehicle_name}: the scenarios, the success criterion and the classical baselines' "
+              f"designs are Froude-scaled to its {vehicle.length_m:.4g} m (x{ratio:.4g}); the trained agents are "
+              "SUBOFF's and only run there as they were trained)", file=sys.stderr)
 
 
 def evaluate(args: argparse.Namespace) -> int:

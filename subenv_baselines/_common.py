@@ -13,6 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from subenv.envs.dive_plane import OBSERVATION_NAMES
+from subenv.thesis import froude_speed_factor
+from subenv.vehicles import Vehicle
 
 _I = {name: i for i, name in enumerate(OBSERVATION_NAMES)}
 DEPTH_ERROR, PITCH, HEAVE, PITCH_RATE, SPEED = (
@@ -30,6 +32,13 @@ def feedback_state(observations: np.ndarray, depth_error_limit_m: float = np.inf
     obs = np.asarray(observations, dtype=float)
     error = np.clip(obs[:, DEPTH_ERROR], -depth_error_limit_m, depth_error_limit_m)
     return np.stack([obs[:, PITCH], obs[:, HEAVE], obs[:, PITCH_RATE], error], axis=1)
+
+
+def scaled_points(points: np.ndarray, vehicle: Vehicle) -> np.ndarray:
+    """A gain schedule's speeds [m/s], chosen for SUBOFF, Froude-scaled to ``vehicle``: x sqrt(L / L_SUBOFF)
+    (the same points, 1.0 times, on SUBOFF), so the schedule covers the same speeds relative to the
+    boat's own physics (its critical and Hopf speeds scale so)."""
+    return points * froude_speed_factor(vehicle)
 
 
 def speeds(observations: np.ndarray) -> np.ndarray:

@@ -13,7 +13,7 @@ from subenv.analysis.linear import Allocation
 from subenv.dynamics import CONTROL_PERIOD_S
 from subenv.evaluation import SingleRowMixin, check_batch
 from subenv.vehicles import Vehicle
-from subenv_baselines._common import GainSchedule, feedback_state, row_dot, speeds
+from subenv_baselines._common import GainSchedule, feedback_state, row_dot, scaled_points, speeds
 
 # Bryson's rule: each state weighted by the inverse square of its acceptable size.
 ACCEPTABLE: Final = {"pitch_rad": 0.1, "heave_mps": 0.1, "pitch_rate_radps": 0.05, "depth_error_m": 1.0,
@@ -95,7 +95,7 @@ class ScheduledLQR(SingleRowMixin):
         if vehicle is not self._vehicle:
             self._limit = vehicle.planes.limit_rad
             self.schedule = GainSchedule.design(
-                self.points, lambda u: lqi_gain(vehicle, u, self.alpha, self._limit)
+                scaled_points(self.points, vehicle), lambda u: lqi_gain(vehicle, u, self.alpha, self._limit)
             )
             self._vehicle = vehicle
         self.integrator.reset(len(infos))

@@ -12,7 +12,7 @@ from subenv.analysis import critical_speed
 from subenv.dynamics import CONTROL_PERIOD_S
 from subenv.evaluation import SingleRowMixin, check_batch
 from subenv.vehicles import Vehicle
-from subenv_baselines._common import GainSchedule, speeds
+from subenv_baselines._common import GainSchedule, scaled_points, speeds
 from subenv_baselines.lqr import ACCEPTABLE, DEFAULT_POINTS, DepthIntegrator, lqi_command, lqi_gain
 
 ALLOCATIONS: Final = (-1.0, 1.0)
@@ -79,7 +79,8 @@ class ReversalAware(SingleRowMixin):
             )
             self._slow, self._fast = (a for a, _ in sorted(ucr.items(), key=lambda kv: -kv[1]))
             self.schedules = {
-                a: GainSchedule.design(self.points, lambda u, a=a: lqi_gain(vehicle, u, a, self._limit))
+                a: GainSchedule.design(scaled_points(self.points, vehicle),
+                                       lambda u, a=a: lqi_gain(vehicle, u, a, self._limit))
                 for a in ALLOCATIONS
             }
             self._vehicle = vehicle

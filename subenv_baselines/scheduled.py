@@ -7,10 +7,10 @@ from typing import Any
 
 import numpy as np
 
-from subenv.analysis import THESIS_POLES, place_gain
+from subenv.analysis import place_gain, thesis_poles
 from subenv.evaluation import SingleRowMixin
 from subenv.vehicles import Vehicle
-from subenv_baselines._common import GainSchedule, feedback_state, row_dot, speeds
+from subenv_baselines._common import GainSchedule, feedback_state, row_dot, scaled_points, speeds
 
 DEFAULT_POINTS = np.linspace(0.15, 2.0, 38)
 """Scheduling speeds [m/s], every 0.05 m/s; for SUBOFF u_cr = 0.5785 m/s lies between two points."""
@@ -42,7 +42,7 @@ class GainScheduledPolePlacement(SingleRowMixin):
     def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
         if vehicle is not self._vehicle:
             self.schedule = GainSchedule.design(
-                self.points, lambda u: place_gain(vehicle, u, THESIS_POLES, self.alpha)
+                scaled_points(self.points, vehicle), lambda u: place_gain(vehicle, u, thesis_poles(vehicle), self.alpha)
             )
             self._vehicle = vehicle
             self._limit = vehicle.planes.limit_rad

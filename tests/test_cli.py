@@ -297,7 +297,8 @@ def test_evaluate_takes_a_vehicle_and_says_what_is_not_scaled(tmp_path: Path, ca
     main(["evaluate", "--vehicle", "suboff_fullscale", "--controllers", "thesis", "--suite", "tiny", "--episodes", "1",
           "--no-plots", "--no-progress", "--out", str(out)])
     err = capsys.readouterr().err
-    assert "--vehicle suboff_fullscale: the scenarios are Froude-scaled to its 102.3 m (x24)" in err
+    assert "--vehicle suboff_fullscale: the scenarios, the success criterion and the classical baselines' designs are " \
+           "Froude-scaled to its 102.3 m (x24)" in err
     assert json.loads((out / "run.json").read_text())["vehicle"] == "suboff_fullscale"
     with pytest.raises(SystemExit, match=r"vehicle='boat' is unknown: must be one of \['suboff', 'suboff_fullscale'\]"):
         main(["evaluate", "--vehicle", "boat", "--out", str(tmp_path / "none")])

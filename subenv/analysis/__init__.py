@@ -32,6 +32,7 @@ from subenv.analysis.design import (
     place_gain,
     scheduled_depth_gain,
     thesis_gain,
+    thesis_poles,
 )
 from subenv.analysis.equilibria import Equilibrium, equilibria, steady_state_residual, symmetric_pitchfork
 from subenv.analysis.hopf import (
@@ -80,4 +81,5 @@ __all__ = [
     "steady_state_residual",
     "symmetric_pitchfork",
     "thesis_gain",
+    "thesis_poles",
 ]

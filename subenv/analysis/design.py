@@ -15,7 +15,7 @@ from scipy.signal import place_poles
 
 from subenv._typing import FloatArray
 from subenv.analysis.linear import linear_model
-from subenv.thesis import THESIS_DESIGN_SPEED_MPS
+from subenv.thesis import THESIS_DESIGN_SPEED_MPS, froude_speed_factor
 from subenv.vehicles.vehicle import Vehicle
 
 __all__ = [
@@ -27,6 +27,7 @@ __all__ = [
     "place_gain",
     "scheduled_depth_gain",
     "thesis_gain",
+    "thesis_poles",
 ]
 
 THESIS_POLES: Final = (-0.3, -0.31, -0.32, -0.33)
@@ -54,9 +55,18 @@ def place_gain(
     return np.asarray(result.gain_matrix[0], dtype=float)
 
 
+def thesis_poles(vehicle: Vehicle) -> tuple[float, ...]:
+    """:data:`THESIS_POLES` for ``vehicle``: SUBOFF's, Froude-scaled (rates x sqrt(L_SUBOFF / L); the
+    same numbers on SUBOFF), so that a boat of another size gets the same design relative to its own
+    dynamics."""
+    factor = froude_speed_factor(vehicle)
+    return tuple(p / factor for p in THESIS_POLES)
+
+
 def thesis_gain(vehicle: Vehicle, alpha: float = 0.0) -> FloatArray:
-    """The thesis controller's gain: poles (-0.3, -0.31, -0.32, -0.33) placed at 5 fps (eq. 2.98)."""
-    return place_gain(vehicle, THESIS_DESIGN_SPEED_MPS, THESIS_POLES, alpha)
+    """The thesis controller's gain: poles (-0.3, -0.31, -0.32, -0.33) placed at 5 fps (eq. 2.98); on a
+    vehicle of another length both Froude-scaled (:func:`thesis_poles`, ``froude_speed_factor``)."""
+    return place_gain(vehicle, THESIS_DESIGN_SPEED_MPS * froude_speed_factor(vehicle), thesis_poles(vehicle), alpha)
 
 
 def closed_loop_eigenvalues(

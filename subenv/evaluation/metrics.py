@@ -266,6 +266,7 @@ def episode_metrics(
     episode_duration_s: float | None = None,
     depth_tolerance_m: float = DEPTH_TOLERANCE_M,
     hold_window_s: float = HOLD_WINDOW_S,
+    length_ratio: float = 1.0,
 ) -> EpisodeMetrics:
     """Compute the :class:`EpisodeMetrics` of one recorded episode.
 
@@ -293,6 +294,11 @@ def episode_metrics(
         See :data:`DEPTH_TOLERANCE_M`.
     hold_window_s : float
         See :data:`HOLD_WINDOW_S`.
+    length_ratio : float
+        lambda of an episode Froude-scaled to a vehicle of another size
+        (:attr:`subenv.envs.config.DivePlaneConfig.length_ratio`): the tolerances above and the
+        steadiness thresholds are the reference vehicle's (SUBOFF's) and are scaled with it, lengths
+        x lambda, times x sqrt(lambda), rates x 1/sqrt(lambda). 1 on SUBOFF.
 
     Returns
     -------
@@ -348,6 +354,9 @@ def episode_metrics(
     check.positive("plane_limit_rad", plane_limit_rad)
     check.positive("depth_tolerance_m", depth_tolerance_m)
     check.positive("hold_window_s", hold_window_s)
+    root = math.sqrt(check.positive("length_ratio", length_ratio))
+    depth_tolerance_m, hold_window_s = depth_tolerance_m * length_ratio, hold_window_s * root
+    steady_rate, steady_change = STEADY_PITCH_RATE_RADPS / root, STEADY_DEPTH_CHANGE_M * length_ratio
     if episode_duration_s is not None:
         check.positive("episode_duration_s", episode_duration_s)
 
@@ -400,7 +409,7 @@ def episode_metrics(
             float(np.sum(dts[steps & (sign * planes[p] >= level)])) / window_time
             for p in (0, 1) for sign in (1.0, -1.0)
         )
-        steady_pitch = float(np.abs(q[in_window]).max()) <= STEADY_PITCH_RATE_RADPS
+        steady_pitch = float(np.abs(q[in_window]).max()) <= steady_rate
         off_depth = hold_max > depth_tolerance_m
         wrong_branch = (
             pinned > PINNED_FRACTION
@@ -413,7 +422,7 @@ def episode_metrics(
             not terminated
             and not wrong_branch
             and steady_pitch
-            and abs(float(e_window[-1] - e_window[0])) <= STEADY_DEPTH_CHANGE_M
+            and abs(float(e_window[-1] - e_window[0])) <= steady_change
             and off_depth
         )
 

@@ -88,6 +88,9 @@ class Trajectory:
     plane_limit_rad: float
     episode_duration_s: float
     """The scheduled length of the episode [s] (the scenario's, or the suite's cap)."""
+    length_ratio: float = 1.0
+    """lambda of the episode's Froude scaling (:attr:`subenv.envs.config.DivePlaneConfig.length_ratio`):
+    its metrics' tolerances are scaled with it."""
 
     @property
     def steps(self) -> int:
@@ -99,7 +102,7 @@ class Trajectory:
             self.time_s, self.depth_error_m, self.pitch_rad, self.pitch_rate_radps,
             self.stern_plane_rad, self.bow_plane_rad,
             termination_reason=self.termination_reason, plane_limit_rad=self.plane_limit_rad,
-            episode_duration_s=self.episode_duration_s, **kwargs,
+            episode_duration_s=self.episode_duration_s, length_ratio=self.length_ratio, **kwargs,
         )
 
 
@@ -127,7 +130,8 @@ class TrajectoryRecorder:
         self._stacked = None
 
     def trajectory(
-        self, episode: int, steps: int, termination_reason: str, plane_limit_rad: float, episode_duration_s: float
+        self, episode: int, steps: int, termination_reason: str, plane_limit_rad: float, episode_duration_s: float,
+        length_ratio: float = 1.0,
     ) -> Trajectory:
         """Episode ``episode``'s (its row) first ``steps`` steps."""
         if self._stacked is None:
@@ -144,14 +148,15 @@ class TrajectoryRecorder:
             actions=np.ascontiguousarray(actions[:steps, episode]), termination_reason=termination_reason,
             depth_command_m=float(self._depth_command_m[episode]),
             critical_speed_mps=float(self._critical_speed_mps[episode]),
-            plane_limit_rad=plane_limit_rad, episode_duration_s=episode_duration_s,
+            plane_limit_rad=plane_limit_rad, episode_duration_s=episode_duration_s, length_ratio=length_ratio,
         )
 
     def finish(
-        self, termination_reason: str, plane_limit_rad: float, episode_duration_s: float
+        self, termination_reason: str, plane_limit_rad: float, episode_duration_s: float, length_ratio: float = 1.0
     ) -> Trajectory:
         """The trajectory of one episode, recorded to its end."""
-        return self.trajectory(0, len(self._actions), termination_reason, plane_limit_rad, episode_duration_s)
+        return self.trajectory(0, len(self._actions), termination_reason, plane_limit_rad, episode_duration_s,
+                               length_ratio)
 
 
 @dataclass(frozen=True)
@@ -387,7 +392,7 @@ def _run_single(
     limit = env.spec.max_episode_steps if env.spec is not None else None
     duration_s = _scheduled(float(base.episode.duration_s), limit, float(base.dt))
     trajectory = recorder.finish(info["termination_reason"] if terminated else "", float(base.plane_limit_rad),
-                                 duration_s)
+                                 duration_s, base.config.length_ratio)
     return _result(controller, base.scenario.name, seed, episode, trajectory, keep)
 
 
@@ -426,7 +431,8 @@ def _run_batch(
     for i, (seed, draw) in enumerate(zip(seeds, drawn)):
         assert draw is not None
         duration_s = _scheduled(float(draw.duration_s), env.max_episode_steps, float(config.dt))
-        trajectory = recorder.trajectory(i, int(steps[i]), reasons[i], float(config.plane_limit_rad), duration_s)
+        trajectory = recorder.trajectory(i, int(steps[i]), reasons[i], float(config.plane_limit_rad), duration_s,
+                                         config.length_ratio)
         results.append(_result(controller, env.scenario.name, seed, first_episode + i, trajectory, i < keep))
     return results
 

@@ -9,19 +9,17 @@ from __future__ import annotations
 
 from subenv.scenarios.registry import register_scenario
 from subenv.scenarios.scenario import Scenario, SpeedRamp
-from subenv.thesis import THESIS_DESIGN_SPEED_MPS
-from subenv.vehicles.loader import load_vehicle
+from subenv.thesis import REFERENCE_LENGTH_M, THESIS_DESIGN_SPEED_MPS
 
 __all__ = ["BASE_SCENARIOS"]
 
 _SMALL_PITCH = (-0.05, 0.05)  # rad, about +-3 deg
-_SUBOFF_LENGTH_M = load_vehicle("suboff").length_m
-"""The scenarios' depths, m/s speeds, times, loadings and disturbances are SUBOFF's: on a vehicle of
-another length every episode is Froude-scaled (``Scenario.reference_length_m``)."""
+# The scenarios' depths, m/s speeds, times, loadings and disturbances are SUBOFF's (REFERENCE_LENGTH_M):
+# on a vehicle of another length every episode is Froude-scaled (Scenario.reference_length_m).
 
 NOMINAL = Scenario(
     name="Nominal",
-    reference_length_m=_SUBOFF_LENGTH_M,
+    reference_length_m=REFERENCE_LENGTH_M,
     description="Design speed 5 fps (1.524 m/s), well above critical: the thesis controller works here.",
     speed_mps=(THESIS_DESIGN_SPEED_MPS, THESIS_DESIGN_SPEED_MPS),
     depth_command_m=(8.0, 15.0),
@@ -31,7 +29,7 @@ NOMINAL = Scenario(
 )
 LOW_SPEED = Scenario(
     name="LowSpeed",
-    reference_length_m=_SUBOFF_LENGTH_M,
+    reference_length_m=REFERENCE_LENGTH_M,
     description="Below the critical speed (0.3-0.8 u_cr): level flight is unstable and the planes reverse.",
     speed_ratio=(0.3, 0.8),
     depth_command_m=(8.0, 15.0),
@@ -41,7 +39,7 @@ LOW_SPEED = Scenario(
 )
 NEAR_CRITICAL = Scenario(
     name="NearCritical",
-    reference_length_m=_SUBOFF_LENGTH_M,
+    reference_length_m=REFERENCE_LENGTH_M,
     description="Within 15% of the critical speed, where the planes have almost no net effect on depth.",
     speed_ratio=(0.85, 1.15),
     depth_command_m=(8.0, 15.0),
@@ -51,7 +49,7 @@ NEAR_CRITICAL = Scenario(
 )
 SPEED_TRANSIENT = Scenario(
     name="SpeedTransient",
-    reference_length_m=_SUBOFF_LENGTH_M,
+    reference_length_m=REFERENCE_LENGTH_M,
     description=(
         "Decelerates from 2-2.6 u_cr to 0.4-0.7 u_cr within the episode, through the critical speed, "
         "with a 0.3 N heave-force disturbance (below u_cr it reveals whether level flight is still stable)."
@@ -66,7 +64,7 @@ SPEED_TRANSIENT = Scenario(
 )
 PERISCOPE_DEPTH = Scenario(
     name="PeriscopeDepth",
-    reference_length_m=_SUBOFF_LENGTH_M,
+    reference_length_m=REFERENCE_LENGTH_M,
     description=(
         "Ordered depth 1.0-1.2 m, near the surface; surface suction modelled as excess buoyancy "
         "(Riedel 1993 Ch. V.C); broaching ends the episode."
@@ -80,7 +78,7 @@ PERISCOPE_DEPTH = Scenario(
 )
 BALLAST_OFFSET = Scenario(
     name="BallastOffset",
-    reference_length_m=_SUBOFF_LENGTH_M,
+    reference_length_m=REFERENCE_LENGTH_M,
     description="Centre of gravity 0.5-3 mm fore or aft of buoyancy (x_GB != 0, Riedel 1993 Ch. IV).",
     speed_ratio=(0.6, 2.0),
     depth_command_m=(8.0, 15.0),
@@ -95,7 +93,7 @@ BASE_SCENARIOS = (NOMINAL, LOW_SPEED, NEAR_CRITICAL, SPEED_TRANSIENT, PERISCOPE_
 
 RANDOMIZED = Scenario(
     name="Randomized",
-    reference_length_m=_SUBOFF_LENGTH_M,
+    reference_length_m=REFERENCE_LENGTH_M,
     description=(
         "Randomized: one of the scenarios above, with z_GB scaled by 0.8-1.25, C_D in 0-0.6, sensor "
         "noise and a heave-force disturbance."
@@ -109,7 +107,7 @@ RANDOMIZED = Scenario(
 
 MIXED = Scenario(
     name="Mixed",
-    reference_length_m=_SUBOFF_LENGTH_M,
+    reference_length_m=REFERENCE_LENGTH_M,
     description=(
         "Mixed: one of the scenarios above, the low-speed, near-critical and speed-transient ones twice as "
         "often as the others, mildly randomized (z_GB scaled by 0.9-1.1, C_D in 0.2-0.4, sensor noise, a 0.3 N "

@@ -248,3 +248,26 @@ def test_bad_input_is_a_clear_error(kwargs, match):
     args.update(kwargs)
     with pytest.raises(ValueError, match=match):
         episode_metrics(**args)
+
+
+@pytest.mark.parametrize("case", ["settled", "within", "wrong_branch", "steady_offset", "late"])
+def test_a_froude_scaled_episode_is_judged_as_the_models(case) -> None:  # type: ignore[no-untyped-def]
+    """length_ratio: an episode of a boat lambda times larger, in scaled units (times x sqrt(lambda), depths
+    x lambda, rates x 1/sqrt(lambda)), gets the model episode's outcome."""
+    t = _time(300.0)
+    e = {"settled": 2.0 * np.exp(-t / 20.0), "within": np.full(t.size, 0.3), "wrong_branch": 0.8 + 0.004 * t,
+         "steady_offset": np.full(t.size, 0.8), "late": np.where(t < 270.0, 2.0, 0.1)}[case]
+    pitch = np.full(t.size, 0.05) if case == "wrong_branch" else np.zeros(t.size)
+    stern = np.full(t.size, LIMIT) if case == "wrong_branch" else np.zeros(t.size)
+    rate = np.full(t.size, 0.5 * STEADY_PITCH_RATE_RADPS)
+    ratio = 24.0
+    root = math.sqrt(ratio)
+    model = episode_metrics(t, e, pitch, rate, stern, stern * 0, termination_reason="", plane_limit_rad=LIMIT)
+    full = episode_metrics(t * root, e * ratio, pitch, rate / root, stern, stern * 0, termination_reason="",
+                           plane_limit_rad=LIMIT, length_ratio=ratio)
+    expected = {"settled": "success", "within": "success", "late": "unsettled"}.get(case, case)
+    assert full.outcome == model.outcome == expected
+    if case == "within":  # 7.2 m off at full scale: within the scaled tolerance, not within 0.5 m
+        unscaled = episode_metrics(t * root, e * ratio, pitch, rate / root, stern, stern * 0, termination_reason="",
+                                   plane_limit_rad=LIMIT)
+        assert unscaled.outcome == "steady_offset"
