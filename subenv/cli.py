@@ -1,6 +1,7 @@
 """The ``subenv`` command line: the submarine depth-control benchmark's commands.
 
-``subenv evaluate`` (the main job) compares the installed controllers on a suite of scenarios;
+``subenv evaluate`` (the main job) compares the installed controllers on a suite of scenarios; ``subenv sweep``
+runs them over a grid of the physics' parameters on Ray (:mod:`subenv.sweep`);
 ``subenv demo`` flies the thesis's pole-placement design (Riedel 1993 Ch. II.B, computed here from
 the linear model) once above and once below the critical speed, prints a summary and writes a plot.
 The command line is the composition root: it finds the controllers through their entry points
@@ -19,6 +20,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -26,6 +28,7 @@ import numpy as np
 import subenv  # noqa: F401  (registers the environments)
 from subenv.analysis import THESIS_POLES, critical_speed, thesis_gain
 from subenv.extras import MissingExtra, require
+from subenv.sweep import PARAMETERS
 from subenv.thesis import THESIS_DESIGN_SPEED_MPS
 from subenv.units import mps_to_fps
 from subenv.vehicles import available_vehicles
@@ -265,6 +268,60 @@ def _path(text: str) -> str:
     return text
 
 
+def _grid_axis(text: str) -> tuple[str, tuple[float, ...]]:
+    """``name=v1,v2,...`` or ``name=start:stop:count`` (count points from start to stop)."""
+    name, sep, values = text.partition("=")
+    try:
+        if not sep or not name.strip():
+            raise ValueError
+        if ":" in values:
+            start, stop, count = values.split(":")
+            n = int(count)
+            if n < 1:
+                raise ValueError
+            points = tuple(float(v) for v in np.linspace(float(start), float(stop), n))
+        else:
+            points = tuple(float(v) for v in values.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"invalid value {text!r}: must be name=v1,v2,... or name=start:stop:count") from None
+    return name.strip(), points
+
+
+def sweep(args: argparse.Namespace) -> int:
+    from subenv.evaluation import controller_names
+    from subenv.sweep import SweepSpec, run_sweep
+
+    _installed_controllers(args.controllers)
+    controllers = args.controllers or controller_names()
+    try:
+        spec = SweepSpec(controllers=tuple(controllers), scenarios=tuple(args.scenarios), grid=tuple(args.grid or ()),
+                         episodes=args.episodes, seed=args.seed, vehicle=args.vehicle,
+                         chunk_episodes=args.chunk_episodes)
+    except ValueError as exc:
+        raise SystemExit(f"subenv sweep: {exc}") from None
+    out = args.out or f"results/sweep/{time.strftime('%Y%m%d-%H%M%S')}"
+    try:
+        path = run_sweep(spec, out, address=args.address, num_cpus=args.num_cpus, progress=not args.no_progress)
+    except FileExistsError as exc:
+        raise SystemExit(f"subenv sweep: --out: {exc}") from None
+    import pyarrow.parquet as pq
+
+    rows = pq.read_table(path).to_pylist()
+    axes = [f"grid_{name}" for name, _ in spec.grid]
+    cells: dict[tuple[Any, ...], list[bool]] = {}
+    for row in rows:
+        cells.setdefault((row["controller"], row["scenario"], *(row[a] for a in axes)), []).append(row["success"])
+    print("| controller | scenario | " + " | ".join(name for name, _ in spec.grid) + (" | " if axes else "")
+          + "success |")
+    print("|---" * (3 + len(axes)) + "|")
+    for key, successes in cells.items():
+        values = " | ".join(f"{v:.4g}" if isinstance(v, float) else str(v) for v in key)
+        print(f"| {values} | {sum(successes) / len(successes):.0%} |")
+    print(f"\n{len(rows)} episodes; results in {path}")
+    return 0
+
+
 def _names(text: str) -> list[str]:
     """A comma-separated list of names; an empty one (``""``, ``"a,"``, ``"a,,b"``) is refused."""
     names = [name.strip() for name in text.split(",")]
@@ -313,6 +370,23 @@ def _parser() -> argparse.ArgumentParser:
     p_analyze.add_argument("--vehicle", default="suboff", help="vehicle name or file (default: %(default)s)")
     p_analyze.add_argument("--force", action="store_true",
                            help="replace the folder if it holds an earlier report (it has the marker file)")
+    p_sweep = sub.add_parser("sweep", help="sweep the controllers over a grid of physics parameters on Ray "
+                                           "(needs the 'ray' extra)")
+    p_sweep.add_argument("--controllers", type=_names, help="comma-separated controller names (default: all registered)")
+    p_sweep.add_argument("--scenarios", type=_names, default=["LowSpeed"],
+                         help="comma-separated scenario names (default: LowSpeed)")
+    p_sweep.add_argument("--grid", type=_grid_axis, action="append",
+                         help="a grid axis, name=v1,v2,... or name=start:stop:count, repeatable; names: "
+                              + ", ".join(sorted(PARAMETERS)) + " (default: speed_ratio=0.3:1.5:13)")
+    p_sweep.add_argument("--episodes", type=int, default=20, help="episodes per grid point (default: %(default)s)")
+    p_sweep.add_argument("--seed", type=int, default=10000, help="base seed (default: %(default)s)")
+    p_sweep.add_argument("--vehicle", default="suboff", help="vehicle name or file (default: %(default)s)")
+    p_sweep.add_argument("--chunk-episodes", type=int, default=50, help="episodes per Ray task (default: %(default)s)")
+    p_sweep.add_argument("--out", type=_path, help="results folder; the same arguments again resume it "
+                                                   "(default: results/sweep/<date-time>)")
+    p_sweep.add_argument("--address", help="a Ray cluster's address (e.g. auto); default: a local Ray instance")
+    p_sweep.add_argument("--num-cpus", type=int, help="CPUs of the local Ray instance (default: all)")
+    p_sweep.add_argument("--no-progress", action="store_true", help="no progress on stderr")
     sub.add_parser("list", help="list the environment ids and their scenarios")
     sub.add_parser("train", add_help=False, help="train a Stable-Baselines3 agent (needs the 'rl' extra)")
     return parser
@@ -329,7 +403,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command is None:
             parser.print_help(sys.stderr)
             return 2
-        commands = {"evaluate": evaluate, "demo": demo, "analyze": analyze, "list": list_environments}
+        if args.command == "sweep" and args.grid is None:
+            args.grid = [("speed_ratio", tuple(float(v) for v in np.linspace(0.3, 1.5, 13)))]
+        commands = {"evaluate": evaluate, "demo": demo, "analyze": analyze, "list": list_environments, "sweep": sweep}
         return commands[args.command](args)
     except MissingExtra as exc:
         raise SystemExit(f"subenv {argv[0]}: {exc}") from None

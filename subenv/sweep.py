@@ -1,0 +1,233 @@
+"""Evaluation sweeps over the physics' parameters on Ray: controllers x scenarios x a grid x seeds.
+
+A sweep pins some of a scenario's drawn quantities to each point of a grid (speed as u / u_cr,
+ballast offset x_GB, excess buoyancy, metacentric height z_GB, cross-flow drag, disturbance) and
+runs every controller on the same seeded episodes at every point, with the batched harness
+(:func:`subenv.evaluation.run_episodes`). The work is cut into chunks (one controller, one grid
+point, a range of seeds), run as Ray tasks: on a local Ray instance by default, on a cluster with
+``address``. Per-episode results are those of the serial harness for the same seeds.
+
+The results folder ``out_dir``::
+
+    sweep.json          the sweep (controllers, scenarios, grid, episodes, seed, vehicle)
+    chunks/<id>.parquet each finished chunk's rows, written whole (a temporary name, then a rename)
+    manifest.json       the finished chunks, rewritten (atomically) after each one
+    results.parquet     every row, in grid order; written last, when every chunk is done
+
+A sweep that is interrupted (Ctrl-C, a lost driver) is resumed by running it again with the same
+arguments: finished chunks are read back, not run again; a chunk whose worker died is retried by
+Ray (``max_retries``), so no row is lost or duplicated. Needs the ``ray`` extra (Ray and pyarrow).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import itertools
+import json
+import math
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Final
+
+from subenv.atomic import atomic_write_bytes, atomic_write_text
+from subenv.evaluation.suites import DEFAULT_SEED
+from subenv.extras import require
+from subenv.scenarios import get_scenario, scenario_names
+from subenv.scenarios.scenario import Scenario
+
+__all__ = ["PARAMETERS", "Chunk", "SweepSpec", "run_chunk", "run_sweep"]
+
+PARAMETERS: Final = {
+    "speed_ratio": "initial speed as u / u_cr (a scenario with speeds in m/s gets its speed_mps instead)",
+    "x_GB_m": "ballast offset x_GB [m] (Riedel 1993 Ch. IV)",
+    "excess_buoyancy_fraction": "(B - W) / W",
+    "z_GB_m": "metacentric height z_GB [m]",
+    "crossflow_drag": "hull cross-flow drag coefficient C_D",
+    "disturbance_std_N": "standard deviation of the heave-force disturbance [N]",
+}
+"""The scenario quantities a sweep's grid may pin, and what each is."""
+CHUNK_EPISODES: Final = 50
+"""Episodes per chunk by default: a chunk is a few seconds of work on one core, so the scheduling
+overhead of a task (milliseconds) is negligible, and a lost worker costs little."""
+TASK_RETRIES: Final = 3
+"""Times Ray runs a chunk again whose worker died (Ray's ``max_retries``)."""
+_SPEC_FILE, _MANIFEST_FILE, _RESULTS_FILE, _CHUNKS_DIR = "sweep.json", "manifest.json", "results.parquet", "chunks"
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """What a sweep runs: the grid is the product of every parameter's values, in the order given."""
+
+    controllers: tuple[str, ...]
+    scenarios: tuple[str, ...]
+    grid: tuple[tuple[str, tuple[float, ...]], ...]
+    episodes: int
+    seed: int = DEFAULT_SEED
+    vehicle: str = "suboff"
+    chunk_episodes: int = CHUNK_EPISODES
+
+    def __post_init__(self) -> None:
+        if not self.controllers or not self.scenarios:
+            raise ValueError("controllers and scenarios must each name at least one")
+        unknown = [s for s in self.scenarios if s not in scenario_names()]
+        if unknown:
+            raise ValueError(f"scenarios {unknown} are unknown: must be among {scenario_names()}")
+        for name, values in self.grid:
+            if name not in PARAMETERS:
+                raise ValueError(f"grid parameter {name!r} is unknown: must be one of {sorted(PARAMETERS)}")
+            if not values or not all(isinstance(v, (int, float)) and math.isfinite(v) for v in values):
+                raise ValueError(f"grid[{name!r}]={list(values)!r} is invalid: must be one or more finite numbers")
+        for name, value, low in (("episodes", self.episodes, 1), ("seed", self.seed, 0),
+                                 ("chunk_episodes", self.chunk_episodes, 1)):
+            if not (isinstance(value, int) and not isinstance(value, bool) and value >= low):
+                raise ValueError(f"{name}={value!r} is invalid: must be an integer >= {low}")
+
+    @property
+    def points(self) -> list[dict[str, float]]:
+        """The grid's points, each parameter -> value (one empty point without a grid)."""
+        names = [name for name, _ in self.grid]
+        return [dict(zip(names, values)) for values in itertools.product(*(v for _, v in self.grid))]
+
+    def chunks(self) -> list[Chunk]:
+        """Every chunk of the sweep, in the order of the results table."""
+        return [Chunk(controller, scenario, tuple(point.items()), first, min(self.chunk_episodes, self.episodes - first))
+                for controller in self.controllers for scenario in self.scenarios for point in self.points
+                for first in range(0, self.episodes, self.chunk_episodes)]
+
+    def as_dict(self) -> dict[str, Any]:
+        return {**dataclasses.asdict(self), "grid": {name: list(values) for name, values in self.grid}}
+
+
+@dataclass(frozen=True)
+class Chunk:
+    """One controller on one grid point of one scenario, episodes ``first .. first + count - 1``."""
+
+    controller: str
+    scenario: str
+    point: tuple[tuple[str, float], ...]
+    first: int
+    count: int
+
+    @property
+    def id(self) -> str:
+        """A name that identifies the chunk's work (stable across runs: the resume key)."""
+        text = json.dumps([self.controller, self.scenario, self.point, self.first, self.count])
+        return f"{self.controller}-{self.scenario}-{hashlib.sha256(text.encode()).hexdigest()[:16]}"
+
+    def scenario_at_point(self) -> Scenario:
+        """The scenario with the point's quantities pinned (an interval of one value)."""
+        base = get_scenario(self.scenario)
+        changes: dict[str, Any] = {}
+        for name, value in self.point:
+            if name == "speed_ratio" and not base.speed_relative:
+                changes["speed_mps"] = None
+            if name == "disturbance_std_N":
+                changes[name] = float(value)
+            else:
+                changes[name] = (float(value), float(value))
+        return base.replace(**changes)
+
+
+def run_chunk(chunk: Chunk, seed: int, vehicle: str = "suboff") -> list[dict[str, Any]]:
+    """The rows of one chunk: :func:`subenv.evaluation.run_episodes` on seeds ``seed + first ..``, each
+    row with the grid point's values (the task a Ray worker runs; also callable directly)."""
+    from subenv.evaluation import discover_controllers, make_controller, run_episodes
+
+    discover_controllers()  # (a fresh worker process registers the installed controllers)
+    controller = make_controller(chunk.controller)
+    results = run_episodes(controller, chunk.scenario_at_point(), range(seed + chunk.first, seed + chunk.first
+                                                                         + chunk.count),
+                           first_episode=chunk.first, vehicle=vehicle)
+    point = {f"grid_{name}": value for name, value in chunk.point}
+    return [{**r.row(), **point, "chunk": chunk.id} for r in results]
+
+
+def _write_table(path: Path, rows: Sequence[Mapping[str, Any]]) -> None:
+    """A Parquet file of ``rows``, complete or absent (:func:`subenv.atomic.atomic_write_bytes`)."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    sink = pa.BufferOutputStream()
+    pq.write_table(pa.Table.from_pylist(list(rows)), sink)
+    atomic_write_bytes(path, sink.getvalue().to_pybytes())
+
+
+def _read_rows(path: Path) -> list[dict[str, Any]]:
+    import pyarrow.parquet as pq
+
+    return pq.read_table(path).to_pylist()  # type: ignore[no-any-return]
+
+
+def run_sweep(
+    spec: SweepSpec,
+    out_dir: str | os.PathLike[str],
+    *,
+    address: str | None = None,
+    num_cpus: int | None = None,
+    progress: bool = True,
+) -> Path:
+    """Run (or resume) ``spec`` on Ray and write ``out_dir`` (the module docstring lists it).
+
+    Parameters
+    ----------
+    address : str, optional
+        A Ray cluster (``ray.init(address=...)``, e.g. ``"auto"``); None starts a local instance.
+    num_cpus : int, optional
+        CPUs of the local instance (Ray's default: all).
+    progress : bool
+        Chunks done, and the time left, on stderr.
+
+    Returns the path of ``results.parquet``. Raises ``FileExistsError`` if ``out_dir`` holds another
+    sweep (its ``sweep.json`` differs).
+    """
+    require("ray", "subenv sweep", "ray", "pyarrow")
+    import ray
+
+    from subenv.evaluation.progress import Progress
+
+    out = Path(out_dir)
+    stored = out / _SPEC_FILE
+    wanted = json.dumps(spec.as_dict(), indent=2, sort_keys=True) + "\n"
+    if stored.exists():
+        if stored.read_text() != wanted:
+            raise FileExistsError(f"{str(out)!r} holds another sweep (its {_SPEC_FILE} differs): choose another folder")
+    else:
+        (out / _CHUNKS_DIR).mkdir(parents=True, exist_ok=True)
+        atomic_write_text(stored, wanted)
+    (out / _CHUNKS_DIR).mkdir(exist_ok=True)
+    chunks = spec.chunks()
+    finished = {p.stem for p in (out / _CHUNKS_DIR).glob("*.parquet")}  # (each written whole)
+    todo = [c for c in chunks if c.id not in finished]
+
+    def record() -> None:
+        atomic_write_text(out / _MANIFEST_FILE, json.dumps(
+            {"chunks": len(chunks), "finished": sorted(finished)}, indent=2) + "\n")
+
+    if todo:
+        started_here = not ray.is_initialized()
+        if started_here:
+            ray.init(address=address, num_cpus=num_cpus, include_dashboard=False, log_to_driver=False,
+                     configure_logging=False)
+        bar = Progress(len(todo), enabled=progress, label="sweep", unit="chunk")
+        try:
+            task = ray.remote(max_retries=TASK_RETRIES)(run_chunk)
+            pending = {task.remote(c, spec.seed, spec.vehicle): c for c in todo}
+            while pending:
+                (done,), _ = ray.wait(list(pending), num_returns=1)
+                chunk = pending.pop(done)
+                _write_table(out / _CHUNKS_DIR / f"{chunk.id}.parquet", ray.get(done))
+                finished.add(chunk.id)
+                record()
+                bar.describe(f"{chunk.controller} on {chunk.scenario}")
+                bar.update(1)
+        finally:
+            bar.close()
+            if started_here:
+                ray.shutdown()
+    record()
+    rows = [row for c in chunks for row in _read_rows(out / _CHUNKS_DIR / f"{c.id}.parquet")]
+    _write_table(out / _RESULTS_FILE, rows)
+    return out / _RESULTS_FILE
