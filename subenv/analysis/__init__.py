@@ -9,6 +9,7 @@
 - :mod:`~subenv.analysis.bifurcation`: cusps and bifurcation sets (eqs 4.7, 4.37, 4.39, 4.43-4.45, 5.1-5.2).
 - :mod:`~subenv.analysis.reversal`: level-flight trim through the critical speed (Fig. 5-2).
 - :mod:`~subenv.analysis.curriculum`: speed stages relative to the critical speed.
+- :mod:`~subenv.analysis.winnable`: depth-holding trims with both plane pairs free (can an episode be won).
 - :mod:`~subenv.analysis.report`: the reproduction report (``subenv analyze``).
 """
 
@@ -34,9 +35,11 @@ from subenv.analysis.design import (
 from subenv.analysis.equilibria import Equilibrium, equilibria, steady_state_residual, symmetric_pitchfork
 from subenv.analysis.linear import BOW_PLANES_ONLY, LinearModel, linear_model, numerical_jacobian
 from subenv.analysis.reversal import LevelFlightTrim, level_flight_trim
+from subenv.analysis.winnable import DepthHoldingTrim, depth_holding_trim, winnable
 
 __all__ = [
     "BOW_PLANES_ONLY",
+    "DepthHoldingTrim",
     "THESIS_POLES",
     "Branch",
     "ContinuationError",
@@ -51,6 +54,7 @@ __all__ = [
     "controllability_losses",
     "critical_froude",
     "critical_speed",
+    "depth_holding_trim",
     "equilibria",
     "exact_bifurcation_set",
     "exact_cusp",
@@ -66,4 +70,5 @@ __all__ = [
     "steady_state_residual",
     "symmetric_pitchfork",
     "thesis_gain",
+    "winnable",
 ]
