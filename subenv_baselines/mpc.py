@@ -272,10 +272,9 @@ class DepthMPC(SingleRowMixin):
             self._surface_m = 0.5 * max(vehicle.hull.breadth_m) + self.surface_margin_m
             self._vehicle = vehicle
         n = len(infos)
-        while len(self._rows) < n:
-            self._rows.append(_RowQP(self.horizon, self.weights, self.settings))
-        for row in self._rows[:n]:
-            row.z = row.y = None
+        # A fresh solver per episode: OSQP carries its iterates and step size from one solve to the next, so a
+        # reused one would make an episode's actions depend on the episodes run before it in that row.
+        self._rows = [_RowQP(self.horizon, self.weights, self.settings) for _ in range(n)]
         N = self.horizon
         self._n = n
         self._y = np.zeros((n, N_X))                     # the last measured state
@@ -403,16 +402,34 @@ class DepthMPC(SingleRowMixin):
         """The steady state at the ordered depth that the cost's state and plane terms measure from.
 
         The linearised map x+ = A x + B u + c (at the measured state) held still, x = x+, with Z at the ordered
-        depth: 4 equations in (theta, w, q, stern, bow); of that line of steady states (the bow/stern
-        allocation is free) the one of least weighted size. At a steady state the linearisation is exact there,
-        so the cost's minimum is the plant's steady state at the ordered depth: no offset from the state and
-        plane weights (with them measured from 0 a finite horizon trades depth error for plane angle).
+        depth: 4 equations in v = (theta, w, q, stern, bow), a line of steady states (the bow/stern allocation is
+        free). On it, the point of least weighted size with the planes within their limit and the pitch within
+        the soft bound (where the line crosses that box; else the point nearest to it in plane angle). At a
+        steady state the linearisation is exact, so the cost's minimum is the plant's steady state at the
+        ordered depth: the state and plane weights leave no offset (measured from 0, a finite horizon trades
+        depth error for plane angle), and the target is one the planes can hold (an unconstrained one can lie
+        beyond the limit, where the planes then stay pinned while the boat drifts).
         """
         w = self.weights
         scale = 1.0 / np.sqrt([w.pitch, w.heave, w.pitch_rate, w.plane, w.plane])
         I_A = np.eye(N_X) - A
-        M = np.concatenate([I_A[:, :3], -B], axis=1) * scale
-        v = np.linalg.lstsq(M, c - I_A[:, 3] * command, rcond=None)[0] * scale
+        M = np.concatenate([I_A[:, :3], -B], axis=1)
+        v0 = np.linalg.lstsq(M * scale, c - I_A[:, 3] * command, rcond=None)[0] * scale
+        n = np.linalg.svd(M)[2][-1]  # the line's direction: v0 + t n
+        bound = np.array([self.pitch_bound_rad, self._limit, self._limit])
+        at, dn = v0[[0, 3, 4]], n[[0, 3, 4]]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ends = np.sort(np.stack([(-bound - at) / dn, (bound - at) / dn]), axis=0)
+        free = dn == 0
+        low = np.max(np.where(free, -np.inf, ends[0]))
+        high = np.min(np.where(free, np.inf, ends[1]))
+        if low <= high and np.all(np.abs(at[free]) <= bound[free]):
+            t = min(max(0.0, low), high)
+        else:  # no steady state inside the box on this line: the one needing the least plane angle
+            candidates = [0.0] + [-(v0[3] - sign * v0[4]) / d for sign in (1.0, -1.0)
+                                  if (d := n[3] - sign * n[4]) != 0]
+            t = min(candidates, key=lambda t: float(np.max(np.abs(v0[3:] + t * n[3:]))))
+        v = v0 + t * n
         return np.r_[v[:3], command], v[3:]
 
     @staticmethod

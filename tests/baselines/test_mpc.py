@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import importlib
+import sys
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -9,6 +12,8 @@ import pytest
 pytest.importorskip("osqp")
 
 from subenv.dynamics import model_params  # noqa: E402
+from subenv.evaluation import run_episodes  # noqa: E402
+from subenv.extras import MissingExtra  # noqa: E402
 from subenv_baselines.mpc import DepthMPC, ObserverNoise, discrete_jacobians  # noqa: E402
 
 STATE_KEYS = ("pitch_rad", "heave_mps", "pitch_rate_radps", "depth_m")
@@ -143,3 +148,22 @@ def test_surface_suction_is_trimmed_out():
 def test_invalid_settings_name_the_parameter(kwargs, match):
     with pytest.raises(ValueError, match=match):
         DepthMPC(**kwargs)
+
+
+def test_without_osqp_the_module_names_the_extra(monkeypatch):
+    """The entry point's import fails with the one-line advice, so the harness skips ``mpc`` with a note."""
+    monkeypatch.setitem(sys.modules, "osqp", None)  # as if not installed
+    monkeypatch.delitem(sys.modules, "subenv_baselines.mpc")
+    with pytest.raises(MissingExtra, match=r"^the 'mpc' extra is needed for the MPC baseline .*subenv\[mpc\]"):
+        importlib.import_module("subenv_baselines.mpc")
+
+
+def test_a_batch_gets_the_one_at_a_time_results_bit_for_bit():
+    """Each episode's controller state is its own row (the harness's contract for batch controllers)."""
+    seeds = [10_005, 10_010, 10_000]
+    one = run_episodes(DepthMPC(), "BallastOffset", seeds, batched=False, max_duration_s=60.0, keep_trajectories=3)
+    batch = run_episodes(DepthMPC(), "BallastOffset", seeds, max_duration_s=60.0, keep_trajectories=3)
+    for a, b in zip(one, batch):
+        assert a.trajectory is not None and b.trajectory is not None
+        np.testing.assert_array_equal(a.trajectory.actions, b.trajectory.actions)
+        np.testing.assert_array_equal(a.trajectory.depth_error_m, b.trajectory.depth_error_m)
