@@ -13,8 +13,11 @@ from __future__ import annotations
 import argparse
 import time
 
+import gymnasium as gym
 import numpy as np
 
+from subenv.analysis import winnable
+from subenv.envs.config import DivePlaneConfig
 from subenv.evaluation import Controller, controller_names, evaluate, make_controller
 from subenv.evaluation.results import summarize, wilson_interval
 from subenv_baselines.mpc import DepthMPC
@@ -27,6 +30,13 @@ def _controller(name: str) -> Controller:
     return make_controller(name)
 
 
+def _winnable(scenario: str, seed: int, final_speed_mps: float) -> bool:
+    """Whether the episode's loading has a depth-holding trim within the limits at the speed it ends at."""
+    env = gym.make(f"subenv/{scenario}-v0")
+    env.reset(seed=seed)
+    return winnable(env.unwrapped.vehicle, [final_speed_mps], DivePlaneConfig.max_pitch_rad)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--suite", default="default")
@@ -34,6 +44,8 @@ def main() -> None:
     parser.add_argument("--controllers", nargs="+", default=["reversal_aware", "mpc"])
     args = parser.parse_args()
     rows = {}
+    won: dict[tuple[str, str], list[bool]] = {}  # success over the winnable episodes
+    can_win: dict[tuple[str, int], bool] = {}
     for name in args.controllers:
         controller = _controller(name)
         start = time.perf_counter()
@@ -48,9 +60,16 @@ def main() -> None:
               flush=True)
         for row in summarize(results):
             rows[(row["scenario"], name)] = row
+        for r in results:
+            key = (r.scenario, r.seed)
+            if key not in can_win:
+                can_win[key] = _winnable(r.scenario, r.seed, r.final_speed_mps)
+            if can_win[key]:
+                won.setdefault((r.scenario, name), []).append(r.metrics.outcome == "success")
     scenarios = list(dict.fromkeys(s for s, _ in rows))
-    print(f"\n| scenario | " + " | ".join(f"{n} success [95%] | {n} plane RMS [rad]" for n in args.controllers) + " |")
-    print("|---|" + "---|---|" * len(args.controllers))
+    print("\n| scenario | winnable | " + " | ".join(
+        f"{n} success [95%] | {n} on winnable [95%] | {n} plane RMS [rad]" for n in args.controllers) + " |")
+    print("|---|---|" + "---|---|---|" * len(args.controllers))
     for scenario in scenarios:
         cells = []
         for name in args.controllers:
@@ -58,9 +77,15 @@ def main() -> None:
             n = row["episodes"]
             k = round(row["success_rate"] * n)
             low, high = wilson_interval(k, n)
+            wins = won.get((scenario, name), [])
+            kw, nw = sum(wins), len(wins)
+            wlow, whigh = wilson_interval(kw, nw) if nw else (float("nan"), float("nan"))
             cells += [f"{k}/{n} = {100 * k / n:.0f}% [{100 * low:.0f}, {100 * high:.0f}]",
+                      f"{kw}/{nw} = {100 * kw / max(nw, 1):.0f}% [{100 * wlow:.0f}, {100 * whigh:.0f}]",
                       f"{row['plane_rms_rad_mean']:.3f}"]
-        print(f"| {scenario} | " + " | ".join(cells) + " |")
+        winnable_here = sum(v for (s_, _), v in can_win.items() if s_ == scenario)
+        total = sum(1 for (s_, _) in can_win if s_ == scenario)
+        print(f"| {scenario} | {winnable_here}/{total} | " + " | ".join(cells) + " |")
 
 
 if __name__ == "__main__":

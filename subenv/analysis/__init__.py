@@ -39,10 +39,10 @@ from subenv.analysis.winnable import DepthHoldingTrim, depth_holding_trim, winna
 
 __all__ = [
     "BOW_PLANES_ONLY",
-    "DepthHoldingTrim",
     "THESIS_POLES",
     "Branch",
     "ContinuationError",
+    "DepthHoldingTrim",
     "Equilibrium",
     "LevelFlightTrim",
     "LinearModel",
