@@ -258,16 +258,24 @@ class DepthMPC(SingleRowMixin):
 
     **Why this formulation** (and not full nonlinear MPC): the dynamics are mildly nonlinear at the pitches
     the soft bound allows (sin, cos, w|w| drag), and RTI along the shifted plan tracks them; one QP of 320
-    variables and 558 rows per period solves in 0.45 ms (median; 0.8 ms p99) on this 2-core machine, the
-    whole step (Jacobians, filter, QP) in 1.3 ms per episode. A CasADi/IPOPT NMPC would need the equations
-    again in CasADi's symbols (a second copy of the physics) or a callback around ``derivatives`` without
-    exact derivatives, at tens of milliseconds per step. Default suite, 20 episodes per scenario
-    (``benchmarks/mpc.py``): success equal to ``reversal_aware`` on Nominal, LowSpeed, NearCritical,
-    SpeedTransient (100%), PeriscopeDepth (95%: the one loss has no depth-holding trim within the plane
-    limits, :func:`subenv.analysis.winnable`), and one better on BallastOffset (95% vs 90%, the one loss
-    unwinnable). Plane RMS: lower than ``reversal_aware`` below and near the critical speed (0.059 vs 0.104
-    rad LowSpeed, 0.061 vs 0.081 NearCritical), higher where it holds a trim with both planes (0.165 vs 0.127
-    PeriscopeDepth) and at design speed (0.042 vs 0.031).
+    variables and 558 rows per period solves in 0.48 ms (median; 0.94 ms at the 99th percentile) on this
+    2-core machine, the whole step (Jacobians, filter, QP) in 1.3 ms per episode (0.77 episodes/s of 600 s).
+    A CasADi/IPOPT NMPC would need the equations again in CasADi's symbols (a second copy of the physics) or a
+    callback around ``derivatives`` without exact derivatives; it was not built, so not measured: with this
+    MPC losing only one episode that has a trim (below), there is little for it to win.
+
+    **Measured** (``benchmarks/mpc.py --episodes 100``: default suite, seeds 10000-10099, against
+    ``reversal_aware`` on the same episodes; 95% Wilson intervals): 100% [96, 100] on Nominal, LowSpeed,
+    NearCritical and SpeedTransient, as ``reversal_aware``; PeriscopeDepth 94% [88, 97] (94/94 of the
+    winnable episodes; the six losses have no depth-holding trim within the plane limits,
+    :func:`subenv.analysis.winnable`), as ``reversal_aware``; BallastOffset 89% [81, 94] against 87%
+    [79, 92] (89/90 winnable against 87/90; the one winnable loss, seed 10021, has a trim 0.036 rad inside
+    the limits and closes its depth error, 1.3 m after 30 s, at 1.3 mm/s with the planes that close to
+    their limit). Plane RMS:
+    less than ``reversal_aware`` below and near the critical speed (0.070 against 0.119 rad LowSpeed, 0.070
+    against 0.095 NearCritical), more at design speed (0.049 against 0.035), in the transient (0.061 against
+    0.054) and at periscope depth (0.179 against 0.142), where it drives both planes to trim; the same with
+    a ballast offset (0.261 against 0.262).
 
     It knows what the other controllers know: the observation (its measured state; the planes it applied),
     the design vehicle at reset, and the environment's limits as constructor arguments (defaults: the
@@ -299,6 +307,7 @@ class DepthMPC(SingleRowMixin):
         self.settings = {"verbose": False, "warm_starting": True, "polishing": False, "eps_abs": 1e-5,
                          "eps_rel": 1e-5, "max_iter": max_iter, "check_termination": 10}
         self._vehicle: Vehicle | None = None
+        self._params: ModelParams | None = None
         self._rows: list[_RowQP] = []
         self.solve_times_s: list[float] = []
         """Wall time of every QP solve (update, solve) [s], one per episode per control period."""
@@ -313,8 +322,6 @@ class DepthMPC(SingleRowMixin):
         d = np.zeros(np.shape(planes_rad)) if disturbance is None else np.asarray(disturbance, dtype=float)
         return control_period(self._params, state, speed_mps, np.asarray(planes_rad, dtype=float), d, self.dt_s,
                               self.substeps)
-
-    _params: ModelParams | None = None
 
     @property
     def disturbance(self) -> np.ndarray:
