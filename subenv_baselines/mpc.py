@@ -32,10 +32,11 @@ DEPTH, STERN, BOW = (OBSERVATION_NAMES.index(name) for name in ("depth_m", "ster
 N_X: Final = 4  # (theta, w, q, Z)
 N_U: Final = 2  # (stern, bow) [rad]
 N_D: Final = 2  # (heave force [N], pitch moment [N m]), derivatives' force and moment
-_EPS: Final = np.array([1e-6, 1e-6, 1e-6, 1e-6, 1e-6, 1e-6, 1e-4, 1e-4])
-"""Central-difference steps of the discrete Jacobians: (theta, w, q, Z) [rad, m/s, rad/s, m], planes [rad],
-force [N], moment [N m]. The truncation error is O(eps^2) against curvatures of order 1, the rounding
-error 1e-16 / eps: both below 1e-9 relative."""
+_EPS: Final = np.array([1e-7, 1e-7, 1e-7, 1e-7, 1e-7, 1e-7, 1e-5, 1e-5])
+"""Forward-difference steps of the discrete Jacobians: (theta, w, q, Z) [rad, m/s, rad/s, m], planes [rad],
+force [N], moment [N m]. The truncation error is O(eps) against curvatures of order 1, the rounding error
+1e-16 / eps: both about 1e-8 relative, far below what a QP's solution notices; central differences would
+cost twice the evaluations (the Jacobians are most of a step's model time)."""
 
 
 def control_period(params: ModelParams, state: np.ndarray, speed_mps: Any, planes_rad: np.ndarray,
@@ -65,7 +66,7 @@ def control_period(params: ModelParams, state: np.ndarray, speed_mps: Any, plane
 
 def discrete_jacobians(params: ModelParams, points: np.ndarray, speed_mps: np.ndarray, dt_s: float = CONTROL_PERIOD_S,
                        substeps: int = SUBSTEPS) -> tuple[np.ndarray, np.ndarray]:
-    """The discrete map x+ = F(x, u, d) of :func:`control_period` and its Jacobian at every point, by central
+    """The discrete map x+ = F(x, u, d) of :func:`control_period` and its Jacobian at every point, by forward
     differences of the one model (no second copy of the equations).
 
     Parameters
@@ -82,14 +83,13 @@ def discrete_jacobians(params: ModelParams, points: np.ndarray, speed_mps: np.nd
         dF / d(x, u, d): columns 0-3 the state (A), 4-5 the planes (B), 6-7 the disturbance.
     """
     n = points.shape[-1]
-    perturbed = np.repeat(points[..., None, :], 1 + 2 * n, axis=-2)
+    perturbed = np.repeat(points[..., None, :], 1 + n, axis=-2)
     k = np.arange(n)
-    perturbed[..., 1 + 2 * k, k] += _EPS
-    perturbed[..., 2 + 2 * k, k] -= _EPS
+    perturbed[..., 1 + k, k] += _EPS
     speed = np.asarray(speed_mps, dtype=float)[..., None]
     out = control_period(params, perturbed[..., :N_X], speed, perturbed[..., N_X:N_X + N_U],
                          perturbed[..., N_X + N_U:], dt_s, substeps)
-    J = (out[..., 1::2, :] - out[..., 2::2, :]) / (2.0 * _EPS[:, None])
+    J = (out[..., 1:, :] - out[..., :1, :]) / _EPS[:, None]
     return out[..., 0, :], np.swapaxes(J, -1, -2)
 
 
@@ -477,9 +477,11 @@ class DepthMPC(SingleRowMixin):
         w = self.weights
         scale = 1.0 / np.sqrt([w.pitch, w.heave, w.pitch_rate, w.plane, w.plane])
         I_A = np.eye(N_X) - A
-        M = np.concatenate([I_A[:, :3], -B], axis=1)
-        v0 = np.linalg.lstsq(M * scale, c - I_A[:, 3] * command, rcond=None)[0] * scale
-        n = np.linalg.svd(M)[2][-1]  # the line's direction: v0 + t n
+        # One SVD of the scaled system: its least-norm solution, and the line's direction (its null vector).
+        U, S, Vt = np.linalg.svd(np.concatenate([I_A[:, :3], -B], axis=1) * scale)
+        S = np.where(S > 1e-12 * S[0], S, np.inf)  # (a rank-deficient direction contributes nothing)
+        v0 = scale * (Vt[:N_X].T @ ((U.T @ (c - I_A[:, 3] * command)) / S))
+        n = scale * Vt[-1]  # v0 + t n
         bound = np.array([self.pitch_bound_rad, self._limit, self._limit])
         at, dn = v0[[0, 3, 4]], n[[0, 3, 4]]
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -494,7 +496,7 @@ class DepthMPC(SingleRowMixin):
                                   if (d := n[3] - sign * n[4]) != 0]
             t = min(candidates, key=lambda t: float(np.max(np.abs(v0[3:] + t * n[3:]))))
         v = v0 + t * n
-        return np.r_[v[:3], command], v[3:]
+        return np.append(v[:3], command), v[3:]
 
     @staticmethod
     def _shift(z: np.ndarray, row: _RowQP) -> np.ndarray:

@@ -74,7 +74,7 @@ def test_the_linearisation_is_the_derivative_of_the_prediction(suboff):
         plus = controller.predict((point + step)[:4], (point + step)[4:6], 0.5, (point + step)[6:])
         minus = controller.predict((point - step)[:4], (point - step)[4:6], 0.5, (point - step)[6:])
         np.testing.assert_allclose(J[:, k], (plus - minus) / (2 * h), rtol=1e-5, atol=1e-9)
-    np.testing.assert_allclose(J[:, 3], [0, 0, 0, 1], rtol=1e-9, atol=0)  # depth enters nothing: Z+ = Z + ...
+    np.testing.assert_allclose(J[:, 3], [0, 0, 0, 1], rtol=1e-7, atol=0)  # depth enters nothing: Z+ = Z + ...
 
 
 def test_commands_stay_within_the_plane_limit_and_the_rate_limit():
