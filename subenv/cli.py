@@ -289,11 +289,11 @@ def _grid_axis(text: str) -> tuple[str, tuple[float, ...]]:
 
 
 def sweep(args: argparse.Namespace) -> int:
-    from subenv.evaluation import controller_names
+    from subenv.evaluation import resolve_controllers
     from subenv.sweep import SweepSpec, run_sweep
 
     _installed_controllers(args.controllers)
-    controllers = args.controllers or controller_names()
+    controllers = args.controllers or [c.name for c in resolve_controllers(None)]
     try:
         spec = SweepSpec(controllers=tuple(controllers), scenarios=tuple(args.scenarios), grid=tuple(args.grid or ()),
                          episodes=args.episodes, seed=args.seed, vehicle=args.vehicle,
@@ -370,8 +370,7 @@ def _parser() -> argparse.ArgumentParser:
     p_analyze.add_argument("--vehicle", default="suboff", help="vehicle name or file (default: %(default)s)")
     p_analyze.add_argument("--force", action="store_true",
                            help="replace the folder if it holds an earlier report (it has the marker file)")
-    p_sweep = sub.add_parser("sweep", help="sweep the controllers over a grid of physics parameters on Ray "
-                                           "(needs the 'ray' extra)")
+    p_sweep = sub.add_parser("sweep", help="run controllers over a grid of physics parameters, on Ray")
     p_sweep.add_argument("--controllers", type=_names, help="comma-separated controller names (default: all registered)")
     p_sweep.add_argument("--scenarios", type=_names, default=["LowSpeed"],
                          help="comma-separated scenario names (default: LowSpeed)")

@@ -5,6 +5,8 @@
 - ``lqr``: LQR with integral action on the stern planes, scheduled over speed.
 - ``reversal_aware``: LQR with integral action and a bow/stern allocation chosen to keep the
   critical speed away from the operating speed.
+- ``mpc``: linear time-varying model-predictive control of both planes (needs the ``mpc`` extra,
+  OSQP; :data:`OPTIONAL_CONTROLLERS`).
 
 Every controller designs itself from :mod:`subenv.analysis` (linear model, critical speed) at its
 first reset, for the design vehicle the harness passes; none uses numbers typed in.
@@ -27,4 +29,10 @@ CONTROLLERS: dict[str, type] = {
     "reversal_aware": ReversalAware,
 }
 
-__all__ = ["CONTROLLERS", "GainScheduledPolePlacement", "ReversalAware", "ScheduledLQR", "ThesisPolePlacement"]
+OPTIONAL_CONTROLLERS: dict[str, str] = {
+    "mpc": "subenv_baselines.mpc:DepthMPC",
+}
+"""The controllers that need an optional dependency, as entry-point values (importing them here would make
+the whole package need it): without their extra they are skipped with a one-line note."""
+
+__all__ = ["CONTROLLERS", "OPTIONAL_CONTROLLERS", "GainScheduledPolePlacement", "ReversalAware", "ScheduledLQR", "ThesisPolePlacement"]

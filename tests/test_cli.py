@@ -235,7 +235,7 @@ def test_evaluate_arguments_are_refused_in_one_line_or_reach_the_work(options, t
     pytest.fail(f"{argv} neither ran nor was refused")
 
 
-COMMANDS = ("evaluate", "demo", "analyze", "list", "train")
+COMMANDS = ("evaluate", "demo", "analyze", "sweep", "list", "train")
 
 
 def test_help_lists_every_command_in_one_line(capsys):

@@ -32,6 +32,7 @@ def test_every_controller_is_declared_as_an_entry_point():
     """pyproject.toml declares each classical controller and each shipped model, by its name."""
     declared = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["entry-points"][ENTRY_POINT_GROUP]
     expected = {name: f"{cls.__module__}:{cls.__qualname__}" for name, cls in subenv_baselines.CONTROLLERS.items()}
+    expected |= subenv_baselines.OPTIONAL_CONTROLLERS
     expected |= {name: f"subenv_agents.shipped:{name}" for name in shipped_models()}
     assert declared == expected
 
@@ -73,10 +74,13 @@ def test_wheel_installs_into_a_clean_venv_and_evaluates(tmp_path: Path):
 
     listed = _run(subenv, "evaluate", "--list", cwd=tmp_path)
     controllers = listed.stdout.splitlines()[0].removeprefix("controllers: ").split(", ")
-    assert sorted(controllers) == sorted(subenv_baselines.CONTROLLERS)  # without the rl extra: no agents
-    assert listed.stderr.startswith("(skipped ppo, sac: the 'rl' extra is needed for the shipped agents: "
-                                    'pip install "subenv[rl]" (or pip install "stable-baselines3>=2.3" ')
-    assert listed.stderr.count("\n") == 1
+    assert sorted(controllers) == sorted(subenv_baselines.CONTROLLERS)  # without the extras: no agents, no MPC
+    skipped = listed.stderr.splitlines()
+    assert len(skipped) == 2
+    assert skipped[0].startswith("(skipped mpc: the 'mpc' extra is needed for the MPC baseline (subenv_baselines.mpc): "
+                                 'pip install "subenv[mpc]" (or pip install "osqp>=1"; ')
+    assert skipped[1].startswith("(skipped ppo, sac: the 'rl' extra is needed for the shipped agents: "
+                                 'pip install "subenv[rl]" (or pip install "stable-baselines3>=2.3" ')
 
     out = tmp_path / "evaluation"
     evaluate = ("evaluate", "--suite", "tiny", "--episodes", "1", "--controllers", "thesis", "--no-progress", "--out", out)

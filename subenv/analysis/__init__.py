@@ -11,6 +11,7 @@
 - :mod:`~subenv.analysis.curriculum`: speed stages relative to the critical speed.
 - :mod:`~subenv.analysis.hopf`: beyond the thesis (its Ch. VI): the Hopf bifurcation of level flight at
   speed, its criticality, and the periodic orbits born there.
+- :mod:`~subenv.analysis.winnable`: depth-holding trims with both plane pairs free (can an episode be won).
 - :mod:`~subenv.analysis.report`: the reproduction report (``subenv analyze``).
 """
 
@@ -44,12 +45,14 @@ from subenv.analysis.hopf import (
 )
 from subenv.analysis.linear import BOW_PLANES_ONLY, LinearModel, linear_model, numerical_jacobian
 from subenv.analysis.reversal import LevelFlightTrim, level_flight_trim
+from subenv.analysis.winnable import DepthHoldingTrim, depth_holding_trim, winnable
 
 __all__ = [
     "BOW_PLANES_ONLY",
     "THESIS_POLES",
     "Branch",
     "ContinuationError",
+    "DepthHoldingTrim",
     "Equilibrium",
     "HopfPoint",
     "LevelFlightTrim",
@@ -64,6 +67,7 @@ __all__ = [
     "controllability_losses",
     "critical_froude",
     "critical_speed",
+    "depth_holding_trim",
     "equilibria",
     "exact_bifurcation_set",
     "exact_cusp",
@@ -82,4 +86,5 @@ __all__ = [
     "symmetric_pitchfork",
     "thesis_gain",
     "thesis_poles",
+    "winnable",
 ]

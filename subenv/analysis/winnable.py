@@ -1,0 +1,112 @@
+"""Can depth be held at all? The depth-holding trims of a loading with both plane pairs free.
+
+A controller can only hold depth where the boat has a steady state that holds it: q = 0, no depth rate
+(w = u tan(theta), Riedel 1993 eq. 4.4), and the heave and pitch balances (eqs 2.38-2.39 with the
+accelerations zero) met by plane angles within their limit. With the stern and bow planes driven
+independently every bow/stern allocation alpha (eq. 2.58) is one line through the plane square, so a trim
+for some allocation is a trim here; where none exists within the limits (a large ballast offset or excess
+buoyancy at low speed, Ch. IV-V) no controller can win the episode, and its loss says nothing about the
+controller.
+
+At each pitch the balances are linear in the plane angles (the planes enter as u^2 (Z_ds delta_s +
+Z_db delta_b) and u^2 (M_ds delta_s + M_db delta_b)): two equations, two unknowns, solved exactly. The
+residual forces come from the one right-hand side, :func:`subenv.dynamics.derivatives` (with the hull's
+cross-flow drag and the loading's W - B, x_GB, z_GB), so this agrees with the environments by construction.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Final
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from subenv import _validation as check
+from subenv.dynamics.model import derivatives, model_params
+from subenv.vehicles.vehicle import Vehicle
+
+__all__ = ["DepthHoldingTrim", "depth_holding_trim", "winnable"]
+
+_PITCH_POINTS: Final = 2001
+"""Pitch grid over (-max_pitch, max_pitch) on which the least plane angle is looked for, then refined: the
+plane needed is smooth in pitch, so a grid of 0.03 deg (for 0.6 rad) brackets its minimum."""
+
+
+@dataclass(frozen=True)
+class DepthHoldingTrim:
+    """The depth-holding steady state that needs the least plane angle, at one speed (SI units).
+
+    Attributes
+    ----------
+    speed_mps : float
+    exists : bool
+        Whether it is within the plane limit: ``plane_margin_rad >= 0``.
+    pitch_rad, heave_mps : float
+        Its pitch and heave velocity (w = u tan(theta); q = 0).
+    stern_rad, bow_rad : float
+        The plane angles that hold it (possibly beyond the limit when it does not exist).
+    plane_margin_rad : float
+        Plane limit minus max(|stern|, |bow|): how far inside the limits (negative: outside).
+    """
+
+    speed_mps: float
+    exists: bool
+    pitch_rad: float
+    heave_mps: float
+    stern_rad: float
+    bow_rad: float
+    plane_margin_rad: float
+
+
+def _planes(vehicle: Vehicle, speed_mps: float, pitch_rad: np.ndarray) -> np.ndarray:
+    """(stern, bow) that zero w_dot and q_dot at (theta, u tan(theta), 0): shape (..., 2)."""
+    params = model_params(vehicle)
+    theta = np.asarray(pitch_rad, dtype=float)
+    state = np.stack([theta, speed_mps * np.tan(theta), np.zeros_like(theta), np.zeros_like(theta)], axis=-1)
+    # The balances are affine in the planes: the accelerations at zero planes and per unit of each.
+    f0, fs, fb = (derivatives(state, speed_mps, s, b, params)[..., 1:3] for s, b in ((0, 0), (1, 0), (0, 1)))
+    G = np.stack([fs - f0, fb - f0], axis=-1)  # (..., 2, 2): d(w_dot, q_dot) / d(stern, bow)
+    return np.linalg.solve(G, -f0[..., None])[..., 0]
+
+
+def depth_holding_trim(vehicle: Vehicle, speed_mps: float, max_pitch_rad: float) -> DepthHoldingTrim:
+    """The depth-holding trim of ``vehicle`` (its loading) at ``speed_mps`` that needs the least plane angle,
+    with both plane pairs free and the pitch inside ``max_pitch_rad``.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        The loading (W - B, x_GB, z_GB, C_D): an episode's ``env.unwrapped.vehicle``.
+    speed_mps : float
+        Forward speed [m/s], > 0.
+    max_pitch_rad : float
+        Pitch limit [rad] in (0, pi/2): the environment's ``max_pitch_rad`` (a trim beyond it ends the episode).
+    """
+    check.require("speed_mps", speed_mps, check.is_number(speed_mps) and math.isfinite(speed_mps) and speed_mps > 0,
+                  "a finite number > 0")
+    check.require("max_pitch_rad", max_pitch_rad,
+                  check.is_number(max_pitch_rad) and 0 < max_pitch_rad < math.pi / 2, "a number in (0, pi/2)")
+    u, limit = float(speed_mps), vehicle.planes.limit_rad
+    grid = np.linspace(-max_pitch_rad, max_pitch_rad, _PITCH_POINTS)[1:-1]
+
+    def need(theta: float | np.ndarray) -> np.ndarray:
+        return np.max(np.abs(_planes(vehicle, u, np.asarray(theta))), axis=-1)
+
+    needs = need(grid)
+    i = int(np.argmin(needs))
+    lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
+    best = minimize_scalar(lambda t: float(need(t)), bounds=(lo, hi), method="bounded",
+                           options={"xatol": 1e-12})
+    theta = float(best.x) if best.fun <= needs[i] else float(grid[i])
+    stern, bow = (float(v) for v in _planes(vehicle, u, np.asarray(theta)))
+    margin = limit - max(abs(stern), abs(bow))
+    return DepthHoldingTrim(u, margin >= 0, theta, u * math.tan(theta), stern, bow, margin)
+
+
+def winnable(vehicle: Vehicle, speeds_mps: Iterable[float], max_pitch_rad: float) -> bool:
+    """Whether a depth-holding trim within the plane limits exists at every speed of ``speeds_mps`` (for an
+    episode: the speed it holds at the end, the last knot of its profile; see :func:`depth_holding_trim`)."""
+    return all(depth_holding_trim(vehicle, u, max_pitch_rad).exists for u in speeds_mps)
