@@ -199,7 +199,9 @@ def summarize(results: Sequence[EpisodeResult], confidence: float = CONFIDENCE_L
     and any other that occurred) ``outcome_<o>`` (the count of :func:`outcome_counts`) and
     ``<o>_rate``, ``<o>_ci_low``, ``<o>_ci_high`` (Wilson); for each of
     :data:`CONTINUOUS_METRICS` ``<m>_mean``, ``<m>_ci_low``, ``<m>_ci_high`` (Student t);
-    ``settled`` (episodes with a finite settling time).
+    ``settled`` (episodes with a finite settling time); where the results say which episodes are
+    winnable (:attr:`EpisodeResult.winnable`), ``winnable`` (their number), ``winnable_successes`` and
+    ``winnable_success_rate``, ``winnable_ci_low``, ``winnable_ci_high``.
     """
     extra = [o for o in _outcomes(results) if o not in OUTCOMES]
     rows = []
@@ -219,8 +221,19 @@ def summarize(results: Sequence[EpisodeResult], confidence: float = CONFIDENCE_L
                 row["settled"] = len(values)
             mean, low, high = mean_interval(values, confidence, support)
             row |= {f"{name}_mean": mean, f"{name}_ci_low": low, f"{name}_ci_high": high}
+        if all(r.winnable is not None for r in group):
+            k, n = _winnable_successes(group)
+            low, high = wilson_interval(k, n, confidence) if n else (math.nan, math.nan)
+            row |= {"winnable": n, "winnable_successes": k, "winnable_success_rate": k / n if n else math.nan,
+                    "winnable_ci_low": low, "winnable_ci_high": high}
         rows.append(row)
     return rows
+
+
+def _winnable_successes(results: Iterable[EpisodeResult]) -> tuple[int, int]:
+    """(successes, episodes) among the winnable episodes of ``results``."""
+    winnable = [r for r in results if r.winnable]
+    return sum(r.metrics.success for r in winnable), len(winnable)
 
 
 _MAX_SPEED_BINS: Final = 6
@@ -356,9 +369,12 @@ def leaderboard_markdown(
 ) -> str:
     """Markdown leaderboard: controllers as rows, success rate per scenario with its interval.
 
-    Rows are sorted by the success rate over all the suite's episodes (pooled), best first, then
-    by name. The last columns break the pooled failures down by outcome (:func:`outcome_counts`,
-    the counts :func:`summarize` gives per scenario).
+    Where the results say which episodes are winnable (:attr:`EpisodeResult.winnable`: a depth-holding
+    trim exists within the limits), the column ``winnable`` is the success over those, and the rows are
+    sorted by it: an episode no controller can win says nothing about a controller. Then by the
+    success rate over all the suite's episodes (pooled), best first, then by name. The last columns
+    break the pooled failures down by outcome (:func:`outcome_counts`, the counts :func:`summarize`
+    gives per scenario).
     """
     if not results:
         raise ValueError("results is empty: nothing to rank")
@@ -366,13 +382,23 @@ def leaderboard_markdown(
     controllers = list(dict.fromkeys(r.controller for r in results))
     groups = _groups(results)
     pooled = {c: [r.metrics for r in results if r.controller == c] for c in controllers}
-    order = sorted(controllers, key=lambda c: (-sum(m.success for m in pooled[c]) / len(pooled[c]), c))
+    judged = all(r.winnable is not None for r in results)
+    winnable = {c: _winnable_successes(r for r in results if r.controller == c) for c in controllers}
+
+    def rank(c: str) -> tuple[float, float, str]:
+        k, n = winnable[c]
+        return (-(k / n) if judged and n else 0.0, -sum(m.success for m in pooled[c]) / len(pooled[c]), c)
+
+    order = sorted(controllers, key=rank)
     failure_outcomes = [o for o in _outcomes(results) if o != "success"]
     rows = []
     for c in order:
         ms = pooled[c]
         k = sum(m.success for m in ms)
         cells = [c, _pct(k / len(ms), *wilson_interval(k, len(ms), confidence))]
+        if judged:
+            kw, nw = winnable[c]
+            cells.append(_pct(kw / nw, *wilson_interval(kw, nw, confidence)) if nw else "-")
         for s in scenarios:
             group = groups.get((c, s), [])
             ks = sum(r.metrics.success for r in group)
@@ -383,10 +409,19 @@ def leaderboard_markdown(
         rows.append(cells)
     episodes = sorted({len(g) for g in groups.values()})
     per = str(episodes[0]) if len(episodes) == 1 else f"{episodes[0]}-{episodes[-1]}"
-    header = ["controller", "all scenarios", *scenarios, *(o.replace("_", " ") for o in failure_outcomes)]
+    header = ["controller", "all scenarios", *(["winnable"] if judged else []), *scenarios,
+              *(o.replace("_", " ") for o in failure_outcomes)]
+    first = controllers[0]
+    n_winnable = sum(1 for r in results if r.controller == first and r.winnable)
+    n_first = sum(1 for r in results if r.controller == first)
+    ranking = (
+        f"Ranked by the success over the winnable episodes ({n_winnable} of {n_first} here: those whose "
+        "loading has a depth-holding trim within the plane and pitch limits at their final speed, with both "
+        "plane pairs free; subenv.analysis.winnable), then over all. " if judged else ""
+    )
     note = (
         f"Success rate with {100 * confidence:.0f}% Wilson intervals, {per} episodes per scenario "
-        f"(the same seeds for every controller). Last columns: episodes per failure outcome, all "
+        f"(the same seeds for every controller). {ranking}Last columns: episodes per failure outcome, all "
         f"scenarios. {OUTCOME_NOTE}"
     )
     return f"## {title}\n\n{_markdown_table(header, rows)}\n\n{note}\n"
@@ -412,13 +447,16 @@ def summary_markdown(summary: Sequence[Mapping[str, Any]], *, title: str = "Per 
     outcomes = [key.removeprefix("outcome_") for key in dict.fromkeys(k for r in summary for k in r)
                 if key.startswith("outcome_")]
     shown = [o for o in outcomes if o == "success" or any(r.get(f"outcome_{o}", 0) for r in summary)]
-    header = ["scenario", "controller", "n", *(o.replace("_", " ") for o in shown),
+    judged = all("winnable" in r for r in summary)
+    header = ["scenario", "controller", "n", *(["winnable: success"] if judged else []), *(o.replace("_", " ") for o in shown),
               *(label for label, _ in _SUMMARY_MEANS), "settled"]
     scenarios = list(dict.fromkeys(r["scenario"] for r in summary))
     ordered = sorted(summary, key=lambda r: scenarios.index(r["scenario"]))  # stable: controllers keep order
     rows = []
     for r in ordered:
         cells = [r["scenario"], r["controller"], str(r["episodes"])]
+        if judged:
+            cells.append(f"{r['winnable_successes']}/{r['winnable']}")
         cells += [_pct(r[f"{o}_rate"], r[f"{o}_ci_low"], r[f"{o}_ci_high"]) for o in shown]
         cells += [_num(r[f"{name}_mean"], r[f"{name}_ci_low"], r[f"{name}_ci_high"]) for _, name in _SUMMARY_MEANS]
         cells.append(str(r["settled"]))
@@ -426,7 +464,8 @@ def summary_markdown(summary: Sequence[Mapping[str, Any]], *, title: str = "Per 
     note = (
         "Rates of each outcome with 95% Wilson intervals; means with 95% Student-t intervals. Settling "
         "time averages the episodes that settled (column 'settled'). IAE charges a terminated episode "
-        f"its final error until the scheduled end. {OUTCOME_NOTE}"
+        "its final error until the scheduled end. 'winnable: success': successes / episodes among those "
+        f"that have a depth-holding trim within the limits (subenv.analysis.winnable). {OUTCOME_NOTE}"
     )
     return f"## {title}\n\n{_markdown_table(header, rows)}\n\n{note}\n"
 

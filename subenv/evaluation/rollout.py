@@ -23,18 +23,20 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Any, Final
 
 import gymnasium as gym
 import numpy as np
 
+from subenv.analysis.winnable import winnable
 from subenv.envs import DivePlaneVectorEnv
 from subenv.evaluation.controller import BatchController, Controller, make_controller
 from subenv.evaluation.metrics import EpisodeMetrics, episode_metrics
 from subenv.evaluation.progress import Progress
 from subenv.evaluation.suites import DEFAULT_SEED, Suite, check_scenarios, get_suite, suite_names
 from subenv.scenarios.registry import get_scenario, scenario_names
-from subenv.scenarios.scenario import Scenario
+from subenv.scenarios.scenario import EpisodeConfig, Scenario
 from subenv.vehicles.loader import load_vehicle
 from subenv.vehicles.vehicle import Vehicle
 
@@ -181,6 +183,10 @@ class EpisodeResult:
     steps: int
     metrics: EpisodeMetrics
     trajectory: Trajectory | None = field(default=None, repr=False, compare=False)
+    winnable: bool | None = None
+    """Whether the episode's loading has a depth-holding trim within the plane limits and the pitch limit
+    at the speed it is to hold at its end, with both plane pairs free (:func:`subenv.analysis.winnable`):
+    where it has none no controller can succeed. None: not determined."""
 
     def row(self) -> dict[str, Any]:
         """One flat row of the tidy per-episode table."""
@@ -199,6 +205,7 @@ class EpisodeResult:
             "initial_depth_error_m": self.initial_depth_error_m,
             "episode_duration_s": self.episode_duration_s,
             "steps": self.steps,
+            "winnable": self.winnable,
         }
         return base | self.metrics.as_dict()
 
@@ -393,7 +400,9 @@ def _run_single(
     duration_s = _scheduled(float(base.episode.duration_s), limit, float(base.dt))
     trajectory = recorder.finish(info["termination_reason"] if terminated else "", float(base.plane_limit_rad),
                                  duration_s, base.config.length_ratio)
-    return _result(controller, base.scenario.name, seed, episode, trajectory, keep)
+    can_win = _episode_winnable(base.vehicle, base.episode, trajectory.critical_speed_mps, base.config.max_pitch_rad,
+                                options)
+    return _result(controller, base.scenario.name, seed, episode, trajectory, keep, can_win)
 
 
 def _run_batch(
@@ -409,6 +418,7 @@ def _run_batch(
     config = env.config
     obs, info = env.reset(seed=seeds, options=options)
     drawn = env.episodes  # (before an ended sub-environment resets to another episode)
+    loadings = list(env.vehicles)
     columns = {key: value.tolist() for key, value in info.items() if not key.startswith("_")}
     controller.reset_batch([{key: column[i] for key, column in columns.items()} for i in range(len(seeds))],
                            config.base_vehicle)
@@ -433,7 +443,8 @@ def _run_batch(
         duration_s = _scheduled(float(draw.duration_s), env.max_episode_steps, float(config.dt))
         trajectory = recorder.trajectory(i, int(steps[i]), reasons[i], float(config.plane_limit_rad), duration_s,
                                          config.length_ratio)
-        results.append(_result(controller, env.scenario.name, seed, first_episode + i, trajectory, i < keep))
+        can_win = _episode_winnable(loadings[i], draw, trajectory.critical_speed_mps, config.max_pitch_rad, options)
+        results.append(_result(controller, env.scenario.name, seed, first_episode + i, trajectory, i < keep, can_win))
     return results
 
 
@@ -442,8 +453,26 @@ def _scheduled(duration_s: float, max_episode_steps: int | None, dt: float) -> f
     return duration_s if max_episode_steps is None else min(duration_s, max_episode_steps * dt)
 
 
+@lru_cache(maxsize=4096)
+def _winnable(loading: Vehicle, final_speed_mps: float, max_pitch_rad: float) -> bool:
+    """:func:`subenv.analysis.winnable` (about 4 ms), once per loading and speed: every controller of a
+    comparison runs the same episodes."""
+    return winnable(loading, (final_speed_mps,), max_pitch_rad)
+
+
+def _episode_winnable(loading: Vehicle, draw: EpisodeConfig, critical_speed_mps: float, max_pitch_rad: float,
+                      options: Mapping[str, Any] | None) -> bool:
+    """Whether the episode can be won at the speed it holds at its end (its profile's last knot)."""
+    if options and "speed" in options:
+        final = float(options["speed"])
+    else:
+        last = draw.speed_knots[-1][1]
+        final = float(last) * (critical_speed_mps if draw.speed_relative else 1.0)
+    return _winnable(loading, final, max_pitch_rad)
+
+
 def _result(controller: Controller, scenario: str, seed: int, episode: int, trajectory: Trajectory,
-            keep: bool) -> EpisodeResult:
+            keep: bool, winnable_episode: bool | None = None) -> EpisodeResult:
     return EpisodeResult(
         controller=controller.name,
         scenario=scenario,
@@ -460,6 +489,7 @@ def _result(controller: Controller, scenario: str, seed: int, episode: int, traj
         steps=trajectory.steps,
         metrics=trajectory.metrics(),
         trajectory=trajectory if keep else None,
+        winnable=winnable_episode,
     )
 
 

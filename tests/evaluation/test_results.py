@@ -185,8 +185,9 @@ def _assert_tables_agree(results) -> set[str]:
     board = _markdown_rows(res.leaderboard_markdown(results))
     summary = _markdown_rows(res.summary_markdown(res.summarize(results)))
     scenarios = {r.scenario for r in results}
-    board_failures = [k for k in board[0] if k not in {"controller", "all scenarios", *scenarios}]
-    rate_columns = list(summary[0])[3: list(summary[0]).index("IAE [m s]")]
+    board_failures = [k for k in board[0] if k not in {"controller", "all scenarios", "winnable", *scenarios}]
+    columns = [c for c in summary[0] if c != "winnable: success"]
+    rate_columns = columns[3: columns.index("IAE [m s]")]
     assert rate_columns[0] == "success" and rate_columns[1:] == board_failures
     for row in summary:
         percents = [int(row[c].split("%")[0]) for c in rate_columns]
@@ -257,3 +258,25 @@ def test_representative_episode_is_the_commonest_controllers_median(make_result)
     assert list(chosen) == ["success", "steady_offset"]
     assert (chosen["success"].controller, chosen["success"].episode) == ("common", 2)  # IAE 2 of 1, 2, 3
     assert (chosen["steady_offset"].controller, chosen["steady_offset"].episode) == ("rare", 5)
+
+
+def test_the_leaderboard_ranks_by_the_winnable_episodes(make_result):
+    """An episode that no controller can win (no depth-holding trim within the limits) does not rank:
+    a controller that lost only unwinnable episodes ranks above one that lost a winnable one."""
+    def run(controller, lost_winnable):  # type: ignore[no-untyped-def]
+        rows = [dataclasses.replace(make_result(controller, "A", i, True), winnable=True) for i in range(8)]
+        rows += [dataclasses.replace(make_result(controller, "A", 8 + i, False), winnable=False) for i in range(3)]
+        if lost_winnable:  # wins two of the unwinnable ones by luck, loses one winnable
+            rows[0] = dataclasses.replace(make_result(controller, "A", 0, False), winnable=True)
+            rows[8] = dataclasses.replace(make_result(controller, "A", 8, True), winnable=False)
+            rows[9] = dataclasses.replace(make_result(controller, "A", 9, True), winnable=False)
+        return rows
+
+    results = run("lucky", True) + run("sound", False)
+    board = _markdown_rows(res.leaderboard_markdown(results))
+    assert [line["controller"] for line in board] == ["sound", "lucky"]
+    assert board[0]["winnable"].startswith("100% ") and board[1]["winnable"].startswith("88% ")
+    assert board[1]["all scenarios"].startswith("82% ") and board[0]["all scenarios"].startswith("73% ")
+    summary = {r["controller"]: r for r in res.summarize(results)}
+    assert (summary["sound"]["winnable"], summary["sound"]["winnable_successes"]) == (8, 8)
+    assert "| A | lucky | 11 | 7/8 |" in res.summary_markdown(res.summarize(results))
