@@ -289,7 +289,7 @@ def _grid_axis(text: str) -> tuple[str, tuple[float, ...]]:
 
 
 def sweep(args: argparse.Namespace) -> int:
-    from subenv.evaluation import resolve_controllers
+    from subenv.evaluation.rollout import resolve_controllers
     from subenv.sweep import SweepSpec, run_sweep
 
     _installed_controllers(args.controllers)
@@ -319,6 +319,16 @@ def sweep(args: argparse.Namespace) -> int:
         values = " | ".join(f"{v:.4g}" if isinstance(v, float) else str(v) for v in key)
         print(f"| {values} | {sum(successes) / len(successes):.0%} |")
     print(f"\n{len(rows)} episodes; results in {path}")
+    names = [name for name, _ in spec.grid]
+    if not args.no_plots and "speed_ratio" in names and len(names) == 2:
+        from subenv.sweep import plot_performance_maps
+
+        try:
+            maps = plot_performance_maps(path, path.parent / "maps.png", vehicle=spec.vehicle)
+        except MissingExtra as exc:
+            print(f"(no performance maps: {exc})", file=sys.stderr)
+        else:
+            print(f"performance maps in {maps}")
     return 0
 
 
@@ -386,6 +396,8 @@ def _parser() -> argparse.ArgumentParser:
     p_sweep.add_argument("--address", help="a Ray cluster's address (e.g. auto); default: a local Ray instance")
     p_sweep.add_argument("--num-cpus", type=int, help="CPUs of the local Ray instance (default: all)")
     p_sweep.add_argument("--no-progress", action="store_true", help="no progress on stderr")
+    p_sweep.add_argument("--no-plots", action="store_true",
+                         help="no performance maps (drawn when the grid is speed_ratio and one other axis)")
     sub.add_parser("list", help="list the environment ids and their scenarios")
     sub.add_parser("train", add_help=False, help="train a Stable-Baselines3 agent (needs the 'rl' extra)")
     return parser

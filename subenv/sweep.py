@@ -38,7 +38,7 @@ from subenv.extras import require
 from subenv.scenarios import get_scenario, scenario_names
 from subenv.scenarios.scenario import Scenario
 
-__all__ = ["PARAMETERS", "Chunk", "SweepSpec", "run_chunk", "run_sweep"]
+__all__ = ["PARAMETERS", "Chunk", "SweepSpec", "plot_performance_maps", "run_chunk", "run_sweep"]
 
 PARAMETERS: Final = {
     "speed_ratio": "initial speed as u / u_cr (a scenario with speeds in m/s gets its speed_mps instead)",
@@ -231,3 +231,81 @@ def run_sweep(
     rows = [row for c in chunks for row in _read_rows(out / _CHUNKS_DIR / f"{c.id}.parquet")]
     _write_table(out / _RESULTS_FILE, rows)
     return out / _RESULTS_FILE
+
+
+def plot_performance_maps(results: str | os.PathLike[str], out: str | os.PathLike[str],
+                          vehicle: str = "suboff") -> Path:
+    """Success rate over a sweep's two grid axes, one panel per controller, with the physics overlaid.
+
+    The x axis is u / u_cr (``grid_speed_ratio``), the y axis the sweep's other parameter (x_GB as
+    x_GB / L). Overlaid: the critical speed (u / u_cr = 1, Riedel 1993 eq. 3.9); with x_GB on the y axis,
+    the saturation cusp for one plane command (alpha = 0: beyond it the depth-holding state of dual
+    control needs more than the plane limit, eqs 4.43-4.45, :func:`subenv.analysis.saturation_cusp`);
+    and, hatched, the grid points whose episodes have no depth-holding trim within the limits for any
+    allocation (the ``winnable`` column: no controller can win there). Needs the ``plot`` extra.
+    """
+    require("plot", "the performance maps", "matplotlib")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from subenv.analysis import critical_speed, saturation_cusp
+    from subenv.vehicles import load_vehicle
+
+    rows = _read_rows(Path(results))
+    axes_names = [k for k in rows[0] if k.startswith("grid_")]
+    if "grid_speed_ratio" not in axes_names or len(axes_names) != 2:
+        raise ValueError(f"a performance map needs grid_speed_ratio and one other grid axis; the sweep has {axes_names}")
+    other = next(a for a in axes_names if a != "grid_speed_ratio")
+    boat = load_vehicle(vehicle)
+    scale = 1.0 / boat.length_m if other == "grid_x_GB_m" else 1.0
+    label = {"grid_x_GB_m": "x_GB / L", "grid_excess_buoyancy_fraction": "(B - W) / W"}.get(other, other[5:])
+    xs = sorted({r["grid_speed_ratio"] for r in rows})
+    ys = sorted({r[other] for r in rows})
+    controllers = list(dict.fromkeys(r["controller"] for r in rows))
+    fig, panels = plt.subplots(1, len(controllers), figsize=(3.6 * len(controllers) + 1.2, 3.8), sharey=True,
+                               layout="constrained", squeeze=False)
+    image = None
+    for ax, controller in zip(panels[0], controllers):
+        success = np.full((len(ys), len(xs)), np.nan)
+        blocked = np.zeros((len(ys), len(xs)), dtype=bool)
+        for j, y in enumerate(ys):
+            for i, x in enumerate(xs):
+                cell = [r for r in rows if r["controller"] == controller and r["grid_speed_ratio"] == x and r[other] == y]
+                if cell:
+                    success[j, i] = float(np.mean([r["success"] for r in cell]))
+                    blocked[j, i] = not all(r["winnable"] for r in cell)
+        image = ax.pcolormesh(_edges(xs), _edges([y * scale for y in ys]), success, vmin=0.0, vmax=1.0,
+                              cmap="viridis", shading="flat")
+        ax.contourf(xs, [y * scale for y in ys], blocked.astype(float), levels=[0.5, 1.5], colors="none",
+                    hatches=["xx"])
+        ax.axvline(1.0, color="w", ls="--", lw=1.2)
+        if other == "grid_x_GB_m":
+            ucr = critical_speed(boat)
+            ratios = np.linspace(min(xs), max(xs), 200)
+            x_plus, x_minus = saturation_cusp(boat, ratios * ucr)
+            ax.plot(ratios, x_plus * scale, color="tab:red", lw=1.2)
+            ax.plot(ratios, x_minus * scale, color="tab:red", lw=1.2)
+            ax.set_ylim(min(ys) * scale, max(ys) * scale) if min(ys) != max(ys) else None
+        ax.set(title=controller, xlabel="u / u_cr")
+    panels[0][0].set_ylabel(label)
+    fig.colorbar(image, ax=panels[0].tolist(), label="success rate")
+    fig.suptitle("Success over the sweep's grid. Dashed: the critical speed; red: the saturation cusp "
+                 "(alpha = 0);\nhatched: no depth-holding trim within the limits (no controller can win)",
+                 fontsize="medium")
+    path = Path(out)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
+def _edges(centres: Sequence[float]) -> list[float]:
+    """Cell edges around sorted centres (half-way between neighbours)."""
+    c = list(centres)
+    if len(c) == 1:
+        return [c[0] - 0.5, c[0] + 0.5]
+    mids = [(a + b) / 2 for a, b in zip(c[:-1], c[1:])]
+    return [c[0] - (mids[0] - c[0]), *mids, c[-1] + (c[-1] - mids[-1])]

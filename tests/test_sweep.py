@@ -129,3 +129,16 @@ def test_the_command_line_sweeps_a_grid_and_prints_success_per_point(local_ray, 
     with pytest.raises(SystemExit) as error:
         main(["sweep", "--grid", "speed_ratio=1:2", "--out", str(tmp_path / "bad")])
     assert error.value.code == 2 and not (tmp_path / "bad").exists()
+
+
+def test_performance_maps_are_drawn_from_a_two_axis_sweep(local_ray, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    pytest.importorskip("matplotlib")
+    from subenv.sweep import plot_performance_maps
+
+    spec = SweepSpec(controllers=("reversal_aware",), scenarios=("LowSpeed",),
+                     grid=(("speed_ratio", (0.5, 1.5)), ("x_GB_m", (0.0, 0.003))), episodes=2)
+    rows = run_sweep(spec, tmp_path / "sweep", progress=False)
+    png = plot_performance_maps(rows, tmp_path / "maps.png")
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    with pytest.raises(ValueError, match="needs grid_speed_ratio and one other grid axis"):
+        plot_performance_maps(run_sweep(SPEC, tmp_path / "one-axis", progress=False), tmp_path / "no.png")
