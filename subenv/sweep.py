@@ -307,5 +307,5 @@ def _edges(centres: Sequence[float]) -> list[float]:
     c = list(centres)
     if len(c) == 1:
         return [c[0] - 0.5, c[0] + 0.5]
-    mids = [(a + b) / 2 for a, b in zip(c[:-1], c[1:])]
+    mids = [(a + b) / 2 for a, b in itertools.pairwise(c)]
     return [c[0] - (mids[0] - c[0]), *mids, c[-1] + (c[-1] - mids[-1])]
