@@ -167,3 +167,14 @@ def test_a_batch_gets_the_one_at_a_time_results_bit_for_bit():
         assert a.trajectory is not None and b.trajectory is not None
         np.testing.assert_array_equal(a.trajectory.actions, b.trajectory.actions)
         np.testing.assert_array_equal(a.trajectory.depth_error_m, b.trajectory.depth_error_m)
+
+
+@pytest.mark.parametrize("scenario", ["Nominal", "LowSpeed", "NearCritical", "SpeedTransient", "PeriscopeDepth",
+                                      "BallastOffset"])
+def test_it_wins_exactly_the_winnable_episodes(scenario):
+    """Every scenario class: each episode with a depth-holding trim inside the plane limits is won, and the one
+    without (BallastOffset seed 2: x_GB = 2.0 mm at 0.56 m/s) is lost, as it must be by any controller."""
+    results = run_episodes(DepthMPC(), scenario, [0, 1, 2])
+    for result in results:  # (the harness records subenv.analysis.winnable for every episode)
+        assert (result.metrics.outcome == "success") == result.winnable, (result.seed, result.metrics.outcome)
+    assert scenario != "BallastOffset" or [r.metrics.outcome == "success" for r in results] == [True, True, False]
