@@ -49,7 +49,7 @@ def test_list_names_every_id(capsys):
     assert "subenv/LowSpeed-v0" in text and "subenv/DivePlane-v0" in text
 
 
-def test_analyze_writes_the_report_and_refuses_to_overwrite(tmp_path: Path, analysis_report):
+def test_analyze_writes_the_report_and_refuses_to_overwrite(tmp_path: Path, analysis_report, monkeypatch):
     # `subenv analyze --out <folder>` into a folder that did not exist, once per session (tests/conftest.py).
     out = analysis_report.folder
     assert analysis_report.exit_code == 0
@@ -63,7 +63,23 @@ def test_analyze_writes_the_report_and_refuses_to_overwrite(tmp_path: Path, anal
         main(["analyze", "--out", str(out)])
     existing = tmp_path / "analysis"  # the shared report stays as it is: --force replaces a copy of it
     shutil.copytree(out, existing)
+    # --force replaces an earlier report (its marker file says so) through the same atomic replacement,
+    # without computing the report a second time (tens of seconds).
+    from subenv.analysis import report as report_module
+    from subenv.atomic import atomic_output_dir
+
+    calls = []
+
+    def quick(out_dir, vehicle=None, overwrite=False):  # type: ignore[no-untyped-def]
+        calls.append(overwrite)
+        with atomic_output_dir(out_dir, overwrite=overwrite, kind=report_module.REPORT_KIND) as folder:
+            (folder / "report.md").write_text("# replaced\n\n## Figures\n")
+        return Path(out_dir)
+
+    monkeypatch.setattr(report_module, "write_report", quick)
     assert main(["analyze", "--out", str(existing), "--force"]) == 0
+    assert calls == [True] and (existing / "report.md").read_text().startswith("# replaced")
+    assert not list(existing.glob("*.png"))  # the earlier report was replaced, not written into
 
 
 def test_evaluate_end_to_end_on_the_tiny_suite(tmp_path: Path, capsys):
