@@ -28,8 +28,7 @@ class Progress:
     """Work done out of ``total`` (episodes, or another ``unit``), on ``stream`` (default stderr);
     nothing when not ``enabled``.
 
-    :meth:`describe` names what runs now, :meth:`update` counts, :meth:`write` prints a line without
-    breaking the bar, :meth:`close` ends the bar.
+    :meth:`describe` names what runs now, :meth:`update` counts, :meth:`close` ends the bar.
     """
 
     def __init__(self, total: int, *, enabled: bool = True, stream: TextIO | None = None,
@@ -64,15 +63,6 @@ class Progress:
             if reached > self._logged:
                 self._logged = reached
                 print(self.line(time.perf_counter() - self._start), file=self.stream, flush=True)
-
-    def write(self, text: str, stream: TextIO | None = None) -> None:
-        """Print ``text`` on ``stream`` (default stdout), above the bar when there is one (tqdm clears
-        and redraws it), so that what a run prints as it goes is never interleaved with the bar."""
-        stream = sys.stdout if stream is None else stream
-        if self._bar is not None:
-            self._bar.write(text.rstrip("\n"), file=stream)
-        else:
-            print(text.rstrip("\n"), file=stream, flush=True)
 
     def line(self, elapsed_s: float) -> str:
         """The log line after ``elapsed_s`` seconds: work done, percent, elapsed and time left."""
