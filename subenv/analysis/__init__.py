@@ -41,6 +41,7 @@ from subenv.analysis.hopf import (
     PeriodicOrbit,
     continue_periodic_orbits,
     hopf_points,
+    oscillatory_growth_rate,
     periodic_orbit,
 )
 from subenv.analysis.linear import BOW_PLANES_ONLY, LinearModel, linear_model, numerical_jacobian
@@ -76,6 +77,7 @@ __all__ = [
     "level_flight_trim",
     "linear_model",
     "numerical_jacobian",
+    "oscillatory_growth_rate",
     "periodic_orbit",
     "place_gain",
     "saturation_cusp",

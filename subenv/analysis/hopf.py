@@ -40,7 +40,7 @@ from subenv.dynamics.model import derivatives, model_params
 from subenv.vehicles.vehicle import Vehicle
 
 __all__ = ["HopfPoint", "PeriodicOrbit", "continue_periodic_orbits", "hopf_points", "level_flight_eigenvalues",
-           "periodic_orbit"]
+           "oscillatory_growth_rate", "periodic_orbit"]
 
 DEFAULT_FROUDE_GRID: Final = np.linspace(0.008, 0.464, 457)
 """Where :func:`hopf_points` looks for crossings by default: these length Froude numbers u / sqrt(g L),
@@ -84,7 +84,7 @@ class HopfPoint:
     def predicted_amplitude_rad(self, vehicle: Vehicle, speed_mps: float, gain: FloatArray | None = None) -> float:
         """The normal form's pitch amplitude of the cycle at ``speed_mps``, ``-Re(lambda) / c2``
         (NaN where it has none); valid while the amplitude is small (a few degrees)."""
-        growth = _pair_growth(level_flight_eigenvalues(vehicle, speed_mps, gain, self.alpha))
+        growth = oscillatory_growth_rate(vehicle, speed_mps, gain, self.alpha)
         amplitude = -growth / self.amplitude_coefficient
         return float(amplitude) if amplitude > 0.0 else math.nan
 
@@ -122,8 +122,11 @@ def level_flight_eigenvalues(vehicle: Vehicle, speed_mps: float, gain: FloatArra
     return np.linalg.eigvals(model.A - np.outer(model.B, gain))
 
 
-def _pair_growth(eigenvalues: np.ndarray) -> float:
-    """The largest real part among the complex pairs (-inf if there is none)."""
+def oscillatory_growth_rate(vehicle: Vehicle, speed_mps: float, gain: FloatArray | None = None,
+                            alpha: float = 0.0) -> float:
+    """The largest real part [1/s] among the complex pairs of :func:`level_flight_eigenvalues`: the growth
+    (> 0) or decay of level flight's oscillation; -inf where no eigenvalue is complex."""
+    eigenvalues = level_flight_eigenvalues(vehicle, speed_mps, gain, alpha)
     pairs = eigenvalues[np.abs(eigenvalues.imag) > _COMPLEX]
     return float(pairs.real.max()) if pairs.size else -math.inf
 
@@ -220,7 +223,7 @@ def hopf_points(
                   "an increasing array of at least 2 finite speeds >= 0")
 
     def growth(u: float) -> float:
-        return _pair_growth(level_flight_eigenvalues(vehicle, u, k, alpha))
+        return oscillatory_growth_rate(vehicle, u, k, alpha)
 
     values = [growth(u) for u in grid]
     points = []

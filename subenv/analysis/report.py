@@ -28,7 +28,7 @@ from subenv.analysis.design import (
     thesis_gain,
 )
 from subenv.analysis.equilibria import DragMoment, Equilibrium, HullIntegral, equilibria, symmetric_pitchfork
-from subenv.analysis.hopf import HopfPoint, continue_periodic_orbits, hopf_points, level_flight_eigenvalues
+from subenv.analysis.hopf import HopfPoint, continue_periodic_orbits, hopf_points, oscillatory_growth_rate
 from subenv.analysis.linear import BOW_PLANES_ONLY, Allocation, plane_derivatives
 from subenv.analysis.reversal import level_flight_trim
 from subenv.atomic import atomic_output_dir
@@ -238,8 +238,7 @@ def hopf_findings(vehicle: Vehicle) -> HopfFindings:
     pitch_limit_speed = float(np.interp(limit, amplitudes, speeds)) if amplitudes.max() >= limit else math.nan
 
     def pair_exists(u: float) -> float:
-        eigenvalues = level_flight_eigenvalues(vehicle, u)
-        return 1.0 if np.any(np.abs(eigenvalues.imag) > 1e-9) else -1.0
+        return 1.0 if math.isfinite(oscillatory_growth_rate(vehicle, u)) else -1.0
 
     splitting = brentq(pair_exists, point.speed_mps, 3.0 * point.speed_mps, xtol=1e-6)
     return HopfFindings(point=point, env_speeds_mps=env_speeds, env_growth_rates=rates,
@@ -550,8 +549,8 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
 def _hopf_figure(fig: Any, vehicle: Vehicle, found: HopfFindings) -> str:
     p = found.point
     speeds = np.linspace(0.36, 1.44, 300) * p.speed_mps
-    growth = [max((e.real for e in level_flight_eigenvalues(vehicle, u) if abs(e.imag) > 1e-9), default=math.nan)
-              for u in speeds]
+    growth = [oscillatory_growth_rate(vehicle, u) for u in speeds]
+    growth = [g if math.isfinite(g) else math.nan for g in growth]  # (no pair: nothing to draw)
     top, bottom = fig.subplots(2, 1, sharex=True)
     top.plot(speeds, growth, lw=1.2, label="Re(lambda), oscillatory pair")
     top.plot(found.env_speeds_mps, found.env_growth_rates, "o", color="C1", label="environment, zero action")
