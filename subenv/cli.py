@@ -193,14 +193,14 @@ def _installed_controllers(requested: Sequence[str] | None) -> None:
 
 def _note_other_scale(vehicle_name: str) -> None:
     """On a vehicle of another length the comparison is Froude-scaled, but the agents are not."""
-    from subenv.scenarios import get_scenario
+    from subenv.thesis import reference_length_ratio
     from subenv.vehicles import load_vehicle
 
     try:
         vehicle = load_vehicle(vehicle_name)
     except ValueError as exc:
         raise SystemExit(f"subenv evaluate: {exc}") from None
-    ratio = get_scenario("Nominal").length_ratio(vehicle.length_m)
+    ratio = reference_length_ratio(vehicle)
     if ratio != 1.0:
         print(f"(--vehicle {vehicle_name}: the scenarios, the success criterion and the classical baselines' "
               f"designs are Froude-scaled to its {vehicle.length_m:.4g} m (x{ratio:.4g}); the trained agents are "

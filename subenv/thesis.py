@@ -6,14 +6,14 @@ It lives here, below both :mod:`subenv.scenarios` (the default and nominal speed
 
 from __future__ import annotations
 
-import math
 from typing import Final
 
 from subenv.units import fps_to_mps
 from subenv.vehicles.loader import load_vehicle
+from subenv.vehicles.scaling import froude_factor
 from subenv.vehicles.vehicle import Vehicle
 
-__all__ = ["REFERENCE_LENGTH_M", "THESIS_DESIGN_SPEED_MPS", "froude_speed_factor"]
+__all__ = ["REFERENCE_LENGTH_M", "THESIS_DESIGN_SPEED_MPS", "froude_speed_factor", "reference_length_ratio"]
 
 THESIS_DESIGN_SPEED_MPS: Final = fps_to_mps(5.0)
 """The thesis controller's design speed, 5 fps = 1.524 m/s exactly (Riedel 1993 Ch. II.B)."""
@@ -23,7 +23,12 @@ REFERENCE_LENGTH_M: Final = load_vehicle("suboff").length_m
 SUBOFF's; on a vehicle of another length they are Froude-scaled (:func:`froude_speed_factor`)."""
 
 
+def reference_length_ratio(vehicle: Vehicle) -> float:
+    """lambda = L / L_SUBOFF: lengths chosen for SUBOFF scale by it on ``vehicle`` (exactly 1.0 on SUBOFF)."""
+    return vehicle.length_m / REFERENCE_LENGTH_M
+
+
 def froude_speed_factor(vehicle: Vehicle) -> float:
     """sqrt(L / L_SUBOFF): speeds and times chosen for SUBOFF scale by it on ``vehicle``, rates by its
-    inverse (Froude similarity, :func:`subenv.vehicles.froude_scaled`); exactly 1.0 on SUBOFF."""
-    return math.sqrt(vehicle.length_m / REFERENCE_LENGTH_M)
+    inverse (Froude similarity, :func:`subenv.vehicles.froude_factor`); exactly 1.0 on SUBOFF."""
+    return froude_factor("speed", reference_length_ratio(vehicle))

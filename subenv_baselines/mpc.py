@@ -20,7 +20,7 @@ from subenv.dynamics import CONTROL_PERIOD_S, SUBSTEPS, ModelParams, derivatives
 from subenv.envs.config import DEPTH_BAND_M, NOISE_STD, OBSERVATION_NAMES, DivePlaneConfig
 from subenv.evaluation import SingleRowMixin, check_batch
 from subenv.extras import require
-from subenv.thesis import froude_speed_factor
+from subenv.thesis import reference_length_ratio
 from subenv.vehicles import Vehicle
 from subenv_baselines._common import DEPTH_ERROR, HEAVE, PITCH, PITCH_RATE, SPEED
 
@@ -348,7 +348,7 @@ class DepthMPC(SingleRowMixin):
             self._limit = vehicle.planes.limit_rad
             self._surface_m = 0.5 * max(vehicle.hull.breadth_m) + self.surface_margin_m
             # None: the environments' default band, Froude-scaled to the vehicle as theirs is.
-            band = (DEPTH_BAND_M * froude_speed_factor(vehicle) ** 2 if self.max_depth_error_m is None
+            band = (DEPTH_BAND_M * reference_length_ratio(vehicle) if self.max_depth_error_m is None
                     else self.max_depth_error_m)
             self.band_m = band - self.depth_band_margin_m
             self._vehicle = vehicle

@@ -27,6 +27,7 @@ from subenv.envs.episodes import (
 )
 from subenv.envs.info import step_infos
 from subenv.scenarios.scenario import EpisodeConfig, Scenario
+from subenv.vehicles.scaling import froude_factor
 from subenv.vehicles.vehicle import Vehicle
 
 __all__ = ["ENVS_PER_THREAD", "DivePlaneVectorEnv"]
@@ -464,7 +465,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         uniforms = np.empty((len(index), scenario.uniforms_per_episode))
         disturbances = np.empty(len(index))
         # (the initial disturbance drawn with the episode's standard deviation, Froude-scaled as it is)
-        std = scenario.disturbance_std_N * self.config.length_ratio**3
+        std = scenario.disturbance_std_N * froude_factor("force", self.config.length_ratio)
         tr.draw_reset_numbers(self._rngs, index, uniforms, std, disturbances)
         _, loading, episode, state = draw_episode_batch(self.config, uniforms, disturbances, self._loadings)
         write_episode(self._episode, index, episode)

@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from subenv import _validation as check
+from subenv.vehicles.scaling import froude_factor
 
 __all__ = [
     "DEPTH_TOLERANCE_M",
@@ -354,9 +355,9 @@ def episode_metrics(
     check.positive("plane_limit_rad", plane_limit_rad)
     check.positive("depth_tolerance_m", depth_tolerance_m)
     check.positive("hold_window_s", hold_window_s)
-    root = math.sqrt(check.positive("length_ratio", length_ratio))
-    depth_tolerance_m, hold_window_s = depth_tolerance_m * length_ratio, hold_window_s * root
-    steady_rate, steady_change = STEADY_PITCH_RATE_RADPS / root, STEADY_DEPTH_CHANGE_M * length_ratio
+    length, time, rate = (froude_factor(q, length_ratio) for q in ("length", "time", "rate"))
+    depth_tolerance_m, hold_window_s = depth_tolerance_m * length, hold_window_s * time
+    steady_rate, steady_change = STEADY_PITCH_RATE_RADPS * rate, STEADY_DEPTH_CHANGE_M * length
     if episode_duration_s is not None:
         check.positive("episode_duration_s", episode_duration_s)
 

@@ -38,6 +38,7 @@ from subenv.evaluation.suites import DEFAULT_SEED, Suite, check_scenarios, get_s
 from subenv.scenarios.registry import get_scenario, scenario_names
 from subenv.scenarios.scenario import EpisodeConfig, Scenario
 from subenv.vehicles.loader import load_vehicle
+from subenv.vehicles.scaling import froude_factor
 from subenv.vehicles.vehicle import Vehicle
 
 __all__ = [
@@ -243,7 +244,7 @@ def _env_args(
         boat = vehicle if isinstance(vehicle, Vehicle) else load_vehicle(vehicle)
         ratio = the_scenario.length_ratio(boat.length_m)
         if ratio != 1.0 and spec.max_episode_steps is not None:
-            kwargs["max_episode_steps"] = math.ceil(spec.max_episode_steps * math.sqrt(ratio) - 1e-9)
+            kwargs["max_episode_steps"] = math.ceil(spec.max_episode_steps * froude_factor("time", ratio) - 1e-9)
     return env_id, kwargs
 
 

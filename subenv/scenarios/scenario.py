@@ -18,6 +18,7 @@ import numpy as np
 
 from subenv import _validation as check
 from subenv.thesis import THESIS_DESIGN_SPEED_MPS
+from subenv.vehicles.scaling import froude_factor
 
 __all__ = ["EpisodeConfig", "Interval", "Scenario", "SpeedRamp"]
 
@@ -131,18 +132,19 @@ class EpisodeConfig:
         ratio = check.positive("length_ratio", length_ratio)
         if ratio == 1.0:
             return self
-        root = math.sqrt(ratio)
-        speed = 1.0 if self.speed_relative else root
-        pitch, heave, rate, depth = self.initial_state
+        length, time, rate, force = (froude_factor(q, ratio) for q in ("length", "time", "rate", "force"))
+        speed = froude_factor("speed", ratio)
+        speed_knot = 1.0 if self.speed_relative else speed
+        pitch, heave, pitch_rate, depth = self.initial_state
         return dataclasses.replace(
             self,
-            speed_knots=tuple((t * root, u * speed) for t, u in self.speed_knots),
-            depth_command_m=self.depth_command_m * ratio,
-            initial_state=(pitch, heave * root, rate / root, depth * ratio),
-            z_GB_m=None if self.z_GB_m is None else self.z_GB_m * ratio,
-            x_GB_m=self.x_GB_m * ratio,
-            disturbance_std_N=self.disturbance_std_N * ratio**3,
-            duration_s=self.duration_s * root,
+            speed_knots=tuple((t * time, u * speed_knot) for t, u in self.speed_knots),
+            depth_command_m=self.depth_command_m * length,
+            initial_state=(pitch, heave * speed, pitch_rate * rate, depth * length),
+            z_GB_m=None if self.z_GB_m is None else self.z_GB_m * length,
+            x_GB_m=self.x_GB_m * length,
+            disturbance_std_N=self.disturbance_std_N * force,
+            duration_s=self.duration_s * time,
         )
 
 
