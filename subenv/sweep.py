@@ -191,13 +191,11 @@ def run_sweep(
     out = Path(out_dir)
     stored = out / _SPEC_FILE
     wanted = json.dumps(spec.as_dict(), indent=2, sort_keys=True) + "\n"
-    if stored.exists():
-        if stored.read_text() != wanted:
-            raise FileExistsError(f"{str(out)!r} holds another sweep (its {_SPEC_FILE} differs): choose another folder")
-    else:
-        (out / _CHUNKS_DIR).mkdir(parents=True, exist_ok=True)
+    if stored.exists() and stored.read_text() != wanted:
+        raise FileExistsError(f"{str(out)!r} holds another sweep (its {_SPEC_FILE} differs): choose another folder")
+    (out / _CHUNKS_DIR).mkdir(parents=True, exist_ok=True)
+    if not stored.exists():
         atomic_write_text(stored, wanted)
-    (out / _CHUNKS_DIR).mkdir(exist_ok=True)
     chunks = spec.chunks()
     finished = {p.stem for p in (out / _CHUNKS_DIR).glob("*.parquet")}  # (each written whole)
     todo = [c for c in chunks if c.id not in finished]

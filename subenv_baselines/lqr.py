@@ -18,6 +18,8 @@ from subenv_baselines._common import GainSchedule, feedback_state, row_dot, scal
 # Bryson's rule: each state weighted by the inverse square of its acceptable size.
 ACCEPTABLE: Final = {"pitch_rad": 0.1, "heave_mps": 0.1, "pitch_rate_radps": 0.05, "depth_error_m": 1.0,
                      "depth_error_integral_ms": 30.0}
+INTEGRAL_LIMIT_M_S: Final = 3 * ACCEPTABLE["depth_error_integral_ms"]
+"""The depth-error integral is held within +-this (anti-windup bound of the LQI baselines) [m s]."""
 DEPTH_ERROR_LIMIT_M: Final = 1.5
 """Depth error fed back is clipped to this: far from the ordered depth the boat closes at a bounded pitch."""
 DEFAULT_POINTS: Final = np.linspace(0.12, 2.0, 95)
@@ -89,7 +91,7 @@ class ScheduledLQR(SingleRowMixin):
         self.schedule: GainSchedule | None = None
         self._vehicle: Vehicle | None = None
         self._limit = 0.4
-        self.integrator = DepthIntegrator(dt_s, ACCEPTABLE["depth_error_integral_ms"] * 3)
+        self.integrator = DepthIntegrator(dt_s, INTEGRAL_LIMIT_M_S)
 
     def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
         if vehicle is not self._vehicle:

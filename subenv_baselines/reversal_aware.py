@@ -13,7 +13,7 @@ from subenv.dynamics import CONTROL_PERIOD_S
 from subenv.evaluation import SingleRowMixin, check_batch
 from subenv.vehicles import Vehicle
 from subenv_baselines._common import GainSchedule, scaled_points, speeds
-from subenv_baselines.lqr import ACCEPTABLE, DEFAULT_POINTS, DepthIntegrator, lqi_command, lqi_gain
+from subenv_baselines.lqr import DEFAULT_POINTS, INTEGRAL_LIMIT_M_S, DepthIntegrator, lqi_command, lqi_gain
 
 ALLOCATIONS: Final = (-1.0, 1.0)
 """The bow/stern allocations it chooses between: the extremes move u_cr furthest (Fig. 3-9)."""
@@ -67,7 +67,7 @@ class ReversalAware(SingleRowMixin):
         """The allocation alpha in use in every episode (one per row of the last ``reset_batch``)."""
         self._vehicle: Vehicle | None = None
         self._limit = 0.4
-        self.integrator = DepthIntegrator(dt_s, ACCEPTABLE["depth_error_integral_ms"] * 3)
+        self.integrator = DepthIntegrator(dt_s, INTEGRAL_LIMIT_M_S)
 
     def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
         if vehicle is not self._vehicle:
