@@ -21,14 +21,14 @@ import json
 import math
 import os
 import sys
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, Final
 
 from subenv.atomic import atomic_write_text
 from subenv.extras import require
 
-__all__ = ["DEFAULT_SPACE", "SELECTION_SCENARIOS", "main", "search", "tune_space"]
+__all__ = ["DEFAULT_SPACE", "SELECTION_SCENARIOS", "fit", "main", "search", "tune_space"]
 
 DEFAULT_SPACE: Final[dict[str, tuple[Any, ...]]] = {
     "learning_rate": ("log", 1e-4, 1e-3),
@@ -111,7 +111,6 @@ def search(
     """
     require("ray", "the hyperparameter search", "ray", "pandas", "optuna")
     require("rl", "the hyperparameter search", "stable_baselines3")
-    import ray
     from ray import tune
     from ray.tune.search.optuna import OptunaSearch
 
@@ -127,26 +126,14 @@ def search(
     if (out / "best.json").exists():
         raise FileExistsError(f"{str(out)!r} holds a finished search (best.json): choose another folder")
     (out / "trials").mkdir(parents=True, exist_ok=True)
-    started_here = not ray.is_initialized()
-    if started_here:
-        ray.init(address=address, include_dashboard=False, log_to_driver=False, configure_logging=False)
-    try:
-        trainable = tune.with_parameters(_trial, algo=algo, env_id=env_id, timesteps=timesteps, seed=seed,
-                                         episodes=episodes, trials_dir=str(out / "trials"),
-                                         overrides=dict(overrides or {}))
-        tuner = tune.Tuner(
-            trainable, param_space=param_space,
-            tune_config=tune.TuneConfig(search_alg=OptunaSearch(metric="success_rate", mode="max", seed=seed),
-                                        num_samples=samples, max_concurrent_trials=max_concurrent),
-            run_config=tune.RunConfig(name="search", storage_path=str(out / "tune"), verbose=0),
-        )
-        grid = tuner.fit()
-    finally:
-        if started_here:
-            ray.shutdown()
-    failed = [r.error for r in grid if r.error is not None]
-    if failed:
-        raise RuntimeError(f"{len(failed)} of {samples} trials failed; the first: {failed[0]}")
+    trainable = tune.with_parameters(_trial, algo=algo, env_id=env_id, timesteps=timesteps, seed=seed,
+                                     episodes=episodes, trials_dir=str(out / "trials"), overrides=dict(overrides or {}))
+    grid = fit(lambda: tune.Tuner(
+        trainable, param_space=param_space,
+        tune_config=tune.TuneConfig(search_alg=OptunaSearch(metric="success_rate", mode="max", seed=seed),
+                                    num_samples=samples, max_concurrent_trials=max_concurrent),
+        run_config=tune.RunConfig(name="search", storage_path=str(out / "tune"), verbose=0),
+    ), address)
     trials = [{"values": {k: r.config[k] for k in space}, **{k: r.metrics[k] for k in
               ("success_rate", "plane_rms_rad", "run_dir", "timesteps")}} for r in grid]
     best = max(trials, key=lambda t: (t["success_rate"], -t["plane_rms_rad"]))
@@ -155,6 +142,26 @@ def search(
               "trials": trials}
     atomic_write_text(out / "best.json", json.dumps(record, indent=2) + "\n")
     return best
+
+
+def fit(make_tuner: Callable[[], Any], address: str | None) -> Any:
+    """``make_tuner().fit()`` on the Ray cluster at ``address`` (None: the instance already started, or a
+    local one started and shut down here); a RuntimeError names the failed trials and the first error."""
+    import ray
+
+    started_here = not ray.is_initialized()
+    if started_here:
+        ray.init(address=address, include_dashboard=False, log_to_driver=False, configure_logging=False)
+    try:
+        grid = make_tuner().fit()
+    finally:
+        if started_here:
+            ray.shutdown()
+    failed = [r.error for r in grid if r.error is not None]
+    if failed:
+        raise RuntimeError(f"{len(failed)} of {len(grid)} trials failed (running the same command again retries "
+                           f"what a resumable run has not finished); the first: {failed[0]}")
+    return grid
 
 
 def main(argv: list[str] | None = None) -> int:

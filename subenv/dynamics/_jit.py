@@ -3,8 +3,10 @@
 The right-hand side, the hull integral and the environment transition are written once as
 scalar functions and compiled with numba. There is no interpreted copy beside them: the batched
 NumPy-facing functions (:func:`subenv.dynamics.derivatives`,
-:func:`subenv.dynamics.crossflow_integrals`) are generalized ufuncs over the same compiled scalar
-functions that the environments call.
+:func:`subenv.dynamics.crossflow_integrals`) broadcast their arguments (:func:`rows`) and call a kernel
+that loops over the same compiled scalar functions that the environments call. (Not numba's
+generalized ufuncs: a cached gufunc can segfault when two processes compile it at once with a cold
+cache, numba#10128, which two Ray workers here did.)
 
 - ``nogil=True``: the kernels release the GIL, so other Python threads run meanwhile.
 - :func:`parallel_kernel` compiles a kernel with ``parallel=True`` as well: its ``numba.prange``
@@ -36,8 +38,9 @@ from pathlib import Path
 from typing import Any, Final, TypeVar, cast
 
 import numba
+import numpy as np
 
-__all__ = ["KERNEL_OPTIONS", "KERNEL_SOURCES", "gufunc", "inline_kernel", "kernel", "parallel_kernel",
+__all__ = ["KERNEL_OPTIONS", "KERNEL_SOURCES", "inline_kernel", "kernel", "parallel_kernel", "rows",
            "threading_layer_available"]
 
 KERNEL_OPTIONS: Final[dict[str, Any]] = {"cache": True, "nogil": True, "error_model": "numpy"}
@@ -123,10 +126,11 @@ def inline_kernel(fn: FunctionT) -> FunctionT:
     return cast(FunctionT, numba.njit(inline="always", **KERNEL_OPTIONS)(fn))
 
 
-def gufunc(fn: Any, signature: str, layout: str) -> Any:
-    """Compile ``fn`` as a generalized ufunc (NumPy broadcasting over the loop dimensions)."""
-    _drop_stale_cache(fn)
-    return numba.guvectorize([signature], layout, cache=True)(fn)
+def rows(value: Any, shape: tuple[int, ...]) -> Any:
+    """``value`` broadcast to ``shape`` as a contiguous float64 array of one row per element (``shape + (k,)``
+    arrays: pass ``shape + (k,)`` and reshape): how the batched NumPy-facing functions hand a batch to a kernel
+    that loops over it."""
+    return np.ascontiguousarray(np.broadcast_to(np.asarray(value, dtype=float), shape)).reshape(-1)
 
 
 @cache

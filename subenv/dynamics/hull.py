@@ -21,13 +21,12 @@ states, each as one loop. :func:`crossflow_integrals` is the batched form for Nu
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cache, cached_property
-from typing import Any
+from functools import cached_property
 
 import numpy as np
 
 from subenv._typing import FloatArray
-from subenv.dynamics._jit import gufunc, inline_kernel
+from subenv.dynamics._jit import inline_kernel, kernel, rows
 
 __all__ = [
     "HullTable",
@@ -187,15 +186,15 @@ def crossflow_integrals(table: HullTable, w: FloatArray, q: FloatArray) -> tuple
         [m^5/s^2]: one more factor x [m]. The drag moment is M = +(rho/2) C_D I1 [N m] (from
         M = -x Z_F with x forward; the thesis prints the opposite sign in eqs 2.43 and 4.2).
     """
-    I0, I1 = _crossflow_gufunc()(w, q, table.packed)
-    return np.asarray(I0), np.asarray(I1)
+    shape = np.broadcast_shapes(np.shape(w), np.shape(q))
+    w_rows, q_rows = rows(w, shape), rows(q, shape)
+    I0, I1 = np.empty(w_rows.shape), np.empty(w_rows.shape)
+    _crossflow_rows(w_rows, q_rows, table.packed, I0, I1)
+    return I0.reshape(shape), I1.reshape(shape)
 
 
-# --- the batched (generalized ufunc) form, compiled on first use -------------------------------
-def _crossflow_loop(w: float, q: float, hull: FloatArray, I0: FloatArray, I1: FloatArray) -> None:
-    I0[0], I1[0] = crossflow_point(w, q, hull)
-
-
-@cache
-def _crossflow_gufunc() -> Any:
-    return gufunc(_crossflow_loop, "void(f8, f8, f8[:, :], f8[:], f8[:])", "(),(),(r,n)->(),()")
+@kernel
+def _crossflow_rows(w: FloatArray, q: FloatArray, hull: FloatArray, I0: FloatArray, I1: FloatArray) -> None:
+    # A loop over rows, not a generalized ufunc (see subenv.dynamics._jit).
+    for i in range(w.shape[0]):
+        I0[i], I1[i] = crossflow_point(w[i], q[i], hull)

@@ -14,12 +14,12 @@ axes, states ``(..., 4)``, inputs and :class:`ModelParams` fields broadcast agai
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 
 from subenv._typing import ArrayLike, FloatArray
-from subenv.dynamics._jit import gufunc, inline_kernel
+from subenv.dynamics._jit import inline_kernel, kernel, rows
 from subenv.dynamics.hull import HullTable, crossflow_point
 from subenv.dynamics.sincos import sincos_point
 from subenv.vehicles.vehicle import Vehicle
@@ -272,25 +272,25 @@ def derivatives(
     M_drag = +(rho/2) C_D int x b w_loc|w_loc| dx, w_loc = w - x q (see
     :func:`subenv.dynamics.hull.crossflow_integrals` for the sign of the moment).
 
-    This is :func:`rhs_point` broadcast over the batch (a generalized ufunc); the environments
+    This is :func:`rhs_point` broadcast over the batch (a compiled loop over its rows); the environments
     call :func:`rhs_point` itself.
     """
     state = np.asarray(state, dtype=float)
     if state.shape[-1:] != (4,):
         raise ValueError(f"state has shape {state.shape}: must have shape (..., 4) (pitch, heave, pitch rate, depth)")
-    return _derivatives_ufunc()(state, speed, stern, bow, force, moment, pack_params(params), params.hull.packed)
+    prm = pack_params(params)  # (..., P): one set for all, or one per row (stack_params)
+    shape = np.broadcast_shapes(state.shape[:-1], prm.shape[:-1], *(np.shape(a) for a in (speed, stern, bow, force, moment)))
+    states = rows(state, (*shape, 4)).reshape(-1, 4)
+    out = np.empty((states.shape[0], 4))
+    _derivatives_rows(states, *(rows(a, shape) for a in (speed, stern, bow, force, moment)),
+                      rows(prm, (*shape, prm.shape[-1])).reshape(-1, prm.shape[-1]), params.hull.packed, out)
+    return out.reshape(*shape, 4)
 
 
-def _derivatives_loop(state: FloatArray, u: float, stern: float, bow: float, force: float, moment: float,
-                      prm: FloatArray, hull: FloatArray, out: FloatArray) -> None:
-    out[0], out[1], out[2], out[3] = rhs_point(state[0], state[1], state[2], u, stern, bow, force, moment, prm, hull)
-
-
-_UFUNC: list[object] = []
-
-
-def _derivatives_ufunc() -> Any:
-    if not _UFUNC:  # compiled (or loaded from numba's cache) on first use, not on import
-        _UFUNC.append(gufunc(_derivatives_loop, "void(f8[:], f8, f8, f8, f8, f8, f8[:], f8[:, :], f8[:])",
-                             "(s),(),(),(),(),(),(p),(r,n)->(s)"))
-    return _UFUNC[0]
+@kernel
+def _derivatives_rows(state: FloatArray, u: FloatArray, stern: FloatArray, bow: FloatArray, force: FloatArray,
+                      moment: FloatArray, prm: FloatArray, hull: FloatArray, out: FloatArray) -> None:
+    # A loop over rows, not a generalized ufunc (see subenv.dynamics._jit).
+    for i in range(state.shape[0]):
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = rhs_point(state[i, 0], state[i, 1], state[i, 2], u[i], stern[i],
+                                                               bow[i], force[i], moment[i], prm[i], hull)

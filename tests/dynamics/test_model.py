@@ -85,3 +85,38 @@ def test_linear_model_with_ballast_offset_matches_jacobian(suboff):
     A, B = numerical_jacobian(v, 1.0, np.zeros(4), 0.0, 0.0)
     np.testing.assert_allclose(A, lm.A, rtol=1e-6, atol=1e-9)
     np.testing.assert_allclose(B[:, 0], lm.B, rtol=1e-6, atol=1e-12)
+
+
+_COLD_CACHE_PROGRAM = """
+import numpy as np
+from subenv.dynamics import crossflow_integrals, derivatives, model_params
+from subenv.vehicles import load_vehicle
+v = load_vehicle("suboff")
+params = model_params(v)
+x = np.linspace(-1.0, 1.0, 7)
+states = np.stack([0.1 * x, 0.05 * x, 0.01 * x, 10 + x], axis=-1)
+d = derivatives(states, 1.2, 0.05 * x, -0.02, params)
+i0, i1 = crossflow_integrals(params.hull, 0.05 * x, 0.01 * x)
+print(repr(np.concatenate([d.ravel(), i0, i1]).tolist()))
+"""
+
+
+def test_two_processes_compiling_the_batched_functions_at_once_on_a_cold_cache_both_get_the_answer(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    # numba's cached generalized ufuncs could segfault here (numba#10128: two Ray workers did); the batched
+    # functions are plain kernels over rows instead (subenv/dynamics/_jit.py).
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+
+    def start() -> subprocess.Popen[str]:
+        return subprocess.Popen([sys.executable, "-c", _COLD_CACHE_PROGRAM], env=env, stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, text=True)
+
+    procs = [start(), start()]
+    outputs = [p.communicate(timeout=600) for p in procs]
+    later = start()  # then one that loads what they cached
+    outputs.append(later.communicate(timeout=600))
+    assert [p.returncode for p in (*procs, later)] == [0, 0, 0], [err[-2000:] for _, err in outputs]
+    assert outputs[0][0] == outputs[1][0] == outputs[2][0] and outputs[0][0].startswith("[")
