@@ -107,9 +107,10 @@ class Plan:
             _require_int(name, getattr(self, name), low)
 
     def trials(self) -> list[dict[str, Any]]:
-        """One entry per (algorithm, seed): its name (the run folder's) and settings."""
+        """One entry per (algorithm, seed): its name (the run folder's) and settings; seed by seed, so that an
+        interrupted run has as many seeds of each algorithm as it could."""
         return [{"name": f"{algo}-seed{seed}", "algo": algo, "seed": seed, "timesteps": steps}
-                for algo, steps in self.timesteps.items() for seed in range(self.seeds)]
+                for seed in range(self.seeds) for algo, steps in self.timesteps.items()]
 
 
 def _as_dict(plan: Plan) -> dict[str, Any]:
