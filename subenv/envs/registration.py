@@ -34,6 +34,12 @@ def env_ids() -> list[str]:
 def register_envs() -> None:
     """Register (or re-register) an id for every scenario in the registry.
 
+    ``import subenv`` calls it. Calling it again is harmless: each id is replaced by the same
+    registration, and scenarios registered since (:func:`subenv.register_scenario`) gain theirs. A
+    process that makes environments from the ids without importing ``subenv`` first calls it: a Ray
+    worker, for example, which builds RLlib's environments from the id alone, through Ray's setup hook
+    ``ray.init(runtime_env={"worker_process_setup_hook": "subenv.register_envs"})``.
+
     ``max_episode_steps`` is the scenario's longest duration at the default ``dt``; the
     environment truncates at the drawn episode's own duration. ``gym.make_vec`` builds the
     native :class:`~subenv.envs.DivePlaneVectorEnv` (:data:`VECTOR_ENTRY_POINT`).

@@ -374,6 +374,17 @@ def test_gym_make_with_module_prefix_in_a_fresh_process():
     assert out.stdout.strip() == "(8,) DivePlaneEnv"
 
 
+def test_register_envs_called_again_registers_the_same_ids_without_warnings():
+    """What a Ray worker's setup hook does after the worker already imported subenv (README: RLlib)."""
+    before = {env_id: gym.spec(env_id) for env_id in ENV_IDS}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        subenv.register_envs()
+        subenv.register_envs()
+    assert {env_id: gym.spec(env_id) for env_id in ENV_IDS} == before
+    assert all(gym.spec(env_id).vector_entry_point == "subenv.envs.vector:DivePlaneVectorEnv" for env_id in ENV_IDS)
+
+
 def test_render_rgb_array_through_the_env():
     env = gym.make("subenv/PeriscopeDepth-v0", render_mode="rgb_array", disable_env_checker=True)
     gym_check_env(env.unwrapped)  # includes Gymnasium's render checks
