@@ -107,3 +107,13 @@ def analysis_report(tmp_path_factory: pytest.TempPathFactory) -> AnalysisReport:
     with contextlib.redirect_stdout(printed):
         exit_code = main(["analyze", "--out", str(folder)])
     return AnalysisReport(folder, exit_code, printed.getvalue())
+
+
+@pytest.fixture(scope="session")
+def local_ray():  # type: ignore[no-untyped-def]
+    """One local Ray instance with 2 CPUs for every test that runs Ray tasks or Tune trials (a start costs
+    5-10 s); the functions under test use it instead of starting their own."""
+    ray = pytest.importorskip("ray", reason="the 'ray' extra is not installed")
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, configure_logging=False)
+    yield
+    ray.shutdown()

@@ -22,13 +22,6 @@ SPEC = SweepSpec(controllers=("lqr", "thesis"), scenarios=("LowSpeed",), grid=((
                  episodes=6, chunk_episodes=3)
 
 
-@pytest.fixture(scope="module")
-def local_ray():  # type: ignore[no-untyped-def]
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, configure_logging=False)
-    yield
-    ray.shutdown()
-
-
 def _table(path: Path) -> list[dict]:  # type: ignore[type-arg]
     return pq.read_table(path).to_pylist()  # type: ignore[no-any-return]
 

@@ -26,7 +26,7 @@ _SMALL = {"n_envs": 2, "n_steps": 128, "batch_size": 128, "n_epochs": 1, "depth_
 PLAN = Plan(timesteps={"ppo": 256}, seeds=2, episodes=2, curve_points=2, curve_episodes=1, reps=200, overrides=_SMALL)
 
 
-def test_a_tiny_reference_run_gives_rliable_estimates_of_what_it_evaluated_and_resumes(tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_a_tiny_reference_run_gives_rliable_estimates_of_what_it_evaluated_and_resumes(local_ray, tmp_path) -> None:  # type: ignore[no-untyped-def]
     out = tmp_path / "reference"
     summary = run_reference(out, PLAN, progress=False, baselines=["thesis"])
     scenarios = list(get_suite(DEFAULT_SUITE).scenarios)

@@ -19,7 +19,7 @@ _SMALL = {"n_envs": 2, "n_steps": 256, "batch_size": 128, "n_epochs": 1, "depth_
 SPACE = {"learning_rate": ("log", 1e-4, 1e-3), "gamma": ("choice", [0.99, 0.999])}
 
 
-def test_a_tiny_search_trains_scores_and_keeps_every_trial(tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_a_tiny_search_trains_scores_and_keeps_every_trial(local_ray, tmp_path) -> None:  # type: ignore[no-untyped-def]
     out = tmp_path / "search"
     best = search("ppo", "subenv/LowSpeed-v0", out, space=SPACE, samples=2, timesteps=512, episodes=2,
                   overrides=_SMALL)
