@@ -126,10 +126,7 @@ def _require_int(name: str, value: Any, low: int) -> None:
 def _trial(config: dict[str, Any], *, plan: dict[str, Any], trials_dir: str) -> None:
     from ray import tune
 
-    from subenv.evaluation import DEFAULT_SUITE, evaluate
     from subenv_agents.config import load_config
-    from subenv_agents.controller import AgentController
-    from subenv_agents.policy import load_agent
     from subenv_agents.train import train
 
     trial = config["trial"]
@@ -139,13 +136,25 @@ def _trial(config: dict[str, Any], *, plan: dict[str, Any], trials_dir: str) -> 
     select_freq = max(trial["timesteps"] // plan["curve_points"], 1)
     result = train(agent_config, seed=trial["seed"], run_dir=run_dir, eval_freq=0, save_freq=0, verbose=0,
                    progress=False, select_freq=select_freq, select_episodes=plan["curve_episodes"])
+    record = {**trial, "timesteps_trained": result.timesteps, "train_time_s": round(result.wall_time_s, 1)}
+    record = _evaluated(record, run_dir, plan["episodes"])
+    tune.report({"mean_score": float(np.mean([s["score"] for s in record["scenarios"].values()]))})
+
+
+def _evaluated(record: dict[str, Any], run_dir: Path, episodes: int) -> dict[str, Any]:
+    """``record`` with its final policy's scores on the default suite (as it is now), written to
+    ``<run_dir>/evaluation.json``."""
+    from subenv.evaluation import DEFAULT_SUITE, evaluate
+    from subenv_agents.controller import AgentController
+    from subenv_agents.policy import load_agent
+
     start = time.perf_counter()
-    agent = AgentController(load_agent(run_dir), name=trial["name"])  # the final policy
-    episodes = evaluate([agent], DEFAULT_SUITE, plan["episodes"], progress=False, keep_trajectories=0)
-    record = {**trial, "timesteps_trained": result.timesteps, "train_time_s": round(result.wall_time_s, 1),
-              "evaluation_time_s": round(time.perf_counter() - start, 1), "scenarios": _scenario_scores(episodes)}
+    agent = AgentController(load_agent(run_dir), name=record["name"])  # the final policy
+    results = evaluate([agent], DEFAULT_SUITE, episodes, progress=False, keep_trajectories=0)
+    record = {**record, "evaluation_time_s": round(time.perf_counter() - start, 1),
+              "scenarios": _scenario_scores(results)}
     atomic_write_text(run_dir / TRIAL_RESULT, json.dumps(record, indent=2) + "\n")
-    tune.report({"iqm_input": float(np.mean([s["score"] for s in record["scenarios"].values()]))})
+    return record
 
 
 def _scenario_scores(results: Sequence[Any]) -> dict[str, dict[str, Any]]:
@@ -242,6 +251,11 @@ def summarize_reference(out_dir: str | Path, plan: Plan = Plan(), *, run_time_s:
                                     "(run the reference again to finish it)")
         records.append(json.loads(path.read_text()))
     scenarios = list(get_suite(DEFAULT_SUITE).scenarios)
+    for k, record in enumerate(records):
+        if list(record["scenarios"]) != scenarios or record["scenarios"][scenarios[0]]["episodes"] != plan.episodes:
+            # The default suite changed since the trial was evaluated (or the plan's episodes): its final
+            # policy is evaluated again on the suite as it is, the training kept.
+            records[k] = _evaluated(record, out / "trials" / record["name"], plan.episodes)
     controllers = resolve_controllers(list(baselines) if baselines is not None else None)
     results = evaluate(controllers, DEFAULT_SUITE, plan.episodes, progress=False, keep_trajectories=0)
     fixed = {c.name: _scenario_scores([r for r in results if r.controller == c.name]) for c in controllers}

@@ -63,11 +63,16 @@ def test_a_tiny_reference_run_gives_rliable_estimates_of_what_it_evaluated_and_r
     for figure in ("learning_curves.png", "performance_profiles.png"):
         assert (out / figure).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
-    # Run again after losing one trial's result: that trial alone is trained again.
+    # Run again after losing one trial's result: that trial alone is trained again. The other's evaluation,
+    # made as if on another suite, is made again on this one from its saved policy (not trained again).
     kept = (out / "trials" / "ppo-seed0" / "model.zip").stat().st_mtime_ns
     (out / "trials" / "ppo-seed1" / "evaluation.json").unlink()
+    first = json.loads((out / "trials" / "ppo-seed0" / "evaluation.json").read_text())
+    stale = {**first, "scenarios": {"Retired-v0": first["scenarios"][scenarios[0]]}}
+    (out / "trials" / "ppo-seed0" / "evaluation.json").write_text(json.dumps(stale))
     run_reference(out, PLAN, progress=False, baselines=["thesis"])
     assert (out / "trials" / "ppo-seed0" / "model.zip").stat().st_mtime_ns == kept
+    assert json.loads((out / "trials" / "ppo-seed0" / "evaluation.json").read_text())["scenarios"] == first["scenarios"]
     assert json.loads((out / "trials" / "ppo-seed1" / "evaluation.json").read_text())["scenarios"] == trial["scenarios"]
 
 
