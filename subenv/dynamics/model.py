@@ -20,7 +20,8 @@ import numpy as np
 
 from subenv._typing import ArrayLike, FloatArray
 from subenv.dynamics._jit import gufunc, inline_kernel
-from subenv.dynamics.hull import HullTable, crossflow_point
+from subenv.dynamics.free_surface import NO_FREE_SURFACE, FreeSurface, suction_point
+from subenv.dynamics.hull import SOURCE_ROW, HullTable, crossflow_point
 from subenv.dynamics.sincos import sincos_point
 from subenv.vehicles.vehicle import Vehicle
 
@@ -62,15 +63,21 @@ class ModelParams(NamedTuple):
     xGW_minus_xBB: ArrayLike  # x_G W - x_B B [N m]
     zGW_minus_zBB: ArrayLike  # z_G W - z_B B [N m]
     half_rho_CD: ArrayLike    # (rho/2) C_D [kg/m^3]
+    rho_suction: ArrayLike    # rho times FreeSurface.suction_factor [kg/m^3]; 0: deep water
     hull: HullTable
 
 
 PARAM_FIELDS = ModelParams._fields[:-1]
 """The numeric fields of :class:`ModelParams`, in the order of :func:`pack_params` (all but ``hull``)."""
+_RHO_SUCTION = PARAM_FIELDS.index("rho_suction")
 
 
-def model_params(vehicle: Vehicle) -> ModelParams:
-    """Reduce a :class:`~subenv.vehicles.Vehicle` to the parameters of :func:`derivatives`."""
+def model_params(vehicle: Vehicle, free_surface: FreeSurface = NO_FREE_SURFACE) -> ModelParams:
+    """Reduce a :class:`~subenv.vehicles.Vehicle` to the parameters of :func:`derivatives`.
+
+    ``free_surface`` adds the free surface's suction (:mod:`subenv.dynamics.free_surface`); the
+    default is deep water, Riedel (1993)'s model.
+    """
     c = vehicle.coefficients
     m = vehicle.mass_kg
     # Added-mass matrix of eqs 2.38-2.39 (Riedel 1993), left-hand side for (wdot, qdot).
@@ -98,6 +105,7 @@ def model_params(vehicle: Vehicle) -> ModelParams:
         xGW_minus_xBB=vehicle.x_G_m * W - vehicle.x_B_m * B,
         zGW_minus_zBB=vehicle.z_G_m * W - vehicle.z_B_m * B,
         half_rho_CD=0.5 * vehicle.water_density_kg_m3 * vehicle.crossflow_drag,
+        rho_suction=vehicle.water_density_kg_m3 * free_surface.suction_factor,
         hull=_hull_table(vehicle),
     )
 
@@ -150,6 +158,7 @@ def rhs_point(
     theta: float,
     w: float,
     q: float,
+    depth: float,
     u: float,
     stern: float,
     bow: float,
@@ -161,10 +170,12 @@ def rhs_point(
     """d/dt (theta, w, q, Z) for one state (Riedel 1993 eqs 2.38-2.43); see :func:`derivatives`.
 
     ``prm`` holds the fields of :class:`ModelParams` in :data:`PARAM_FIELDS` order
-    (:func:`pack_params`), ``hull`` is :attr:`HullTable.packed`. Depth does not enter.
+    (:func:`pack_params`), ``hull`` is :attr:`HullTable.packed`. Depth enters only through the free
+    surface's suction (:func:`~subenv.dynamics.free_surface.suction_point`; none in deep water).
     """
     I0, I1 = crossflow_point(w, q, hull)
-    return rhs_given_drag(theta, w, q, u, stern, bow, force, moment, I0, I1, prm, 0, 1)
+    Z_fs, M_fs = suction_point(theta, depth, u, prm[_RHO_SUCTION], hull, SOURCE_ROW)
+    return rhs_given_drag(theta, w, q, u, stern, bow, force, moment, I0, I1, Z_fs, M_fs, prm, 0, 1)
 
 
 @inline_kernel
@@ -179,11 +190,15 @@ def rhs_given_drag(
     moment: float,
     I0: float,
     I1: float,
+    Z_fs: float,
+    M_fs: float,
     prm: FloatArray,
     at: int,
     stride: int,
 ) -> tuple[float, float, float, float]:
-    """:func:`rhs_point` given the hull's cross-flow integrals ``I0``, ``I1`` (:func:`crossflow_point`).
+    """:func:`rhs_point` given the hull's cross-flow integrals ``I0``, ``I1`` (:func:`crossflow_point`)
+    and the free surface's suction ``Z_fs`` [N], ``M_fs`` [N m]
+    (:func:`~subenv.dynamics.free_surface.suction_point`, exactly 0.0 in deep water).
 
     Field k of :data:`PARAM_FIELDS` is ``prm[at + k * stride]``: a packed parameter row has
     stride 1; the block integrator (:func:`subenv.dynamics.integrate.control_period_lanes`) keeps
@@ -206,6 +221,7 @@ def rhs_given_drag(
         + uu * (Z_delta_s * stern + Z_delta_b * bow)
         - half_rho_CD * I0
         + force
+        + Z_fs  # free-surface suction (subenv.dynamics.free_surface)
     )
     pitch = (
         -m_zG * w * q
@@ -216,6 +232,7 @@ def rhs_given_drag(
         + uu * (M_delta_s * stern + M_delta_b * bow)
         + half_rho_CD * I1
         + moment
+        + M_fs
     )
     return (
         q,  # Riedel (1993) eq. 2.40
@@ -283,7 +300,8 @@ def derivatives(
 
 def _derivatives_loop(state: FloatArray, u: float, stern: float, bow: float, force: float, moment: float,
                       prm: FloatArray, hull: FloatArray, out: FloatArray) -> None:
-    out[0], out[1], out[2], out[3] = rhs_point(state[0], state[1], state[2], u, stern, bow, force, moment, prm, hull)
+    out[0], out[1], out[2], out[3] = rhs_point(state[0], state[1], state[2], state[3], u, stern, bow, force, moment,
+                                               prm, hull)
 
 
 _UFUNC: list[object] = []

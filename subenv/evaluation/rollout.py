@@ -35,7 +35,7 @@ from subenv.evaluation.controller import BatchController, Controller, make_contr
 from subenv.evaluation.metrics import EpisodeMetrics, episode_metrics
 from subenv.evaluation.progress import Progress
 from subenv.evaluation.suites import DEFAULT_SEED, Suite, check_scenarios, get_suite, suite_names
-from subenv.scenarios.registry import get_scenario, scenario_names
+from subenv.scenarios.registry import get_scenario, scenario_for_env_id, scenario_names
 from subenv.scenarios.scenario import EpisodeConfig, Scenario
 from subenv.vehicles.loader import load_vehicle
 from subenv.vehicles.scaling import froude_factor
@@ -214,12 +214,14 @@ class EpisodeResult:
 def _scenario_of(name: str) -> str:
     """The scenario name of ``"LowSpeed"`` or ``"subenv/LowSpeed-v0"`` (checked)."""
     scenario = name
-    if "/" in name:
-        scenario = name.removeprefix("subenv/").removesuffix("-v0")
-        if name != f"subenv/{scenario}-v0":
-            raise ValueError(f"env id {name!r} is not a subenv id: must be 'subenv/<Scenario>-v0'")
-    if scenario == "DivePlane":
+    if name == "subenv/DivePlane-v0":
         scenario = "Randomized"
+    elif "/" in name:
+        found = scenario_for_env_id(name)
+        if found is None:
+            raise ValueError(f"env id {name!r} is not a subenv id: must be 'subenv/<Scenario>-v<version>' "
+                             f"(one of {[get_scenario(k).env_id for k in scenario_names()]})")
+        scenario = found
     check_scenarios([scenario])
     return scenario
 
@@ -231,7 +233,7 @@ def _env_args(
     if isinstance(scenario, Scenario):
         env_id, kwargs = "subenv/DivePlane-v0", {"scenario": scenario}
     else:
-        env_id, kwargs = f"subenv/{_scenario_of(scenario)}-v0", {}
+        env_id, kwargs = get_scenario(_scenario_of(scenario)).env_id, {}
     kwargs |= {"control": controller.control, "alpha": controller.alpha, "vehicle": vehicle}
     spec = gym.spec(env_id)
     if max_duration_s is not None:
@@ -403,7 +405,7 @@ def _run_single(
                                  duration_s, base.config.length_ratio)
     can_win = _episode_winnable(base.vehicle, base.episode, trajectory.critical_speed_mps, base.config.max_pitch_rad,
                                 options)
-    return _result(controller, base.scenario.name, seed, episode, trajectory, keep, can_win)
+    return _result(controller, base.scenario.key, seed, episode, trajectory, keep, can_win)
 
 
 def _run_batch(
@@ -445,7 +447,7 @@ def _run_batch(
         trajectory = recorder.trajectory(i, int(steps[i]), reasons[i], float(config.plane_limit_rad), duration_s,
                                          config.length_ratio)
         can_win = _episode_winnable(loadings[i], draw, trajectory.critical_speed_mps, config.max_pitch_rad, options)
-        results.append(_result(controller, env.scenario.name, seed, first_episode + i, trajectory, i < keep, can_win))
+        results.append(_result(controller, env.scenario.key, seed, first_episode + i, trajectory, i < keep, can_win))
     return results
 
 

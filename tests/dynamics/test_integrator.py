@@ -99,7 +99,7 @@ def _periods_in_blocks(x, t0, u0, slope, stern, bow, force, prm, hull, dt, subst
         for j in range(n):
             integrate.set_lane(block, j, x[b + j, 0], x[b + j, 1], x[b + j, 2], x[b + j, 3], t0[b + j], u0[b + j],
                                slope[b + j], stern[b + j], bow[b + j], force[b + j], prm[b + j])
-        integrate.control_period_lanes(block, n, dt, substeps, hull)
+        integrate.control_period_lanes(block, n, dt, substeps, hull, integrate.NO_WAVES)
         for j in range(n):
             for r in range(4):
                 x[b + j, r] = block[(integrate.LANE_PITCH + r) * L + j]
