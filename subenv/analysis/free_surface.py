@@ -38,6 +38,8 @@ __all__ = [
 _EPS: Final = 1e-6  # central-difference step of the Jacobians (rad, m/s, rad/s, m)
 _RESIDUAL: Final = 1e-12  # m/s^2 and rad/s^2: a trim's heave and pitch accelerations, at most
 _PITCH_STARTS_RAD: Final = (0.0, 0.1, -0.1, 0.2, -0.2, 0.4, -0.4)  # the trim search's starts
+_DEPTH_STEPS: Final = 400  # depths from 5 m to the hull radius, geometric (steps below 1 % of the depth)
+_BRANCH_JUMP_RAD: Final = 0.05  # a trim this far in pitch from the one below is another branch
 _DEPTH_TOLERANCE_M: Final = 1e-3  # of the shallowest depth held
 _DEEPEST_M: Final = 5.0  # the search's deepest depth: there SUBOFF's suction is below 0.1 % of its plane force
 
@@ -172,7 +174,8 @@ def _check(vehicle: Vehicle, speed_mps: float, depth_m: float) -> tuple[float, f
 
 
 def surface_trim(vehicle: Vehicle, speed_mps: float, depth_m: float, alpha: float = 0.0,
-                 free_surface: FreeSurface | None = None, sea_state: SeaState | None = None) -> SurfaceTrim:
+                 free_surface: FreeSurface | None = None, sea_state: SeaState | None = None,
+                 start: tuple[float, float] | None = None) -> SurfaceTrim:
     """Level flight at ``depth_m`` and ``speed_mps`` with the free surface's suction (and a sea's mean
     suction): the pitch and dual-control plane angle that balance heave and pitch with q = 0 and
     w = u tan(theta), and the stability of that steady state with the planes held.
@@ -190,6 +193,15 @@ def surface_trim(vehicle: Vehicle, speed_mps: float, depth_m: float, alpha: floa
         The suction model (default :class:`~subenv.dynamics.free_surface.FreeSurface`, factor 1).
     sea_state : SeaState, optional
         Adds the waves' mean suction at the depth.
+    start : (float, float), optional
+        (pitch [rad], plane [rad]) to start the root search from, and only from there (a branch
+        followed in depth: :func:`min_level_flight_depth`); by default from level and pitched starts,
+        keeping the trim nearest to level.
+
+    Raises
+    ------
+    RuntimeError
+        No trim found.
     """
     u, h = _check(vehicle, speed_mps, depth_m)
     alpha = check_alpha(alpha)
@@ -203,13 +215,14 @@ def surface_trim(vehicle: Vehicle, speed_mps: float, depth_m: float, alpha: floa
     # From level (the trim of a neutral boat in deep water), then from pitched starts and by
     # Levenberg-Marquardt where Powell's hybrid method stalls; the nearest trim to level is kept.
     found = []
-    for start in _PITCH_STARTS_RAD:
+    starts = [start] if start is not None else [(pitch, 0.0) for pitch in _PITCH_STARTS_RAD]
+    for first in starts:
         for method in ("hybr", "lm"):
-            result = root(balance, np.array([start, 0.0]), method=method, tol=1e-14)
+            result = root(balance, np.array(first, dtype=float), method=method, tol=1e-14)
             if np.max(np.abs(balance(result.x))) <= _RESIDUAL and abs(result.x[0]) < 0.5 * math.pi:
                 found.append(result)
                 break
-        if found and start == 0.0:
+        if found and first[0] == 0.0:
             break
     if not found:
         raise RuntimeError(f"surface_trim: no level-flight trim at depth {h} m, speed {u} m/s from pitch "
@@ -235,40 +248,43 @@ def min_level_flight_depth(vehicle: Vehicle, speed_mps: float, alpha: float = 0.
                            free_surface: FreeSurface | None = None, sea_state: SeaState | None = None) -> LevelFlightDepth:
     """The shallowest depth at which ``speed_mps`` holds level flight with the planes within their limit.
 
-    Depths from 5 m up to the hull radius are searched on a grid for the first that cannot be held,
-    then the boundary is bisected to 1 mm. A depth cannot be held when its trim (:func:`surface_trim`)
-    needs more than the plane limit, or when there is no trim at all: near the surface the suction's
-    nose-up moment grows faster with pitch than the planes and the hydrostatic moment can answer,
-    and the level-flight equilibrium disappears in a fold.
+    The level-flight trim of deep water (level, planes amidships, for a neutral boat) is followed up
+    towards the surface in steps of at most 1 % of the depth, each trim's root search started from
+    the one below (:func:`surface_trim`), until the trim needs more than the plane limit or the
+    branch is lost: near the surface the suction's nose-up moment grows with pitch, and the trim
+    meets another in a fold and disappears (the root search fails, or lands on a distant branch);
+    the boundary is then bisected to 1 mm.
     """
     u = check.positive("speed_mps", speed_mps, upper=100.0)
     alpha = check_alpha(alpha)
     limit = _plane_limit(vehicle)
     radius = max(vehicle.hull.breadth_m) / 2
 
-    def failure(h: float) -> str:  # why depth h cannot be held ("" if it can)
+    def follow(h: float, below: SurfaceTrim) -> tuple[SurfaceTrim | None, str]:
         try:
-            trim = surface_trim(vehicle, u, h, alpha, free_surface, sea_state)
+            trim = surface_trim(vehicle, u, h, alpha, free_surface, sea_state, start=(below.pitch_rad, below.plane_rad))
         except RuntimeError:
-            return "no trim"
-        return "" if trim.within_limits else "planes"
+            return None, "no trim"
+        if abs(trim.pitch_rad - below.pitch_rad) > _BRANCH_JUMP_RAD:
+            return None, "no trim"
+        return trim, "" if trim.within_limits else "planes"
 
-    depths = np.geomspace(_DEEPEST_M, radius * (1.0 + 1e-6), 60)
-    if failure(depths[0]):
+    held = surface_trim(vehicle, u, _DEEPEST_M, alpha, free_surface, sea_state)
+    if not held.within_limits:
         raise ValueError(f"speed_mps={u!r}: level flight cannot be held even at {_DEEPEST_M} m")
-    held = depths[0]
-    for h in depths[1:]:
-        why = failure(h)
+    for h in np.geomspace(_DEEPEST_M, radius * (1.0 + 1e-6), _DEPTH_STEPS)[1:]:
+        trim, why = follow(float(h), held)
         if why:
-            lost = h
-            while held - lost > _DEPTH_TOLERANCE_M:
-                mid = 0.5 * (held + lost)
-                if failure(mid):
-                    lost = mid
+            lost = float(h)
+            while held.depth_m - lost > _DEPTH_TOLERANCE_M:
+                mid = 0.5 * (held.depth_m + lost)
+                trim, why_mid = follow(mid, held)
+                if why_mid:
+                    lost, why = mid, why_mid
                 else:
-                    held = mid
-            return LevelFlightDepth(u, float(held), failure(lost), limit, alpha)
-        held = h
+                    held = trim  # type: ignore[assignment]
+            return LevelFlightDepth(u, held.depth_m, why, limit, alpha)
+        held = trim  # type: ignore[assignment]
     return LevelFlightDepth(u, radius, "broaching", limit, alpha)
 
 

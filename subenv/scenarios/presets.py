@@ -135,13 +135,15 @@ PERISCOPE_DEPTH_V1 = PERISCOPE_DEPTH.replace(
     free_surface=FreeSurface(),
     version=1,
 )
-PERISCOPE_SEA: Final = SeaState(significant_height_m=0.03, peak_period_s=2.0)
-"""PeriscopeDepthWaves's sea at SUBOFF's scale: H_s 3 cm, T_p 2 s; Froude-scaled by 1:24 (SUBOFF as
-a model of a 102 m boat), H_s 0.7 m and T_p 9.8 s, a moderate sea (sea state 3-4)."""
+PERISCOPE_SEA: Final = SeaState(significant_height_m=0.06, peak_period_s=2.0)
+"""PeriscopeDepthWaves's sea at SUBOFF's scale: H_s 6 cm, T_p 2 s; at 1:24 (SUBOFF as the model of a
+102 m boat, Froude-scaled) H_s 1.4 m and T_p 9.8 s, sea state 4. At 1.1 m its waves push the hull
+with 32 N and 42 N m rms (four times what the planes can answer at 0.6 m/s, but at periods of 1.5-2 s,
+where the boat's inertia leaves millimetres of heave) and pull it up with 0.53 N on average."""
 PERISCOPE_DEPTH_WAVES = PERISCOPE_DEPTH_V1.replace(
     name="PeriscopeDepthWaves",
     description=(
-        "PeriscopeDepth-v1 in a head sea (JONSWAP, H_s 3 cm, T_p 2 s at SUBOFF's scale): the waves' "
+        "PeriscopeDepth-v1 in a head sea (JONSWAP, H_s 6 cm, T_p 2 s at SUBOFF's scale): the waves' "
         "oscillating heave force and pitch moment and their mean suction (subenv.dynamics.waves), "
         "phases drawn per episode."
     ),
