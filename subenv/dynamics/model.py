@@ -278,16 +278,18 @@ def derivatives(
     ::
 
         (m - Z_wdot) wdot - (Z_qdot + m x_G) qdot = (m + Z_q) u q + m z_G q^2 + Z_w u w
-            + (W - B) cos(theta) + u^2 (Z_ds delta_s + Z_db delta_b) + Z_drag
+            + (W - B) cos(theta) + u^2 (Z_ds delta_s + Z_db delta_b) + Z_drag + force + Z_fs
         -(M_wdot + m x_G) wdot + (I_y - M_qdot) qdot = -m z_G w q + (M_q - m x_G) u q + M_w u w
             - (x_G W - x_B B) cos(theta) - (z_G W - z_B B) sin(theta)
-            + u^2 (M_ds delta_s + M_db delta_b) + M_drag
+            + u^2 (M_ds delta_s + M_db delta_b) + M_drag + moment + M_fs
         theta_dot = q
         Z_dot = -u sin(theta) + w cos(theta)
 
     with the hull cross-flow drag Z_drag = -(rho/2) C_D int b w_loc|w_loc| dx and
     M_drag = +(rho/2) C_D int x b w_loc|w_loc| dx, w_loc = w - x q (see
-    :func:`subenv.dynamics.hull.crossflow_integrals` for the sign of the moment).
+    :func:`subenv.dynamics.hull.crossflow_integrals` for the sign of the moment), and the free
+    surface's suction Z_fs(Z, theta, u), M_fs(Z, theta, u) (:mod:`subenv.dynamics.free_surface`; zero
+    in deep water, ``params.rho_suction`` 0), the one place where the depth Z enters.
 
     This is :func:`rhs_point` broadcast over the batch (a generalized ufunc); the environments
     call :func:`rhs_point` itself.

@@ -21,6 +21,7 @@ against one episode at a time.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -30,6 +31,8 @@ import gymnasium as gym
 import numpy as np
 
 from subenv.analysis.winnable import winnable
+from subenv.dynamics.free_surface import NO_FREE_SURFACE, FreeSurface
+from subenv.dynamics.waves import SeaState
 from subenv.envs import DivePlaneVectorEnv
 from subenv.evaluation.controller import BatchController, Controller, make_controller
 from subenv.evaluation.metrics import EpisodeMetrics, episode_metrics
@@ -219,8 +222,11 @@ def _scenario_of(name: str) -> str:
     elif "/" in name:
         found = scenario_for_env_id(name)
         if found is None:
-            raise ValueError(f"env id {name!r} is not a subenv id: must be 'subenv/<Scenario>-v<version>' "
-                             f"(one of {[get_scenario(k).env_id for k in scenario_names()]})")
+            parsed = re.fullmatch(r"subenv/(\w+)-v(\d+)", name)
+            if parsed is None:
+                raise ValueError(f"env id {name!r} is not a subenv id: must be 'subenv/<Scenario>-v<version>'")
+            base, version = parsed.groups()
+            found = base if version == "0" else f"{base}-v{version}"  # (unknown: check_scenarios says so)
         scenario = found
     check_scenarios([scenario])
     return scenario
@@ -457,10 +463,11 @@ def _scheduled(duration_s: float, max_episode_steps: int | None, dt: float) -> f
 
 
 @lru_cache(maxsize=4096)
-def _winnable(loading: Vehicle, final_speed_mps: float, max_pitch_rad: float) -> bool:
-    """:func:`subenv.analysis.winnable` (about 4 ms), once per loading and speed: every controller of a
-    comparison runs the same episodes."""
-    return winnable(loading, (final_speed_mps,), max_pitch_rad)
+def _winnable(loading: Vehicle, final_speed_mps: float, max_pitch_rad: float, depth_m: float = 0.0,
+              free_surface: FreeSurface = NO_FREE_SURFACE, sea_state: SeaState | None = None) -> bool:
+    """:func:`subenv.analysis.winnable` (about 4 ms), once per loading and speed (and ordered depth, near
+    the surface): every controller of a comparison runs the same episodes."""
+    return winnable(loading, (final_speed_mps,), max_pitch_rad, depth_m, free_surface, sea_state)
 
 
 def _episode_winnable(loading: Vehicle, draw: EpisodeConfig, critical_speed_mps: float, max_pitch_rad: float,
@@ -471,7 +478,10 @@ def _episode_winnable(loading: Vehicle, draw: EpisodeConfig, critical_speed_mps:
     else:
         last = draw.speed_knots[-1][1]
         final = float(last) * (critical_speed_mps if draw.speed_relative else 1.0)
-    return _winnable(loading, final, max_pitch_rad)
+    if draw.free_surface is None and draw.sea_state is None:
+        return _winnable(loading, final, max_pitch_rad)
+    depth = float(options["depth_command"]) if options and "depth_command" in options else float(draw.depth_command_m)
+    return _winnable(loading, final, max_pitch_rad, depth, draw.free_surface or NO_FREE_SURFACE, draw.sea_state)
 
 
 def _result(controller: Controller, scenario: str, seed: int, episode: int, trajectory: Trajectory,
