@@ -8,8 +8,9 @@ import numba
 import numpy as np
 import pytest
 
-from subenv.dynamics import HullTable, derivatives, model_params
+from subenv.dynamics import HullTable, derivatives, integrate, model_params, rk4
 from subenv.dynamics.free_surface import NO_FREE_SURFACE, FreeSurface, dipole_suction_N, suction
+from subenv.dynamics.model import pack_params as pack
 from subenv.dynamics.waves import SeaState, hull_wave_integrals, wave_force_point
 from subenv.vehicles import load_vehicle
 
@@ -152,3 +153,38 @@ def test_the_expected_mean_suction_falls_as_the_spectrum_weighted_exp_minus_2_k_
     ratio = Z2 / Z1
     low, high = (f ** 2 * kp for f in SEA.band)
     assert math.exp(-2 * high) < ratio < math.exp(-2 * low)
+
+
+@numba.njit(error_model="numpy")
+def _one_period_in_a_block(x, t0, u, plane, prm, hull, waves, n_waves, distance):
+    block = np.zeros(integrate.LANE_ROWS * integrate.LANES)
+    integrate.set_lane(block, 0, x[0], x[1], x[2], x[3], t0, u, 0.0, plane, 0.0, 0.0, prm, distance, n_waves)
+    integrate.control_period_lanes(block, 1, integrate.CONTROL_PERIOD_S, integrate.SUBSTEPS, hull, waves)
+    return np.array([block[(integrate.LANE_PITCH + r) * integrate.LANES] for r in range(4)])
+
+
+@numba.njit
+def _wave_at(t, distance, depth, waves, n):
+    return wave_force_point(t, distance, depth, waves, n)
+
+
+def test_the_block_integrator_in_a_sea_is_rk4_over_the_one_right_hand_side_with_the_waves_as_inputs():
+    # The environments' integrator evaluates the sea at every stage, at the stage's time, depth and
+    # distance travelled; the NumPy reference passes the same force and moment to derivatives.
+    rng = np.random.default_rng(11)
+    params = model_params(SUBOFF, FreeSurface())
+    waves = SEA.components(rng.random(SEA.waves), rng.uniform(0, 2 * math.pi, SEA.waves), SUBOFF.hull.x_m,
+                           SUBOFF.hull.breadth_m, RHO, SUBOFF.gravity_m_s2)
+    x0, t0, u, plane, distance = np.array([0.02, 0.01, -0.003, 1.1]), 37.5, 0.6, 0.1, 22.5
+
+    def f(t, state):
+        force, moment = _wave_at(t, distance + u * (t - t0), state[3], waves, SEA.waves)
+        return derivatives(state, u, plane, 0.0, params, force, moment)
+
+    reference = rk4(f, t0, x0, integrate.CONTROL_PERIOD_S, integrate.SUBSTEPS)
+    block = _one_period_in_a_block(x0, t0, u, plane, np.ascontiguousarray(pack(params)), params.hull.packed,
+                                   waves[None], SEA.waves, distance)
+    np.testing.assert_allclose(block, reference, rtol=1e-12, atol=1e-15)
+    calm = _one_period_in_a_block(x0, t0, u, plane, np.ascontiguousarray(pack(params)), params.hull.packed,
+                                  waves[None], 0, distance)
+    assert np.abs(block - calm).max() > 1e-6  # and the sea moved the boat
