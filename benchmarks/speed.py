@@ -175,7 +175,7 @@ def integrator_table(seconds: float) -> list[str]:
         a, b, c, d = x[0], x[1], x[2], x[3]
         for k in range(periods):  # a block of one state, as the single environment steps
             ig.set_lane(block, 0, a, b, c, d, k * CONTROL_PERIOD_S, speed, 0.0, plane, 0.0, 0.0, prm)
-            ig.control_period_lanes(block, 1, CONTROL_PERIOD_S, SUBSTEPS, hull)
+            ig.control_period_lanes(block, 1, CONTROL_PERIOD_S, SUBSTEPS, hull, ig.NO_WAVES)
             L = ig.LANES
             a, b, c, d = block[ig.LANE_PITCH * L], block[(ig.LANE_PITCH + 1) * L], block[(ig.LANE_PITCH + 2) * L], \
                 block[(ig.LANE_PITCH + 3) * L]
@@ -250,7 +250,7 @@ def cost_table(seconds: float) -> list[str]:
         block = np.empty(ig.LANE_ROWS * L)
         for i in range(x.shape[0]):  # a block of one state at a time
             ig.set_lane(block, 0, x[i, 0], x[i, 1], x[i, 2], x[i, 3], 0.0, 1.0, 0.0, 0.05, 0.0, 0.0, prm[i])
-            ig.control_period_lanes(block, 1, CONTROL_PERIOD_S, SUBSTEPS, hull)
+            ig.control_period_lanes(block, 1, CONTROL_PERIOD_S, SUBSTEPS, hull, ig.NO_WAVES)
             for r in range(4):
                 out[i, r] = block[(ig.LANE_PITCH + r) * L]
 
@@ -263,7 +263,7 @@ def cost_table(seconds: float) -> list[str]:
             for j in range(m):  # the inputs, as the transition fills them
                 ig.set_lane(block, j, x[b + j, 0], x[b + j, 1], x[b + j, 2], x[b + j, 3], 0.0, 1.0, 0.0, 0.05, 0.0, 0.0,
                             prm[b + j])
-            ig.control_period_lanes(block, m, CONTROL_PERIOD_S, SUBSTEPS, hull)
+            ig.control_period_lanes(block, m, CONTROL_PERIOD_S, SUBSTEPS, hull, ig.NO_WAVES)
             for j in range(m):
                 for r in range(4):
                     out[b + j, r] = block[(ig.LANE_PITCH + r) * L + j]
@@ -271,8 +271,8 @@ def cost_table(seconds: float) -> list[str]:
     @numba.njit
     def rhs(x: np.ndarray, prm: np.ndarray, out: np.ndarray) -> None:
         for i in range(x.shape[0]):
-            out[i, 0], out[i, 1], out[i, 2], out[i, 3] = rhs_point(x[i, 0], x[i, 1], x[i, 2], 1.0, 0.05, 0.0, 0.0, 0.0,
-                                                                   prm[i], hull)
+            out[i, 0], out[i, 1], out[i, 2], out[i, 3] = rhs_point(x[i, 0], x[i, 1], x[i, 2], x[i, 3], 1.0, 0.05, 0.0,
+                                                                   0.0, 0.0, prm[i], hull)
 
     pitch, sin_cos = states[:, 0].copy(), np.empty((2, n))  # contiguous: a loop over them is SIMD
 

@@ -256,7 +256,7 @@ def list_environments(args: argparse.Namespace) -> int:
     from subenv.scenarios import get_scenario, scenario_names
 
     for name in scenario_names():
-        print(f"subenv/{name}-v0: {get_scenario(name).description}")
+        print(f"{get_scenario(name).env_id}: {get_scenario(name).description}")
     print("subenv/DivePlane-v0: the Randomized scenario")
     return 0
 

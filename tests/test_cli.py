@@ -55,7 +55,7 @@ def test_analyze_writes_the_report_and_refuses_to_overwrite(tmp_path: Path, anal
     assert analysis_report.exit_code == 0
     text = analysis_report.printed
     assert "| quantity | thesis value | computed value | difference |" in text
-    assert (out / "report.md").is_file() and len(list(out.glob("*.png"))) == 15
+    assert (out / "report.md").is_file() and len(list(out.glob("*.png"))) == 16
     mask = os.umask(0)
     os.umask(mask)
     assert stat.S_IMODE(out.stat().st_mode) == 0o777 & ~mask  # the usual mode, not mkdtemp's 0o700

@@ -11,6 +11,9 @@
 - :mod:`~subenv.analysis.curriculum`: speed stages relative to the critical speed.
 - :mod:`~subenv.analysis.hopf`: beyond the thesis (its Ch. VI): the Hopf bifurcation of level flight at
   speed, its criticality, and the periodic orbits born there.
+- :mod:`~subenv.analysis.free_surface`: beyond the thesis (its Ch. VI's first recommendation): level
+  flight near the free surface, its stability, the shallowest depth a speed holds, the critical
+  speed's shift.
 - :mod:`~subenv.analysis.winnable`: depth-holding trims with both plane pairs free (can an episode be won).
 - :mod:`~subenv.analysis.report`: the reproduction report (``subenv analyze``).
 """
@@ -36,6 +39,14 @@ from subenv.analysis.design import (
     thesis_poles,
 )
 from subenv.analysis.equilibria import Equilibrium, equilibria, steady_state_residual, symmetric_pitchfork
+from subenv.analysis.free_surface import (
+    LevelFlightDepth,
+    SurfaceCriticalSpeed,
+    SurfaceTrim,
+    min_level_flight_depth,
+    surface_critical_speed,
+    surface_trim,
+)
 from subenv.analysis.hopf import (
     HopfPoint,
     PeriodicOrbit,
@@ -56,10 +67,13 @@ __all__ = [
     "DepthHoldingTrim",
     "Equilibrium",
     "HopfPoint",
+    "LevelFlightDepth",
     "LevelFlightTrim",
     "LinearModel",
     "PeriodicOrbit",
     "SpeedStage",
+    "SurfaceCriticalSpeed",
+    "SurfaceTrim",
     "approximate_cusp",
     "closed_loop_eigenvalues",
     "continue_equilibria",
@@ -76,6 +90,7 @@ __all__ = [
     "hopf_points",
     "level_flight_trim",
     "linear_model",
+    "min_level_flight_depth",
     "numerical_jacobian",
     "oscillatory_growth_rate",
     "periodic_orbit",
@@ -85,6 +100,8 @@ __all__ = [
     "scheduled_depth_gain",
     "speed_curriculum",
     "steady_state_residual",
+    "surface_critical_speed",
+    "surface_trim",
     "symmetric_pitchfork",
     "thesis_gain",
     "thesis_poles",

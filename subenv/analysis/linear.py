@@ -9,6 +9,7 @@ import numpy as np
 
 from subenv import _validation as check
 from subenv._typing import FloatArray
+from subenv.dynamics.free_surface import NO_FREE_SURFACE, FreeSurface
 from subenv.dynamics.model import derivatives, model_params
 from subenv.vehicles.vehicle import Vehicle
 
@@ -99,8 +100,10 @@ def numerical_jacobian(
     stern_rad: float,
     bow_rad: float,
     eps: float = 1e-6,
+    free_surface: FreeSurface = NO_FREE_SURFACE,
 ) -> tuple[FloatArray, FloatArray]:
-    """Central-difference Jacobians of :func:`~subenv.dynamics.derivatives` about any point.
+    """Central-difference Jacobians of :func:`~subenv.dynamics.derivatives` about any point (deep
+    water, or near the surface with ``free_surface``: :mod:`subenv.dynamics.free_surface`).
 
     Returns
     -------
@@ -109,7 +112,7 @@ def numerical_jacobian(
     B : ndarray, shape (4, 2)
         d f / d (delta_s, delta_b).
     """
-    params = model_params(vehicle)
+    params = model_params(vehicle, free_surface)
     x0 = np.asarray(state, dtype=float)
     steps = eps * np.eye(4)
     f_plus = derivatives(x0 + steps, speed_mps, stern_rad, bow_rad, params)

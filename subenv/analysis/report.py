@@ -28,16 +28,25 @@ from subenv.analysis.design import (
     thesis_gain,
 )
 from subenv.analysis.equilibria import DragMoment, Equilibrium, HullIntegral, equilibria, symmetric_pitchfork
+from subenv.analysis.free_surface import (
+    LevelFlightDepth,
+    SurfaceCriticalSpeed,
+    min_level_flight_depth,
+    surface_critical_speed,
+    surface_trim,
+)
 from subenv.analysis.hopf import HopfPoint, continue_periodic_orbits, hopf_points, oscillatory_growth_rate
 from subenv.analysis.linear import BOW_PLANES_ONLY, Allocation, plane_derivatives
 from subenv.analysis.reversal import level_flight_trim
 from subenv.atomic import atomic_output_dir
+from subenv.dynamics.free_surface import FreeSurface, suction
+from subenv.dynamics.model import model_params
 from subenv.units import FOOT_M, mps_to_fps
 from subenv.vehicles.loader import load_vehicle
 from subenv.vehicles.vehicle import Vehicle
 
-__all__ = ["REPORT_KIND", "HopfFindings", "ReportRow", "critical_speed_three_ways", "env_growth_rate", "hopf_findings",
-           "reproduce_numbers", "write_report"]
+__all__ = ["REPORT_KIND", "HopfFindings", "ReportRow", "SurfaceFindings", "critical_speed_three_ways", "env_growth_rate",
+           "hopf_findings", "reproduce_numbers", "surface_findings", "write_report"]
 
 # Inputs the thesis used for its figures (not results): x_GB/L of Figs 4-1, 4-6, 4-11 and the
 # Froude numbers of the paths of Fig. 4-13.
@@ -283,6 +292,117 @@ def _hopf_markdown(vehicle: Vehicle, found: HopfFindings) -> list[str]:
     ]
 
 
+_SURFACE_DEPTHS_M: Final = (0.3, 0.35, 0.4, 0.5, 0.6, 0.8, 1.0, 1.2, 1.5, 2.0, 3.0)
+"""Depths of midship [m] at which the report gives the critical speed near the surface."""
+_SURFACE_SPEED_RATIOS: Final = (0.3, 0.5, 0.7, 0.8, 0.85, 0.9, 0.93, 0.95, 0.97, 1.03, 1.05, 1.1, 1.15, 1.2, 1.5, 2.0)
+"""u / u_cr (deep water, alpha = 0) at which the report gives the shallowest depth held."""
+_SURFACE_ALPHAS: Final = (0.0, 1.0)  # stern planes only; both pairs, equal
+_PERISCOPE_DEPTHS_M: Final = (1.0, 1.2)  # PeriscopeDepth's ordered depths (subenv.scenarios.presets)
+
+
+@dataclass(frozen=True)
+class SurfaceFindings:
+    """What the report says of level flight near the free surface (:mod:`subenv.analysis.free_surface`)."""
+
+    critical: tuple[SurfaceCriticalSpeed, ...]
+    held: dict[float, tuple[LevelFlightDepth, ...]]
+    """alpha -> the shallowest depth held at each of :data:`_SURFACE_SPEED_RATIOS`."""
+    suction_N: tuple[float, ...]
+    """The suction at :data:`_SURFACE_DEPTHS_M`, level, at u_cr [N, down positive]."""
+    growth_per_s: tuple[float, ...]
+    """The fastest eigenvalue's real part of level flight at :data:`_SURFACE_DEPTHS_M`, planes held, 0.5 u_cr [1/s]."""
+
+
+def surface_findings(vehicle: Vehicle) -> SurfaceFindings:
+    """The free-surface section's numbers: the critical speed two ways, the shallowest depth held, the
+    suction and the stability of level flight against depth."""
+    ucr = critical_speed(vehicle)
+    critical = tuple(surface_critical_speed(vehicle, h) for h in _SURFACE_DEPTHS_M)
+    held = {a: tuple(min_level_flight_depth(vehicle, r * ucr, a) for r in _SURFACE_SPEED_RATIOS) for a in _SURFACE_ALPHAS}
+    trims = [surface_trim(vehicle, 0.5 * ucr, h) for h in _SURFACE_DEPTHS_M]
+    params = model_params(vehicle, FreeSurface())
+    suction_at_ucr, _ = suction(params.hull, 0.0, np.array(_SURFACE_DEPTHS_M), ucr, params.rho_suction)
+    return SurfaceFindings(critical=critical, held=held, suction_N=tuple(float(z) for z in suction_at_ucr),
+                           growth_per_s=tuple(float(max(t.eigenvalues.real)) for t in trims))
+
+
+def _surface_markdown(vehicle: Vehicle, found: SurfaceFindings) -> list[str]:
+    ucr = critical_speed(vehicle)
+    header = ("| depth [m] | suction at u_cr [N] | u_cr, eq. 3.9 + suction [m/s] | u_cr, linearised rhs [m/s] "
+              "| shift | growth, planes held, 0.5 u_cr [1/s] |")
+    lines = [header, "|---:|---:|---:|---:|---:|---:|"]
+    for c, z, g in zip(found.critical, found.suction_N, found.growth_per_s):
+        lines.append(f"| {c.depth_m:.2f} | {z:.3f} | {c.speed_mps:.4f} | {c.speed_numerical_mps:.4f} | "
+                     f"{100 * c.shift:+.2f} % | {g:+.4f} |")
+    held = [("| u / u_cr | " + " | ".join(f"alpha = {a:g}" for a in _SURFACE_ALPHAS) + " |"),
+            "|---:|" + "---|" * len(_SURFACE_ALPHAS)]
+    for k, r in enumerate(_SURFACE_SPEED_RATIOS):
+        cells = [f"{found.held[a][k].min_depth_m:.3f} m ({found.held[a][k].limited_by})" for a in _SURFACE_ALPHAS]
+        held.append(f"| {r:g} | " + " | ".join(cells) + " |")
+    return [
+        "## Beyond the thesis: level flight near the free surface",
+        "",
+        "Riedel (1993) Ch. VI's first recommendation: a more complete expression for the free surface's effect,",
+        "taken into the bifurcation analysis. The model (`subenv.dynamics.free_surface`) is the rigid-lid suction",
+        "of the hull's slender-body sources (Lagally's force in the flow of their images above the surface; the",
+        "zero-Froude limit of Havelock's free-surface source, as in McCreight 1970): up, proportional to u^2,",
+        "falling as h^-4 far away, with a nose-up moment that grows as the bow rises. It enters the one",
+        "right-hand side, so the critical speed (eq. 3.9 with the suction's pitch derivatives, checked by the",
+        "root of the linearised steady depth-rate gain), the trims and their stability follow from it.",
+        f"Deep-water u_cr = {ucr:.4f} m/s.",
+        "",
+        *lines,
+        "",
+        "With the planes held, level flight near the surface is unstable in depth: the suction weakens with",
+        "depth, so a boat pushed down keeps sinking and one pushed up keeps rising (the growth rate above).",
+        "The shallowest depth at which level flight is held with the planes within 0.4 rad (the trim followed",
+        "up from deep water; `planes`: the plane limit; `no trim`: the trim meets another in a fold and",
+        "vanishes; `broaching`: held up to the hull radius):",
+        "",
+        *held,
+        "",
+    ]
+
+
+def _surface_figure(fig: Any, vehicle: Vehicle, found: SurfaceFindings) -> str:
+    ucr = critical_speed(vehicle)
+    left, right = fig.subplots(1, 2)
+    depths = np.geomspace(0.27, 3.0, 120)
+    closed = [surface_critical_speed(vehicle, h).speed_mps / ucr for h in depths]
+    left.plot(closed, depths, lw=1.2, label="eq. 3.9 with the suction's\npitch derivatives")
+    left.plot([c.speed_numerical_mps / ucr for c in found.critical], [c.depth_m for c in found.critical], "o", ms=4,
+              label="root of the linearised\nsteady depth-rate gain")
+    left.set(xlabel="u_cr(depth) / u_cr(deep)", ylabel="depth of midship [m]", ylim=(3.0, 0.0))
+    left.legend(fontsize="small", loc="lower left")
+    markers = {"planes": "o", "no trim": "x", "broaching": "^"}
+    for k, a in enumerate(_SURFACE_ALPHAS):
+        rows = found.held[a]
+        right.plot(_SURFACE_SPEED_RATIOS, [r.min_depth_m for r in rows], "-", color=f"C{k}", lw=1,
+                   label=f"alpha = {a:g}")
+        for why, marker in markers.items():
+            pts = [(x, r.min_depth_m) for x, r in zip(_SURFACE_SPEED_RATIOS, rows) if r.limited_by == why]
+            if pts:
+                right.plot(*zip(*pts), marker, color=f"C{k}", ms=5)
+    for why, marker in markers.items():
+        right.plot([], [], marker, color="0.3", label=why)
+    right.axhspan(*_PERISCOPE_DEPTHS_M, color="0.85", label="PeriscopeDepth's\nordered depths")
+    both = critical_speed(vehicle, 1.0) / ucr
+    for k, x in enumerate((1.0, both)):
+        right.axvline(x, color=f"C{k}", ls=":", lw=1)
+    right.set(xlabel="u / u_cr (deep water, alpha = 0)", ylabel="shallowest depth held [m]",
+              ylim=(2.0, 0.0), xlim=(0.25, 2.05))
+    right.legend(fontsize="small", loc="lower right")
+    worst = max((r for r in found.held[0.0] if r.speed_mps < ucr), key=lambda r: r.min_depth_m)
+    shift = next(c for c in found.critical if c.depth_m == 1.0).shift
+    return (f"Left: the critical speed falls towards the surface ({100 * shift:+.1f} % at 1 m, "
+            f"{100 * found.critical[0].shift:+.0f} % at {found.critical[0].depth_m:g} m), the two ways agreeing. "
+            "Right (dotted: each allocation's deep-water u_cr): "
+            f"just below each allocation's critical speed level flight cannot be held near the surface: its "
+            f"trim vanishes in a fold (stern planes alone, at {worst.speed_mps / ucr:.2f} u_cr not above "
+            f"{worst.min_depth_m:.2f} m, deeper than PeriscopeDepth's ordered depths). With both pairs (alpha = 1, "
+            f"u_cr = {both:.2f} u_cr(alpha = 0)) the band moves up in speed and shallower.")
+
+
 # --- figures ----------------------------------------------------------------------------------
 
 def _fn_axis(vehicle: Vehicle, fn: np.ndarray) -> np.ndarray:
@@ -325,6 +445,8 @@ _TITLES: Final = {
     "fig5-7": "Saturation cusps with drag and excess buoyancy (supplementary; Riedel 1993, Fig. 5-7)",
     "hopf": "Planes held at zero: growth of the pitch oscillation and amplitude of the cycles against speed\n"
             "(the Hopf bifurcation Riedel 1993 Ch. VI asks for)",
+    "free_surface": "Near the free surface: the critical speed against depth, and the shallowest depth at which\n"
+                    "level flight is held within the plane limit against speed (Riedel 1993 Ch. VI's first recommendation)",
 }
 """Each figure's title: what it shows, then the thesis figure it reproduces."""
 
@@ -611,20 +733,21 @@ def write_report(out_dir: str | Path, vehicle: Vehicle | None = None, overwrite:
     with atomic_output_dir(out_dir, overwrite=overwrite, kind=REPORT_KIND) as folder:
         rows = reproduce_numbers(vehicle)
         captions = []
-        for name, draw in _figures(vehicle).items():
-            fig = plt.figure(figsize=(8.5, 5) if name != "fig3-5_3-7" else (8.5, 8), layout="constrained")
+        found = hopf_findings(vehicle)
+        surface = surface_findings(vehicle)
+        figures = {
+            **_figures(vehicle),
+            "hopf": lambda fig: _hopf_figure(fig, vehicle, found),
+            "free_surface": lambda fig: _surface_figure(fig, vehicle, surface),
+        }
+        for name, draw in figures.items():
+            tall = name in ("fig3-5_3-7", "hopf")
+            fig = plt.figure(figsize=(8.5, 8 if name == "fig3-5_3-7" else 7) if tall else (8.5, 5), layout="constrained")
             caption = draw(fig)
             fig.suptitle(_TITLES[name], fontsize="medium")
             fig.savefig(folder / f"{name}.png", dpi=100)
             plt.close(fig)
             captions.append((name, caption))
-        found = hopf_findings(vehicle)
-        fig = plt.figure(figsize=(8.5, 7), layout="constrained")
-        caption = _hopf_figure(fig, vehicle, found)
-        fig.suptitle(_TITLES["hopf"], fontsize="medium")
-        fig.savefig(folder / "hopf.png", dpi=100)
-        plt.close(fig)
-        captions.append(("hopf", caption))
         elapsed = time.perf_counter() - started
         text = [
             "# Reproduction of Riedel (1993) with subenv",
@@ -642,6 +765,7 @@ def write_report(out_dir: str | Path, vehicle: Vehicle | None = None, overwrite:
             "to the dimensionally consistent form, which agrees with the exact folds of eq. 4.3.",
             "",
             *_hopf_markdown(vehicle, found),
+            *_surface_markdown(vehicle, surface),
             "## Figures",
             "",
         ]

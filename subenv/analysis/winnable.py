@@ -25,10 +25,14 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from subenv import _validation as check
+from subenv.dynamics.free_surface import NO_FREE_SURFACE, FreeSurface
 from subenv.dynamics.model import derivatives, model_params
+from subenv.dynamics.waves import SeaState
 from subenv.vehicles.vehicle import Vehicle
 
 __all__ = ["DepthHoldingTrim", "depth_holding_trim", "winnable"]
+
+_Surface = tuple[float, FreeSurface, "SeaState | None"]  # depth [m], the suction, a sea
 
 _PITCH_POINTS: Final = 2001
 """Pitch grid over (-max_pitch, max_pitch) on which the least plane angle is looked for, then refined: the
@@ -61,20 +65,29 @@ class DepthHoldingTrim:
     plane_margin_rad: float
 
 
-def _planes(vehicle: Vehicle, speed_mps: float, pitch_rad: np.ndarray) -> np.ndarray:
-    """(stern, bow) that zero w_dot and q_dot at (theta, u tan(theta), 0): shape (..., 2)."""
-    params = model_params(vehicle)
+def _planes(vehicle: Vehicle, speed_mps: float, pitch_rad: np.ndarray, surface: _Surface) -> np.ndarray:
+    """(stern, bow) that zero w_dot and q_dot at (theta, u tan(theta), 0, depth): shape (..., 2)."""
+    depth, free_surface, sea_state = surface
+    params = model_params(vehicle, free_surface)
+    force, moment = 0.0, 0.0
+    if sea_state is not None:  # the waves' mean suction (their first order averages out)
+        force, moment = sea_state.mean_suction(depth, vehicle.hull.x_m, vehicle.hull.breadth_m,
+                                               vehicle.water_density_kg_m3, vehicle.gravity_m_s2)
     theta = np.asarray(pitch_rad, dtype=float)
-    state = np.stack([theta, speed_mps * np.tan(theta), np.zeros_like(theta), np.zeros_like(theta)], axis=-1)
+    state = np.stack([theta, speed_mps * np.tan(theta), np.zeros_like(theta), np.full_like(theta, depth)], axis=-1)
     # The balances are affine in the planes: the accelerations at zero planes and per unit of each.
-    f0, fs, fb = (derivatives(state, speed_mps, s, b, params)[..., 1:3] for s, b in ((0, 0), (1, 0), (0, 1)))
+    f0, fs, fb = (derivatives(state, speed_mps, s, b, params, force, moment)[..., 1:3]
+                  for s, b in ((0, 0), (1, 0), (0, 1)))
     G = np.stack([fs - f0, fb - f0], axis=-1)  # (..., 2, 2): d(w_dot, q_dot) / d(stern, bow)
     return np.linalg.solve(G, -f0[..., None])[..., 0]
 
 
-def depth_holding_trim(vehicle: Vehicle, speed_mps: float, max_pitch_rad: float) -> DepthHoldingTrim:
+def depth_holding_trim(vehicle: Vehicle, speed_mps: float, max_pitch_rad: float, depth_m: float = 0.0,
+                       free_surface: FreeSurface = NO_FREE_SURFACE,
+                       sea_state: SeaState | None = None) -> DepthHoldingTrim:
     """The depth-holding trim of ``vehicle`` (its loading) at ``speed_mps`` that needs the least plane angle,
-    with both plane pairs free and the pitch inside ``max_pitch_rad``.
+    with both plane pairs free and the pitch inside ``max_pitch_rad``: in deep water, or at ``depth_m``
+    below the free surface (its suction, :mod:`subenv.dynamics.free_surface`, and a sea's mean suction).
 
     Parameters
     ----------
@@ -84,6 +97,12 @@ def depth_holding_trim(vehicle: Vehicle, speed_mps: float, max_pitch_rad: float)
         Forward speed [m/s], > 0.
     max_pitch_rad : float
         Pitch limit [rad] in (0, pi/2): the environment's ``max_pitch_rad`` (a trim beyond it ends the episode).
+    depth_m : float
+        Depth [m] of the trim; it matters only with ``free_surface`` or ``sea_state``.
+    free_surface : FreeSurface
+        The surface's suction (default: deep water).
+    sea_state : SeaState, optional
+        A sea whose mean suction is added.
     """
     check.require("speed_mps", speed_mps, check.is_number(speed_mps) and math.isfinite(speed_mps) and speed_mps > 0,
                   "a finite number > 0")
@@ -92,8 +111,10 @@ def depth_holding_trim(vehicle: Vehicle, speed_mps: float, max_pitch_rad: float)
     u, limit = float(speed_mps), vehicle.planes.limit_rad
     grid = np.linspace(-max_pitch_rad, max_pitch_rad, _PITCH_POINTS)[1:-1]
 
+    surface = (float(depth_m), free_surface, sea_state)
+
     def need(theta: float | np.ndarray) -> np.ndarray:
-        return np.max(np.abs(_planes(vehicle, u, np.asarray(theta))), axis=-1)
+        return np.max(np.abs(_planes(vehicle, u, np.asarray(theta), surface)), axis=-1)
 
     needs = need(grid)
     i = int(np.argmin(needs))
@@ -101,12 +122,15 @@ def depth_holding_trim(vehicle: Vehicle, speed_mps: float, max_pitch_rad: float)
     best = minimize_scalar(lambda t: float(need(t)), bounds=(lo, hi), method="bounded",
                            options={"xatol": 1e-12})
     theta = float(best.x) if best.fun <= needs[i] else float(grid[i])
-    stern, bow = (float(v) for v in _planes(vehicle, u, np.asarray(theta)))
+    stern, bow = (float(v) for v in _planes(vehicle, u, np.asarray(theta), surface))
     margin = limit - max(abs(stern), abs(bow))
     return DepthHoldingTrim(u, margin >= 0, theta, u * math.tan(theta), stern, bow, margin)
 
 
-def winnable(vehicle: Vehicle, speeds_mps: Iterable[float], max_pitch_rad: float) -> bool:
+def winnable(vehicle: Vehicle, speeds_mps: Iterable[float], max_pitch_rad: float, depth_m: float = 0.0,
+             free_surface: FreeSurface = NO_FREE_SURFACE, sea_state: SeaState | None = None) -> bool:
     """Whether a depth-holding trim within the plane limits exists at every speed of ``speeds_mps`` (for an
-    episode: the speed it holds at the end, the last knot of its profile; see :func:`depth_holding_trim`)."""
-    return all(depth_holding_trim(vehicle, u, max_pitch_rad).exists for u in speeds_mps)
+    episode: the speed it holds at the end, the last knot of its profile, at its ordered depth; see
+    :func:`depth_holding_trim`)."""
+    return all(depth_holding_trim(vehicle, u, max_pitch_rad, depth_m, free_surface, sea_state).exists
+               for u in speeds_mps)

@@ -46,8 +46,8 @@ __all__ = ["KERNEL_OPTIONS", "KERNEL_SOURCES", "inline_kernel", "kernel", "paral
 KERNEL_OPTIONS: Final[dict[str, Any]] = {"cache": True, "nogil": True, "error_model": "numpy"}
 
 _PACKAGE = Path(__file__).resolve().parents[1]
-KERNEL_SOURCES: Final = ("dynamics/_jit.py", "dynamics/hull.py", "dynamics/model.py", "dynamics/integrate.py",
-                         "dynamics/sincos.py", "envs/transition.py")
+KERNEL_SOURCES: Final = ("dynamics/_jit.py", "dynamics/hull.py", "dynamics/free_surface.py", "dynamics/waves.py",
+                         "dynamics/model.py", "dynamics/integrate.py", "dynamics/sincos.py", "envs/transition.py")
 """The files the compiled kernels are written in (relative to the package): any edit recompiles them all."""
 _STAMP_PREFIX: Final = "subenv-kernels."
 

@@ -22,13 +22,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Final
 
 import numpy as np
 
 from subenv._typing import FloatArray
 from subenv.dynamics._jit import inline_kernel, kernel, rows
+from subenv.dynamics.free_surface import SOURCE_ROWS, source_rows
 
 __all__ = [
+    "SOURCE_ROW",
     "HullTable",
     "crossflow_from_moments",
     "crossflow_integrals",
@@ -38,6 +41,10 @@ __all__ = [
     "hull_segment",
     "moments_on_segment",
 ]
+
+
+SOURCE_ROW: Final = 7
+"""First row of the hull's sources in :attr:`HullTable.packed` (:func:`subenv.dynamics.free_surface.source_rows`)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -52,6 +59,7 @@ class HullTable:
     c1: FloatArray         # [-]
     offset: FloatArray     # shape (4, n_segments): C_k(s) = offset[k, i] + P_k,i(s)
     total: FloatArray      # shape (4,): C_k at the nose, i.e. int x^k b dx over the hull
+    breadth: FloatArray    # b at the breakpoints [m]
 
     @classmethod
     def from_offsets(cls, x_m: tuple[float, ...], breadth_m: tuple[float, ...]) -> HullTable:
@@ -67,22 +75,24 @@ class HullTable:
         p_lo = c0 * x0 ** (k + 1) / (k + 1) + c1 * x0 ** (k + 2) / (k + 2)
         p_hi = c0 * x1 ** (k + 1) / (k + 1) + c1 * x1 ** (k + 2) / (k + 2)
         prefix = np.concatenate([np.zeros((4, 1)), np.cumsum(p_hi - p_lo, axis=1)], axis=1)
-        return cls(x=x, c0=c0, c1=c1, offset=prefix[:, :-1] - p_lo, total=prefix[:, -1].copy())
+        return cls(x=x, c0=c0, c1=c1, offset=prefix[:, :-1] - p_lo, total=prefix[:, -1].copy(), breadth=b)
 
     @cached_property
     def packed(self) -> FloatArray:
-        """The table as one C-contiguous (7, n_stations) array, the form the kernels take.
+        """The table as one C-contiguous (10, n_stations) array, the form the kernels take.
 
         Row 0 is ``x``; rows 1 and 2 are ``c0`` and ``c1``; rows 3-6 are ``offset[k]`` with
-        ``total[k]`` in the last column.
+        ``total[k]`` in the last column; rows 7-9 (:data:`SOURCE_ROW` on) the hull's sources for the
+        free-surface suction (:func:`subenv.dynamics.free_surface.source_rows`).
         """
         n = self.x.size
-        packed = np.zeros((7, n))
+        packed = np.zeros((SOURCE_ROW + SOURCE_ROWS, n))
         packed[0] = self.x
         packed[1, :-1] = self.c0
         packed[2, :-1] = self.c1
-        packed[3:, :-1] = self.offset
-        packed[3:, -1] = self.total
+        packed[3:SOURCE_ROW, :-1] = self.offset
+        packed[3:SOURCE_ROW, -1] = self.total
+        packed[SOURCE_ROW:] = source_rows(self.x, self.breadth)
         packed.flags.writeable = False
         return packed
 

@@ -20,15 +20,26 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Final
 
+import numpy as np
+
 from subenv._typing import FloatArray
 from subenv.dynamics._jit import inline_kernel
-from subenv.dynamics.hull import crossflow_from_moments, crossflow_root, hull_segment, moments_on_segment
+from subenv.dynamics.free_surface import suction_point
+from subenv.dynamics.hull import (
+    SOURCE_ROW,
+    crossflow_from_moments,
+    crossflow_root,
+    hull_segment,
+    moments_on_segment,
+)
 from subenv.dynamics.model import PARAM_FIELDS, rhs_given_drag
+from subenv.dynamics.waves import MAX_WAVES, WAVE_FIELDS, wave_force_point
 
 __all__ = [
     "CONTROL_PERIOD_S",
     "LANES",
     "LANE_ROWS",
+    "NO_WAVES",
     "SUBSTEPS",
     "control_period_lanes",
     "rk4",
@@ -70,11 +81,15 @@ LANES: Final = 64
 LANE_PITCH, LANE_HEAVE, LANE_PITCH_RATE, LANE_DEPTH = 0, 1, 2, 3  # the state: in, and out after the period
 LANE_T0, LANE_SPEED0, LANE_SPEED_SLOPE = 4, 5, 6  # the period starts at t0; u = speed0 + slope (t - t0)
 LANE_STERN, LANE_BOW, LANE_FORCE = 7, 8, 9
-LANE_PARAMS: Final = 10  # the PARAM_FIELDS, one row each
+LANE_DISTANCE, LANE_WAVES = 10, 11  # distance travelled at t0 [m]; the waves of the lane's sea (a count)
+LANE_PARAMS: Final = 12  # the PARAM_FIELDS, one row each
 # ... and the integrator's working rows:
-_STAGE: Final = LANE_PARAMS + len(PARAM_FIELDS)  # (theta, w, q) at which a stage evaluates
-_SPEED: Final = _STAGE + 3
-_ROOT: Final = _SPEED + 1  # the root of w_loc, clipped to the hull
+_STAGE: Final = LANE_PARAMS + len(PARAM_FIELDS)  # (theta, w, q, Z) at which a stage evaluates
+_SPEED: Final = _STAGE + 4
+_TIME: Final = _SPEED + 1  # the stage's time, and the distance travelled then
+_DISTANCE: Final = _TIME + 1
+_FREE_SURFACE: Final = _DISTANCE + 1  # heave force and pitch moment of the free surface (suction and waves)
+_ROOT: Final = _FREE_SURFACE + 2  # the root of w_loc, clipped to the hull
 _SEGMENT: Final = _ROOT + 1  # its hull segment (a count, as a float)
 _SEGMENT_COEFFICIENTS: Final = _SEGMENT + 1  # that segment's column of HullTable.packed, rows 1-6
 _SLOPE_OUT: Final = _SEGMENT_COEFFICIENTS + 6  # the right-hand side's result, 4 rows
@@ -82,14 +97,21 @@ _SLOPES: Final = _SLOPE_OUT + 4  # k1 .. k4, 4 rows each
 LANE_ROWS: Final = _SLOPES + 16
 """Rows of a block: a block is a float64 array of ``LANE_ROWS * LANES`` (row r, column j at ``r * LANES + j``)."""
 
+NO_WAVES: Final = np.zeros((1, WAVE_FIELDS, MAX_WAVES))
+"""The ``waves`` of :func:`control_period_lanes` for blocks whose lanes have no sea (every ``LANE_WAVES`` 0)."""
+NO_WAVES.flags.writeable = False
+_RHO_SUCTION: Final = PARAM_FIELDS.index("rho_suction")
+
 
 @inline_kernel
 def set_lane(block: FloatArray, j: int, theta: float, w: float, q: float, depth: float, t0: float, speed0: float,
-             speed_slope: float, stern: float, bow: float, force: float, prm: FloatArray) -> None:
+             speed_slope: float, stern: float, bow: float, force: float, prm: FloatArray, distance: float = 0.0,
+             n_waves: int = 0) -> None:
     """Put one state's inputs of :func:`control_period_lanes` into column ``j`` of a block: the state
     (theta, w, q, depth), the period's start ``t0`` [s] and speed ``speed0 + speed_slope (t - t0)``
-    [m/s], the planes and heave ``force`` held over the period, and the packed model parameters
-    ``prm`` (:func:`subenv.dynamics.pack_params`)."""
+    [m/s], the planes and heave ``force`` held over the period, the packed model parameters
+    ``prm`` (:func:`subenv.dynamics.pack_params`), and for a lane in a sea the distance travelled at
+    ``t0`` [m] and the number of its waves (in row ``j`` of :func:`control_period_lanes`'s ``waves``)."""
     L = LANES
     block[LANE_PITCH * L + j] = theta
     block[LANE_HEAVE * L + j] = w
@@ -101,13 +123,15 @@ def set_lane(block: FloatArray, j: int, theta: float, w: float, q: float, depth:
     block[LANE_STERN * L + j] = stern
     block[LANE_BOW * L + j] = bow
     block[LANE_FORCE * L + j] = force
+    block[LANE_DISTANCE * L + j] = distance
+    block[LANE_WAVES * L + j] = n_waves
     for r in range(len(PARAM_FIELDS)):
         block[(LANE_PARAMS + r) * L + j] = prm[r]
 
 
 @inline_kernel
-def _rhs_lanes(block: FloatArray, n: int, hull: FloatArray) -> None:
-    """rhs_point of columns 0 .. n-1, at the (theta, w, q) in rows _STAGE .. _STAGE + 2 with the speed
+def _rhs_lanes(block: FloatArray, n: int, hull: FloatArray, waves: FloatArray) -> None:
+    """rhs_point of columns 0 .. n-1, at the (theta, w, q, Z) in rows _STAGE .. _STAGE + 3 with the speed
     in row _SPEED, into rows _SLOPE_OUT .. _SLOPE_OUT + 3.
 
     Each step is a loop over the columns with the same operations in every column, and every
@@ -117,7 +141,15 @@ def _rhs_lanes(block: FloatArray, n: int, hull: FloatArray) -> None:
     segment's coefficients are gathered from the hull table.
     """
     L = LANES
-    theta, w, q = _STAGE * L, (_STAGE + 1) * L, (_STAGE + 2) * L
+    theta, w, q, depth = _STAGE * L, (_STAGE + 1) * L, (_STAGE + 2) * L, (_STAGE + 3) * L
+    rho_suction = (LANE_PARAMS + _RHO_SUCTION) * L
+    for j in range(n):  # the free surface: exactly 0.0 for a lane in deep water without a sea
+        Z_fs, M_fs = suction_point(block[theta + j], block[depth + j], block[_SPEED * L + j], block[rho_suction + j],
+                                   hull, SOURCE_ROW)
+        Z_w, M_w = wave_force_point(block[_TIME * L + j], block[_DISTANCE * L + j], block[depth + j],
+                                    waves[min(j, waves.shape[0] - 1)], int(block[LANE_WAVES * L + j]))
+        block[_FREE_SURFACE * L + j] = Z_fs + Z_w
+        block[(_FREE_SURFACE + 1) * L + j] = M_fs + M_w
     for j in range(n):
         root = crossflow_root(block[w + j], block[q + j], hull)
         block[_ROOT * L + j] = root
@@ -134,7 +166,8 @@ def _rhs_lanes(block: FloatArray, n: int, hull: FloatArray) -> None:
                                             block[c + 5 * L + j])
         I0, I1 = crossflow_from_moments(w_j, q_j, C0, C1, C2, C3, hull)
         d0, d1, d2, d3 = rhs_given_drag(block[theta + j], w_j, q_j, block[_SPEED * L + j], block[LANE_STERN * L + j],
-                                        block[LANE_BOW * L + j], block[LANE_FORCE * L + j], 0.0, I0, I1, block,
+                                        block[LANE_BOW * L + j], block[LANE_FORCE * L + j], 0.0, I0, I1,
+                                        block[_FREE_SURFACE * L + j], block[(_FREE_SURFACE + 1) * L + j], block,
                                         LANE_PARAMS * L + j, L)
         block[_SLOPE_OUT * L + j] = d0
         block[(_SLOPE_OUT + 1) * L + j] = d1
@@ -143,12 +176,15 @@ def _rhs_lanes(block: FloatArray, n: int, hull: FloatArray) -> None:
 
 
 @inline_kernel
-def control_period_lanes(block: FloatArray, n: int, dt: float, substeps: int, hull: FloatArray) -> None:
+def control_period_lanes(block: FloatArray, n: int, dt: float, substeps: int, hull: FloatArray,
+                         waves: FloatArray) -> None:
     """:func:`rk4` of :func:`~subenv.dynamics.rhs_point` over one control period ``dt`` with ``substeps``
     steps, for columns 0 .. n-1 (n <= :data:`LANES`) of ``block``, in place.
 
     ``block`` holds the inputs of each column in the ``LANE_*`` rows (:func:`set_lane`); the planes
-    and the heave force are held, the speed follows each column's ramp. Afterwards rows
+    and the heave force are held, the speed follows each column's ramp; ``waves`` (shape (LANES,
+    WAVE_FIELDS, MAX_WAVES), row j column j's sea: :meth:`subenv.dynamics.waves.SeaState.components`;
+    one row such as :data:`NO_WAVES` where no lane has a sea) adds a sea's force at every stage. Afterwards rows
     ``LANE_PITCH`` .. ``LANE_DEPTH`` hold the states at the end of the period: for each column the
     bits of ``rk4`` over :func:`~subenv.dynamics.derivatives`.
     """
@@ -166,13 +202,16 @@ def control_period_lanes(block: FloatArray, n: int, dt: float, substeps: int, hu
             for j in range(n):
                 t0 = block[LANE_T0 * L + j]
                 t = t0 + i * h
-                block[_SPEED * L + j] = block[LANE_SPEED0 * L + j] + block[LANE_SPEED_SLOPE * L + j] * (
-                    t - t0 if stage == 0 else t + offset - t0)
-            for r in range(3):
+                elapsed = t - t0 if stage == 0 else t + offset - t0
+                speed0, slope = block[LANE_SPEED0 * L + j], block[LANE_SPEED_SLOPE * L + j]
+                block[_SPEED * L + j] = speed0 + slope * elapsed
+                block[_TIME * L + j] = t0 + elapsed
+                block[_DISTANCE * L + j] = block[LANE_DISTANCE * L + j] + elapsed * (speed0 + 0.5 * slope * elapsed)
+            for r in range(4):
                 for j in range(n):
                     x = block[(LANE_PITCH + r) * L + j]
                     block[(_STAGE + r) * L + j] = x if stage == 0 else x + step * block[(previous + r) * L + j]
-            _rhs_lanes(block, n, hull)
+            _rhs_lanes(block, n, hull, waves)
             # Into k_stage here, not in _rhs_lanes: rows that depend on the stage would hide from the
             # compiler that they differ from the rows it reads, and it would not vectorize.
             for r in range(4):

@@ -20,7 +20,8 @@ import numpy as np
 
 from subenv._typing import ArrayLike, FloatArray
 from subenv.dynamics._jit import inline_kernel, kernel, rows
-from subenv.dynamics.hull import HullTable, crossflow_point
+from subenv.dynamics.free_surface import NO_FREE_SURFACE, FreeSurface, suction_point
+from subenv.dynamics.hull import SOURCE_ROW, HullTable, crossflow_point
 from subenv.dynamics.sincos import sincos_point
 from subenv.vehicles.vehicle import Vehicle
 
@@ -62,15 +63,21 @@ class ModelParams(NamedTuple):
     xGW_minus_xBB: ArrayLike  # x_G W - x_B B [N m]
     zGW_minus_zBB: ArrayLike  # z_G W - z_B B [N m]
     half_rho_CD: ArrayLike    # (rho/2) C_D [kg/m^3]
+    rho_suction: ArrayLike    # rho times FreeSurface.suction_factor [kg/m^3]; 0: deep water
     hull: HullTable
 
 
 PARAM_FIELDS = ModelParams._fields[:-1]
 """The numeric fields of :class:`ModelParams`, in the order of :func:`pack_params` (all but ``hull``)."""
+_RHO_SUCTION = PARAM_FIELDS.index("rho_suction")
 
 
-def model_params(vehicle: Vehicle) -> ModelParams:
-    """Reduce a :class:`~subenv.vehicles.Vehicle` to the parameters of :func:`derivatives`."""
+def model_params(vehicle: Vehicle, free_surface: FreeSurface = NO_FREE_SURFACE) -> ModelParams:
+    """Reduce a :class:`~subenv.vehicles.Vehicle` to the parameters of :func:`derivatives`.
+
+    ``free_surface`` adds the free surface's suction (:mod:`subenv.dynamics.free_surface`); the
+    default is deep water, Riedel (1993)'s model.
+    """
     c = vehicle.coefficients
     m = vehicle.mass_kg
     # Added-mass matrix of eqs 2.38-2.39 (Riedel 1993), left-hand side for (wdot, qdot).
@@ -98,6 +105,7 @@ def model_params(vehicle: Vehicle) -> ModelParams:
         xGW_minus_xBB=vehicle.x_G_m * W - vehicle.x_B_m * B,
         zGW_minus_zBB=vehicle.z_G_m * W - vehicle.z_B_m * B,
         half_rho_CD=0.5 * vehicle.water_density_kg_m3 * vehicle.crossflow_drag,
+        rho_suction=vehicle.water_density_kg_m3 * free_surface.suction_factor,
         hull=_hull_table(vehicle),
     )
 
@@ -150,6 +158,7 @@ def rhs_point(
     theta: float,
     w: float,
     q: float,
+    depth: float,
     u: float,
     stern: float,
     bow: float,
@@ -161,10 +170,12 @@ def rhs_point(
     """d/dt (theta, w, q, Z) for one state (Riedel 1993 eqs 2.38-2.43); see :func:`derivatives`.
 
     ``prm`` holds the fields of :class:`ModelParams` in :data:`PARAM_FIELDS` order
-    (:func:`pack_params`), ``hull`` is :attr:`HullTable.packed`. Depth does not enter.
+    (:func:`pack_params`), ``hull`` is :attr:`HullTable.packed`. Depth enters only through the free
+    surface's suction (:func:`~subenv.dynamics.free_surface.suction_point`; none in deep water).
     """
     I0, I1 = crossflow_point(w, q, hull)
-    return rhs_given_drag(theta, w, q, u, stern, bow, force, moment, I0, I1, prm, 0, 1)
+    Z_fs, M_fs = suction_point(theta, depth, u, prm[_RHO_SUCTION], hull, SOURCE_ROW)
+    return rhs_given_drag(theta, w, q, u, stern, bow, force, moment, I0, I1, Z_fs, M_fs, prm, 0, 1)
 
 
 @inline_kernel
@@ -179,11 +190,15 @@ def rhs_given_drag(
     moment: float,
     I0: float,
     I1: float,
+    Z_fs: float,
+    M_fs: float,
     prm: FloatArray,
     at: int,
     stride: int,
 ) -> tuple[float, float, float, float]:
-    """:func:`rhs_point` given the hull's cross-flow integrals ``I0``, ``I1`` (:func:`crossflow_point`).
+    """:func:`rhs_point` given the hull's cross-flow integrals ``I0``, ``I1`` (:func:`crossflow_point`)
+    and the free surface's suction ``Z_fs`` [N], ``M_fs`` [N m]
+    (:func:`~subenv.dynamics.free_surface.suction_point`, exactly 0.0 in deep water).
 
     Field k of :data:`PARAM_FIELDS` is ``prm[at + k * stride]``: a packed parameter row has
     stride 1; the block integrator (:func:`subenv.dynamics.integrate.control_period_lanes`) keeps
@@ -206,6 +221,7 @@ def rhs_given_drag(
         + uu * (Z_delta_s * stern + Z_delta_b * bow)
         - half_rho_CD * I0
         + force
+        + Z_fs  # free-surface suction (subenv.dynamics.free_surface)
     )
     pitch = (
         -m_zG * w * q
@@ -216,6 +232,7 @@ def rhs_given_drag(
         + uu * (M_delta_s * stern + M_delta_b * bow)
         + half_rho_CD * I1
         + moment
+        + M_fs
     )
     return (
         q,  # Riedel (1993) eq. 2.40
@@ -261,16 +278,18 @@ def derivatives(
     ::
 
         (m - Z_wdot) wdot - (Z_qdot + m x_G) qdot = (m + Z_q) u q + m z_G q^2 + Z_w u w
-            + (W - B) cos(theta) + u^2 (Z_ds delta_s + Z_db delta_b) + Z_drag
+            + (W - B) cos(theta) + u^2 (Z_ds delta_s + Z_db delta_b) + Z_drag + force + Z_fs
         -(M_wdot + m x_G) wdot + (I_y - M_qdot) qdot = -m z_G w q + (M_q - m x_G) u q + M_w u w
             - (x_G W - x_B B) cos(theta) - (z_G W - z_B B) sin(theta)
-            + u^2 (M_ds delta_s + M_db delta_b) + M_drag
+            + u^2 (M_ds delta_s + M_db delta_b) + M_drag + moment + M_fs
         theta_dot = q
         Z_dot = -u sin(theta) + w cos(theta)
 
     with the hull cross-flow drag Z_drag = -(rho/2) C_D int b w_loc|w_loc| dx and
     M_drag = +(rho/2) C_D int x b w_loc|w_loc| dx, w_loc = w - x q (see
-    :func:`subenv.dynamics.hull.crossflow_integrals` for the sign of the moment).
+    :func:`subenv.dynamics.hull.crossflow_integrals` for the sign of the moment), and the free
+    surface's suction Z_fs(Z, theta, u), M_fs(Z, theta, u) (:mod:`subenv.dynamics.free_surface`; zero
+    in deep water, ``params.rho_suction`` 0), the one place where the depth Z enters.
 
     This is :func:`rhs_point` broadcast over the batch (a compiled loop over its rows); the environments
     call :func:`rhs_point` itself.
@@ -292,5 +311,5 @@ def _derivatives_rows(state: FloatArray, u: FloatArray, stern: FloatArray, bow: 
                       moment: FloatArray, prm: FloatArray, hull: FloatArray, out: FloatArray) -> None:
     # A loop over rows, not a generalized ufunc (see subenv.dynamics._jit).
     for i in range(state.shape[0]):
-        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = rhs_point(state[i, 0], state[i, 1], state[i, 2], u[i], stern[i],
-                                                               bow[i], force[i], moment[i], prm[i], hull)
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = rhs_point(state[i, 0], state[i, 1], state[i, 2], state[i, 3], u[i],
+                                                               stern[i], bow[i], force[i], moment[i], prm[i], hull)

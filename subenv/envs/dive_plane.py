@@ -48,6 +48,14 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
     oscillating. So at the Nominal design speed (1.524 m/s) zero action ends on ``"pitch_limit"``
     within a minute: the planes must act.
 
+    Near the surface (``PeriscopeDepth-v1``, ``PeriscopeDepthWaves``) the free surface pulls the hull
+    up and pitches it (the rigid-lid suction of the hull's slender-body sources, proportional to u^2,
+    falling as h^-4 far from the surface: :mod:`subenv.dynamics.free_surface`), and in
+    ``PeriscopeDepthWaves`` a seeded JONSWAP head sea adds an oscillating heave force and pitch
+    moment and a mean suction (:mod:`subenv.dynamics.waves`). With the planes held, level flight
+    there is unstable in depth (the suction weakens with depth); just below u_cr the trim of level
+    flight is lost near the surface (:func:`subenv.analysis.free_surface.min_level_flight_depth`).
+
     ## Action Space
 
     ``Box(-1, 1, (1,), float32)`` with ``control="dual"``: the command delta = a * 0.4 rad drives
@@ -158,6 +166,14 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
       for every step, kept every seeded rollout bit for bit. The shipped scenarios are Froude-scaled
       on vehicles of another length than SUBOFF's since 2026-12; on SUBOFF, and so for every id's
       defaults, the seeded rollouts are unchanged.)
+    - ``PeriscopeDepth-v1`` (2026-12): the surface's suction is the free-surface model
+      (:mod:`subenv.dynamics.free_surface`), a force and moment that depend on depth, pitch and
+      speed, instead of v0's constant excess buoyancy (0.02-0.1 % of the weight); the boat is
+      neutrally buoyant. Same draws otherwise (speeds 0.7-2 u_cr, ordered depth 1.0-1.2 m).
+      ``PeriscopeDepth-v0`` stays registered with its seeded episodes (the shipped agents' model
+      cards report it); ``Randomized`` and ``Mixed`` draw from it, unchanged.
+    - ``PeriscopeDepthWaves-v0`` (2026-12): new, ``PeriscopeDepth-v1`` in a seeded head sea.
+      Every other id's seeded rollouts are unchanged, bit for bit.
     """
 
 

@@ -21,7 +21,9 @@ import numpy as np
 
 from subenv import _validation as check
 from subenv.analysis.critical import critical_speed
+from subenv.dynamics.free_surface import NO_FREE_SURFACE
 from subenv.dynamics.model import model_params, pack_params
+from subenv.dynamics.waves import MAX_WAVES, WAVE_FIELDS
 from subenv.envs import transition as tr
 from subenv.envs.config import (
     MAX_DEPTH_COMMAND_M,
@@ -58,14 +60,15 @@ class Loadings:
     def __init__(self, config: DivePlaneConfig) -> None:
         self.base = config.base_vehicle
         self.alpha = config.alpha
-        self._found: dict[tuple[float, float, float, float | None], Loading] = {}
+        self._found: dict[tuple[float, float, float, float | None, float], Loading] = {}
 
     def of(self, draw: EpisodeConfig) -> Loading:
         """The loading of an episode's draw."""
         base = self.base
         z_GB = draw.z_GB_m if draw.z_GB_m is not None else base.z_GB_m
+        free_surface = draw.free_surface or NO_FREE_SURFACE
         key = (z_GB * draw.z_GB_scale, base.x_GB_m + draw.x_GB_m, base.excess_buoyancy_N + draw.excess_buoyancy_N,
-               draw.crossflow_drag)
+               draw.crossflow_drag, free_surface.suction_factor)
         found = self._found.get(key)
         if found is None:
             vehicle = base.variant(z_GB_m=key[0], x_GB_m=key[1], excess_buoyancy_N=key[2], crossflow_drag=key[3])
@@ -76,7 +79,7 @@ class Loadings:
             except ValueError:
                 ucr = math.nan  # z_GB <= 0: no critical speed exists for this loading
             z = vehicle.z_GB_m
-            params = pack_params(model_params(vehicle))
+            params = pack_params(model_params(vehicle, free_surface))
             params.flags.writeable = False
             found = self._found[key] = Loading(vehicle, params, ucr,
                                                math.sqrt(vehicle.gravity_m_s2 * z) if z > 0 else math.nan)
@@ -155,17 +158,37 @@ def episode_fields(config: DivePlaneConfig, draw: EpisodeConfig, loading: Loadin
     knot_time, knot_speed = np.zeros(shape), np.zeros(shape)
     for k, (t, u) in enumerate(knots):
         knot_time[..., k], knot_speed[..., k] = t, u
+    n_waves, waves = _sea(draw, loading.vehicle, shape)
     episode = {
         "params": loading.params, "n_knots": len(knots), "knot_time_s": knot_time, "knot_speed_mps": knot_speed,
         "depth_command_m": command, "disturbance_std_N": draw.disturbance_std_N, "sensor_noise": draw.sensor_noise,
         "duration_s": draw.duration_s, "critical_speed_mps": ucr, "froude_scale_mps": loading.froude_scale_mps,
+        "n_waves": n_waves, "waves": waves,
     }
     state = {
         "pitch_rad": pitch, "heave_mps": heave, "pitch_rate_radps": rate, "depth_m": depth,
         "stern_plane_rad": 0.0, "bow_plane_rad": 0.0, "time_s": 0.0, "steps": 0, "disturbance_N": disturbance,
-        "speed_mps": math.nan,
+        "speed_mps": math.nan, "distance_m": 0.0,
     }
     return episode, state
+
+
+def _sea(draw: EpisodeConfig, vehicle: Vehicle, knot_shape: Any) -> tuple[int, np.ndarray]:
+    """The episode's sea as its record holds it (:meth:`subenv.dynamics.waves.SeaState.components`),
+    one per episode of a batch: its number of waves (0: calm) and their numbers."""
+    sea = draw.sea_state
+    batch = knot_shape[0] if isinstance(knot_shape, tuple) else None
+    shape = (WAVE_FIELDS, MAX_WAVES) if batch is None else (batch, WAVE_FIELDS, MAX_WAVES)
+    if sea is None:
+        return 0, np.zeros(shape)
+    units = np.asarray(draw.wave_uniforms, dtype=float)  # (2 n,) or (2 n, batch)
+    jitter, phase = units[: sea.waves], 2.0 * math.pi * units[sea.waves:]
+    hull, rho, g = vehicle.hull, vehicle.water_density_kg_m3, vehicle.gravity_m_s2
+    if batch is None:
+        return sea.waves, sea.components(jitter, phase, hull.x_m, hull.breadth_m, rho, g)
+    waves = np.stack([sea.components(jitter[:, i], phase[:, i], hull.x_m, hull.breadth_m, rho, g)
+                      for i in range(batch)])
+    return sea.waves, waves
 
 
 def write_episode(records: np.ndarray, index: int | np.ndarray, fields: Mapping[str, Any]) -> None:

@@ -1,4 +1,4 @@
-"""Gymnasium registration of one id per scenario, ``subenv/<Name>-v0``, on ``import subenv``."""
+"""Gymnasium registration of one id per scenario, ``subenv/<Name>-v<version>``, on ``import subenv``."""
 
 from __future__ import annotations
 
@@ -28,7 +28,7 @@ def _max_steps(name: str) -> int:
 
 def env_ids() -> list[str]:
     """The Gymnasium ids this package registers (after :func:`register_envs`)."""
-    return [HEADLINE_ID] + [f"subenv/{name}-v0" for name in registry_snapshot()]
+    return [HEADLINE_ID] + [scenario.env_id for scenario in registry_snapshot().values()]
 
 
 def register_envs() -> None:
@@ -44,8 +44,9 @@ def register_envs() -> None:
     environment truncates at the drawn episode's own duration. ``gym.make_vec`` builds the
     native :class:`~subenv.envs.DivePlaneVectorEnv` (:data:`VECTOR_ENTRY_POINT`).
     """
+    keys = {scenario.env_id: key for key, scenario in registry_snapshot().items()}
     for env_id in env_ids():
-        name = _HEADLINE_SCENARIO if env_id == HEADLINE_ID else env_id.removeprefix("subenv/").removesuffix("-v0")
+        name = _HEADLINE_SCENARIO if env_id == HEADLINE_ID else keys[env_id]
         if env_id in gym.registry:
             del gym.registry[env_id]
         gym.register(

@@ -39,8 +39,16 @@ import numpy as np
 
 from subenv._typing import FloatArray
 from subenv.dynamics._jit import inline_kernel, kernel, parallel_kernel, threading_layer_available
-from subenv.dynamics.integrate import LANE_PITCH, LANE_ROWS, LANES, control_period_lanes, set_lane
+from subenv.dynamics.integrate import (
+    LANE_PITCH,
+    LANE_ROWS,
+    LANE_SPEED0,
+    LANES,
+    control_period_lanes,
+    set_lane,
+)
 from subenv.dynamics.model import PARAM_FIELDS
+from subenv.dynamics.waves import MAX_WAVES, WAVE_FIELDS
 
 __all__ = [
     "CONFIG_DTYPE",
@@ -80,6 +88,7 @@ STATE_DTYPE: Final = np.dtype([
     ("steps", np.int64),               # since the reset
     ("disturbance_N", np.float64),     # heave force, held over a control period
     ("speed_mps", np.float64),         # of the profile at time_s
+    ("distance_m", np.float64),        # travelled since the reset (the phase of a sea's waves)
 ])
 """What a step changes, per sub-environment."""
 
@@ -94,6 +103,8 @@ EPISODE_DTYPE: Final = np.dtype([
     ("duration_s", np.float64),
     ("critical_speed_mps", np.float64),            # nan: none (z_GB <= 0)
     ("froude_scale_mps", np.float64),              # sqrt(g z_GB), nan for z_GB <= 0
+    ("n_waves", np.int64),                         # 0: no sea
+    ("waves", np.float64, (WAVE_FIELDS, MAX_WAVES)),  # the sea, subenv.dynamics.waves.SeaState.components
 ])
 """What a reset draws, per sub-environment (read-only during the episode)."""
 
@@ -323,6 +334,11 @@ def step_block(state: np.ndarray, episode: np.ndarray, actions: FloatArray, acti
     efforts = np.empty(LANES)
     speeds_end = np.empty(LANES)
     members = np.empty(LANES, dtype=np.int64)
+    in_sea = False
+    for i in range(b * LANES, min((b + 1) * LANES, n_rows)):
+        in_sea = in_sea or (active[i] and episode[i].n_waves > 0)
+    # (the seas' rows only where a lane has one: a block of them is larger than the rest of the step's memory)
+    waves = np.zeros((LANES if in_sea else 1, WAVE_FIELDS, MAX_WAVES))
     n = 0
     for i in range(b * LANES, min((b + 1) * LANES, n_rows)):
         if active[i]:
@@ -335,16 +351,20 @@ def step_block(state: np.ndarray, episode: np.ndarray, actions: FloatArray, acti
             u1 = speed_at(t0 + dt, e.n_knots, e.knot_time_s, e.knot_speed_mps)
             speeds_end[n] = u1
             set_lane(block, n, s.pitch_rad, s.heave_mps, s.pitch_rate_radps, s.depth_m, t0, u0, (u1 - u0) / dt,
-                     stern, bow, s.disturbance_N, e.params)
+                     stern, bow, s.disturbance_N, e.params, s.distance_m, e.n_waves)
+            if e.n_waves > 0:
+                waves[n] = e.waves
             members[n] = i
             n += 1
-    control_period_lanes(block, n, dt, cfg.substeps, hull)
+    control_period_lanes(block, n, dt, cfg.substeps, hull, waves)
     L = LANES
     for j in range(n):
         i = members[j]
         s, e = state[i], episode[i]
         x0, x1 = block[LANE_PITCH * L + j], block[(LANE_PITCH + 1) * L + j]
         x2, x3 = block[(LANE_PITCH + 2) * L + j], block[(LANE_PITCH + 3) * L + j]
+        u0 = block[LANE_SPEED0 * L + j]
+        s.distance_m = s.distance_m + 0.5 * (u0 + speeds_end[j]) * dt  # exact for the linear speed of the period
         s.time_s = s.time_s + dt
         s.speed_mps = speeds_end[j]
         reason = episode_end(x0, x1, x2, x3, e.depth_command_m, cfg)

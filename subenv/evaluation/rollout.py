@@ -21,6 +21,7 @@ against one episode at a time.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -30,12 +31,14 @@ import gymnasium as gym
 import numpy as np
 
 from subenv.analysis.winnable import winnable
+from subenv.dynamics.free_surface import NO_FREE_SURFACE, FreeSurface
+from subenv.dynamics.waves import SeaState
 from subenv.envs import DivePlaneVectorEnv
 from subenv.evaluation.controller import BatchController, Controller, make_controller
 from subenv.evaluation.metrics import EpisodeMetrics, episode_metrics
 from subenv.evaluation.progress import Progress
 from subenv.evaluation.suites import DEFAULT_SEED, Suite, check_scenarios, get_suite, suite_names
-from subenv.scenarios.registry import get_scenario, scenario_names
+from subenv.scenarios.registry import get_scenario, scenario_for_env_id, scenario_names
 from subenv.scenarios.scenario import EpisodeConfig, Scenario
 from subenv.vehicles.loader import load_vehicle
 from subenv.vehicles.scaling import froude_factor
@@ -214,12 +217,17 @@ class EpisodeResult:
 def _scenario_of(name: str) -> str:
     """The scenario name of ``"LowSpeed"`` or ``"subenv/LowSpeed-v0"`` (checked)."""
     scenario = name
-    if "/" in name:
-        scenario = name.removeprefix("subenv/").removesuffix("-v0")
-        if name != f"subenv/{scenario}-v0":
-            raise ValueError(f"env id {name!r} is not a subenv id: must be 'subenv/<Scenario>-v0'")
-    if scenario == "DivePlane":
+    if name == "subenv/DivePlane-v0":
         scenario = "Randomized"
+    elif "/" in name:
+        found = scenario_for_env_id(name)
+        if found is None:
+            parsed = re.fullmatch(r"subenv/(\w+)-v(\d+)", name)
+            if parsed is None:
+                raise ValueError(f"env id {name!r} is not a subenv id: must be 'subenv/<Scenario>-v<version>'")
+            base, version = parsed.groups()
+            found = base if version == "0" else f"{base}-v{version}"  # (unknown: check_scenarios says so)
+        scenario = found
     check_scenarios([scenario])
     return scenario
 
@@ -231,7 +239,7 @@ def _env_args(
     if isinstance(scenario, Scenario):
         env_id, kwargs = "subenv/DivePlane-v0", {"scenario": scenario}
     else:
-        env_id, kwargs = f"subenv/{_scenario_of(scenario)}-v0", {}
+        env_id, kwargs = get_scenario(_scenario_of(scenario)).env_id, {}
     kwargs |= {"control": controller.control, "alpha": controller.alpha, "vehicle": vehicle}
     spec = gym.spec(env_id)
     if max_duration_s is not None:
@@ -403,7 +411,7 @@ def _run_single(
                                  duration_s, base.config.length_ratio)
     can_win = _episode_winnable(base.vehicle, base.episode, trajectory.critical_speed_mps, base.config.max_pitch_rad,
                                 options)
-    return _result(controller, base.scenario.name, seed, episode, trajectory, keep, can_win)
+    return _result(controller, base.scenario.key, seed, episode, trajectory, keep, can_win)
 
 
 def _run_batch(
@@ -445,7 +453,7 @@ def _run_batch(
         trajectory = recorder.trajectory(i, int(steps[i]), reasons[i], float(config.plane_limit_rad), duration_s,
                                          config.length_ratio)
         can_win = _episode_winnable(loadings[i], draw, trajectory.critical_speed_mps, config.max_pitch_rad, options)
-        results.append(_result(controller, env.scenario.name, seed, first_episode + i, trajectory, i < keep, can_win))
+        results.append(_result(controller, env.scenario.key, seed, first_episode + i, trajectory, i < keep, can_win))
     return results
 
 
@@ -455,10 +463,11 @@ def _scheduled(duration_s: float, max_episode_steps: int | None, dt: float) -> f
 
 
 @lru_cache(maxsize=4096)
-def _winnable(loading: Vehicle, final_speed_mps: float, max_pitch_rad: float) -> bool:
-    """:func:`subenv.analysis.winnable` (about 4 ms), once per loading and speed: every controller of a
-    comparison runs the same episodes."""
-    return winnable(loading, (final_speed_mps,), max_pitch_rad)
+def _winnable(loading: Vehicle, final_speed_mps: float, max_pitch_rad: float, depth_m: float = 0.0,
+              free_surface: FreeSurface = NO_FREE_SURFACE, sea_state: SeaState | None = None) -> bool:
+    """:func:`subenv.analysis.winnable` (about 4 ms), once per loading and speed (and ordered depth, near
+    the surface): every controller of a comparison runs the same episodes."""
+    return winnable(loading, (final_speed_mps,), max_pitch_rad, depth_m, free_surface, sea_state)
 
 
 def _episode_winnable(loading: Vehicle, draw: EpisodeConfig, critical_speed_mps: float, max_pitch_rad: float,
@@ -469,7 +478,10 @@ def _episode_winnable(loading: Vehicle, draw: EpisodeConfig, critical_speed_mps:
     else:
         last = draw.speed_knots[-1][1]
         final = float(last) * (critical_speed_mps if draw.speed_relative else 1.0)
-    return _winnable(loading, final, max_pitch_rad)
+    if draw.free_surface is None and draw.sea_state is None:
+        return _winnable(loading, final, max_pitch_rad)
+    depth = float(options["depth_command"]) if options and "depth_command" in options else float(draw.depth_command_m)
+    return _winnable(loading, final, max_pitch_rad, depth, draw.free_surface or NO_FREE_SURFACE, draw.sea_state)
 
 
 def _result(controller: Controller, scenario: str, seed: int, episode: int, trajectory: Trajectory,

@@ -117,10 +117,11 @@ def get_suite(name: str) -> Suite:
 register_suite(Suite(
     name="default",
     description=(
-        "The six base scenarios: design speed, below, near and through critical, periscope depth, "
-        "ballast offset."
+        "The base scenarios: design speed, below, near and through critical, periscope depth (the free "
+        "surface's suction; calm, and in a head sea), ballast offset."
     ),
-    scenarios=("Nominal", "LowSpeed", "NearCritical", "SpeedTransient", "PeriscopeDepth", "BallastOffset"),
+    scenarios=("Nominal", "LowSpeed", "NearCritical", "SpeedTransient", "PeriscopeDepth-v1", "PeriscopeDepthWaves",
+               "BallastOffset"),
     episodes=100,
 ))
 register_suite(Suite(

@@ -7,6 +7,10 @@ For DARPA SUBOFF at alpha = 0, u_cr = 1.8979 fps = 0.5785 m/s.
 
 from __future__ import annotations
 
+from typing import Final
+
+from subenv.dynamics.free_surface import FreeSurface
+from subenv.dynamics.waves import SeaState
 from subenv.scenarios.registry import register_scenario
 from subenv.scenarios.scenario import Scenario, SpeedRamp
 from subenv.thesis import REFERENCE_LENGTH_M, THESIS_DESIGN_SPEED_MPS
@@ -67,7 +71,7 @@ PERISCOPE_DEPTH = Scenario(
     reference_length_m=REFERENCE_LENGTH_M,
     description=(
         "Ordered depth 1.0-1.2 m, near the surface; surface suction modelled as excess buoyancy "
-        "(Riedel 1993 Ch. V.C); broaching ends the episode."
+        "(Riedel 1993 Ch. V.C); broaching ends the episode. Superseded by PeriscopeDepth-v1."
     ),
     speed_ratio=(0.7, 2.0),
     depth_command_m=(1.0, 1.2),
@@ -121,5 +125,31 @@ MIXED = Scenario(
     disturbance_std_N=0.3,
 )
 
-for _scenario in (*BASE_SCENARIOS, RANDOMIZED, MIXED):
+PERISCOPE_DEPTH_V1 = PERISCOPE_DEPTH.replace(
+    description=(
+        "Ordered depth 1.0-1.2 m, near the surface, neutrally buoyant; the free surface pulls the hull up "
+        "and pitches it with a force that grows as u^2 and falls with depth (the rigid-lid slender-body "
+        "suction, subenv.dynamics.free_surface); broaching ends the episode."
+    ),
+    excess_buoyancy_fraction=(0.0, 0.0),
+    free_surface=FreeSurface(),
+    version=1,
+)
+PERISCOPE_SEA: Final = SeaState(significant_height_m=0.06, peak_period_s=2.0)
+"""PeriscopeDepthWaves's sea at SUBOFF's scale: H_s 6 cm, T_p 2 s; at 1:24 (SUBOFF as the model of a
+102 m boat, Froude-scaled) H_s 1.4 m and T_p 9.8 s, sea state 4. At 1.1 m its waves push the hull
+with 32 N and 42 N m rms (four times what the planes can answer at 0.6 m/s, but at periods of 1.5-2 s,
+where the boat's inertia leaves millimetres of heave) and pull it up with 0.53 N on average."""
+PERISCOPE_DEPTH_WAVES = PERISCOPE_DEPTH_V1.replace(
+    name="PeriscopeDepthWaves",
+    description=(
+        "PeriscopeDepth-v1 in a head sea (JONSWAP, H_s 6 cm, T_p 2 s at SUBOFF's scale): the waves' "
+        "oscillating heave force and pitch moment and their mean suction (subenv.dynamics.waves), "
+        "phases drawn per episode."
+    ),
+    sea_state=PERISCOPE_SEA,
+    version=0,
+)
+
+for _scenario in (*BASE_SCENARIOS, RANDOMIZED, MIXED, PERISCOPE_DEPTH_V1, PERISCOPE_DEPTH_WAVES):
     register_scenario(_scenario)

@@ -1,10 +1,14 @@
-"""The scenario registry: every registered scenario is also a Gymnasium id ``subenv/<name>-v0``."""
+"""The scenario registry: every registered scenario is also a Gymnasium id ``subenv/<name>-v<version>``.
+
+A scenario of version 0 is known by its name; a later version by ``<name>-v<version>``
+(:attr:`Scenario.key <subenv.scenarios.Scenario.key>`), so that a changed scenario can ship beside
+the one whose seeded episodes its users pinned."""
 
 from __future__ import annotations
 
 from subenv.scenarios.scenario import Scenario
 
-__all__ = ["get_scenario", "register_scenario", "scenario_names"]
+__all__ = ["get_scenario", "register_scenario", "scenario_for_env_id", "scenario_names"]
 
 _REGISTRY: dict[str, Scenario] = {}
 
@@ -16,15 +20,15 @@ def register_scenario(scenario: Scenario, *, overwrite: bool = False) -> Scenari
     ``DivePlaneEnv(scenario=name)``; to get a Gymnasium id for it too, call
     :func:`subenv.envs.register_envs` afterwards.
     """
-    if scenario.name in _REGISTRY and not overwrite:
-        raise ValueError(f"scenario {scenario.name!r} is already registered; pass overwrite=True to replace it")
+    if scenario.key in _REGISTRY and not overwrite:
+        raise ValueError(f"scenario {scenario.key!r} is already registered; pass overwrite=True to replace it")
     for component in scenario.components:
         if component not in _REGISTRY:
             raise ValueError(
                 f"scenario {scenario.name!r}: component {component!r} is unknown; "
                 f"known scenarios: {scenario_names()}"
             )
-    _REGISTRY[scenario.name] = scenario
+    _REGISTRY[scenario.key] = scenario
     return scenario
 
 
@@ -36,8 +40,18 @@ def get_scenario(name: str) -> Scenario:
         raise ValueError(f"scenario={name!r} is unknown: must be one of {scenario_names()}") from None
 
 
+def scenario_for_env_id(env_id: str) -> str | None:
+    """The registry's name (:attr:`Scenario.key <subenv.scenarios.Scenario.key>`) of the scenario
+    registered as Gymnasium id ``env_id`` (``subenv/<name>-v<version>``), or None."""
+    for key, scenario in _REGISTRY.items():
+        if scenario.env_id == env_id:
+            return key
+    return None
+
+
 def scenario_names() -> list[str]:
-    """Names of the registered scenarios, in registration order."""
+    """Names of the registered scenarios (:attr:`Scenario.key <subenv.scenarios.Scenario.key>`), in
+    registration order."""
     return list(_REGISTRY)
 
 

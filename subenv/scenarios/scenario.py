@@ -17,6 +17,8 @@ from typing import Any
 import numpy as np
 
 from subenv import _validation as check
+from subenv.dynamics.free_surface import FreeSurface
+from subenv.dynamics.waves import SeaState
 from subenv.thesis import THESIS_DESIGN_SPEED_MPS
 from subenv.vehicles.scaling import froude_factor
 
@@ -122,6 +124,9 @@ class EpisodeConfig:
     sensor_noise: bool
     disturbance_std_N: float
     duration_s: float
+    free_surface: FreeSurface | None = None
+    sea_state: SeaState | None = None
+    wave_uniforms: tuple[Any, ...] = ()
 
     def froude_scaled(self, length_ratio: float) -> EpisodeConfig:
         """The same episode for a vehicle ``length_ratio`` times longer, at equal Froude number
@@ -145,6 +150,9 @@ class EpisodeConfig:
             x_GB_m=self.x_GB_m * length,
             disturbance_std_N=self.disturbance_std_N * force,
             duration_s=self.duration_s * time,
+            sea_state=None if self.sea_state is None else dataclasses.replace(
+                self.sea_state, significant_height_m=self.sea_state.significant_height_m * length,
+                peak_period_s=self.sea_state.peak_period_s * time),
         )
 
 
@@ -198,6 +206,17 @@ class Scenario:
         Episode length [s]; the episode is truncated at this time.
     components : tuple of str
         Names of scenarios to draw from (a mixture); empty for a plain scenario.
+    free_surface : FreeSurface or None
+        The free surface's suction on the hull (:mod:`subenv.dynamics.free_surface`); None: deep
+        water (Riedel 1993's model).
+    sea_state : SeaState or None
+        A seaway from ahead (:mod:`subenv.dynamics.waves`), its phases and frequencies drawn at each
+        reset; None: calm water.
+    version : int
+        The Gymnasium id's version, ``subenv/<name>-v<version>``: a scenario whose seeded episodes
+        changed is registered again under the next version, and the old one kept. The registry
+        knows a scenario of version 0 by its name, a later one as ``<name>-v<version>``
+        (:attr:`key`).
     reference_length_m : float or None
         The hull length [m] the scenario's absolute quantities (depths, m/s speeds, times, loadings,
         disturbance) were chosen for. On a vehicle of another length L an environment Froude-scales
@@ -227,6 +246,9 @@ class Scenario:
     duration_s: float = 300.0
     components: tuple[str, ...] = ()
     reference_length_m: float | None = None
+    free_surface: FreeSurface | None = None
+    sea_state: SeaState | None = None
+    version: int = 0
 
     def __post_init__(self) -> None:
         if not (self.name and self.name.isidentifier() and self.name[0].isupper()):
@@ -268,6 +290,20 @@ class Scenario:
             raise ValueError(f"duration_s={self.duration_s!r} is invalid: must be a finite number > 0")
         if self.reference_length_m is not None:
             check.positive("reference_length_m", self.reference_length_m)
+        check.integer("version", self.version, 0)
+        if self.components and (self.free_surface is not None or self.sea_state is not None):
+            raise ValueError(f"scenario {self.name!r}: a mixture takes its free surface and sea from its components; "
+                             "give free_surface and sea_state on those")
+
+    @property
+    def key(self) -> str:
+        """The name the registry knows this scenario by: ``name``, or ``name-v<version>`` after version 0."""
+        return self.name if self.version == 0 else f"{self.name}-v{self.version}"
+
+    @property
+    def env_id(self) -> str:
+        """The Gymnasium id, ``subenv/<name>-v<version>``."""
+        return f"subenv/{self.name}-v{self.version}"
 
     @property
     def speed_relative(self) -> bool:
@@ -394,6 +430,9 @@ class Scenario:
             sensor_noise=self.sensor_noise,
             disturbance_std_N=self.disturbance_std_N,
             duration_s=self.duration_s,
+            free_surface=self.free_surface,
+            sea_state=self.sea_state,
+            wave_uniforms=tuple(drawn),  # the sea's: each wave's place in its bin, then its phase / (2 pi)
         )
 
     @cached_property
@@ -413,4 +452,5 @@ class Scenario:
             *((_UNIT,) if self.x_GB_sign_random else ()),
             self.z_GB_scale, self.excess_buoyancy_fraction,
             *((self.crossflow_drag,) if self.crossflow_drag is not None else ()),
+            *((_UNIT,) * (2 * self.sea_state.waves) if self.sea_state is not None else ()),
         ))

@@ -232,8 +232,9 @@ def test_report_is_written_completely_and_not_over_an_existing_folder(analysis_r
     assert f"report written to {out}/report.md" in analysis_report.printed  # the folder write_report returned
     text = (out / "report.md").read_text()
     assert "| u_cr, eq. 3.9 closed form | 1.8979 | 1.8979 |" in text
-    assert len(list(out.glob("*.png"))) == 15  # the thesis's 14 and the Hopf figure
+    assert len(list(out.glob("*.png"))) == 16  # the thesis's 14, the Hopf figure and the free surface's
     assert "## Beyond the thesis: the Hopf bifurcation at speed" in text and "supercritical" in text
+    assert "## Beyond the thesis: level flight near the free surface" in text
     with pytest.raises(FileExistsError, match="exists: choose another output folder or pass overwrite=True"):
         write_report(out, suboff)
     assert [p.name for p in out.parent.iterdir()] == ["report"]  # no temporary folder left behind

@@ -90,6 +90,7 @@ def test_linear_model_with_ballast_offset_matches_jacobian(suboff):
 _COLD_CACHE_PROGRAM = """
 import numpy as np
 from subenv.dynamics import crossflow_integrals, derivatives, model_params
+from subenv.dynamics.free_surface import suction
 from subenv.vehicles import load_vehicle
 v = load_vehicle("suboff")
 params = model_params(v)
@@ -97,7 +98,8 @@ x = np.linspace(-1.0, 1.0, 7)
 states = np.stack([0.1 * x, 0.05 * x, 0.01 * x, 10 + x], axis=-1)
 d = derivatives(states, 1.2, 0.05 * x, -0.02, params)
 i0, i1 = crossflow_integrals(params.hull, 0.05 * x, 0.01 * x)
-print(repr(np.concatenate([d.ravel(), i0, i1]).tolist()))
+zs, ms = suction(params.hull, 0.1 * x, 1.0 + 0.2 * x, 1.0, 1000.0)
+print(repr(np.concatenate([d.ravel(), i0, i1, zs, ms]).tolist()))
 """
 
 

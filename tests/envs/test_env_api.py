@@ -26,10 +26,13 @@ INFO_KEYS = ("time_s", "depth_m", "depth_command_m", "depth_error_m", "pitch_rad
 def test_every_scenario_has_an_id_and_the_headline_id_is_randomized():
     expected = {"subenv/DivePlane-v0", "subenv/Nominal-v0", "subenv/LowSpeed-v0", "subenv/NearCritical-v0",
                 "subenv/SpeedTransient-v0", "subenv/PeriscopeDepth-v0", "subenv/BallastOffset-v0",
-                "subenv/Randomized-v0", "subenv/Mixed-v0"}
+                "subenv/Randomized-v0", "subenv/Mixed-v0", "subenv/PeriscopeDepth-v1", "subenv/PeriscopeDepthWaves-v0"}
     assert set(ENV_IDS) == expected
     assert all(env_id in gym.registry for env_id in ENV_IDS)
     assert gym.spec("subenv/DivePlane-v0").kwargs["scenario"] == "Randomized"
+    # A later version is its own registry entry; version 0 keeps its name (and its seeded episodes).
+    assert gym.spec("subenv/PeriscopeDepth-v1").kwargs["scenario"] == "PeriscopeDepth-v1"
+    assert gym.spec("subenv/PeriscopeDepth-v0").kwargs["scenario"] == "PeriscopeDepth"
 
 
 @pytest.mark.parametrize("env_id", ENV_IDS)

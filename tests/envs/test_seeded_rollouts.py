@@ -28,6 +28,8 @@ DIGESTS = {
     'subenv/BallastOffset-v0': '4eacfa9d874a9a06',
     'subenv/Randomized-v0': '50a7988a56b86775',
     'subenv/Mixed-v0': '6d5dcd26c5f265b6',
+    'subenv/PeriscopeDepth-v1': '3aa630265a7c8a5f',
+    'subenv/PeriscopeDepthWaves-v0': '1e534e3e9bfb06ca',
 }
 
 

@@ -137,7 +137,7 @@ _DRAWS_ALL_BUT_THE_LOADING = Scenario(
     initial_heave_mps=(-0.02, 0.02), initial_pitch_rate_radps=(-0.01, 0.01), sensor_noise=True,
     disturbance_std_N=0.7, duration_s=100.0,
 )
-_BATCH_READY = ("Nominal", "LowSpeed", "NearCritical", "SpeedTransient")
+_BATCH_READY = ("Nominal", "LowSpeed", "NearCritical", "SpeedTransient", "PeriscopeDepth-v1", "PeriscopeDepthWaves")
 
 
 def test_which_scenarios_draw_their_resets_in_batches():

@@ -138,7 +138,8 @@ def test_registered_suites_name_registered_scenarios():
     for name in suite_names():
         assert set(get_suite(name).scenarios) <= set(scenario_names())
     assert get_suite("default").scenarios == (
-        "Nominal", "LowSpeed", "NearCritical", "SpeedTransient", "PeriscopeDepth", "BallastOffset")
+        "Nominal", "LowSpeed", "NearCritical", "SpeedTransient", "PeriscopeDepth-v1", "PeriscopeDepthWaves",
+        "BallastOffset")
     tiny = get_suite("tiny")
     assert len(tiny.scenarios) == 2 and tiny.episodes <= 2
 
@@ -147,6 +148,7 @@ def test_a_suite_is_a_suite_name_a_scenario_name_or_a_list_of_scenarios():
     assert resolve_suite("reversal") == get_suite("reversal")
     assert resolve_suite("Nominal").scenarios == ("Nominal",)  # what `--suite Nominal` passes
     assert resolve_suite("subenv/LowSpeed-v0").scenarios == ("LowSpeed",)
+    assert resolve_suite("subenv/PeriscopeDepth-v1").scenarios == ("PeriscopeDepth-v1",)
     assert resolve_suite(["Nominal", "LowSpeed"]).scenarios == ("Nominal", "LowSpeed")
     with pytest.raises(ValueError, match=r"suite='Fastest' is unknown: must be a suite name \(one of \['default'.*\]\) "
                                          r"or a scenario name \(one of \['Nominal'"):

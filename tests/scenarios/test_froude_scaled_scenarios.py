@@ -35,13 +35,17 @@ def _fly(env, steps: int) -> tuple[np.ndarray, list[float], str]:  # type: ignor
     return np.array(rows), rewards, info["termination_reason"]
 
 
-@pytest.mark.parametrize("scenario", ["LowSpeed", "NearCritical", "BallastOffset", "PeriscopeDepth"])
+@pytest.mark.parametrize("scenario", ["LowSpeed", "NearCritical", "BallastOffset", "PeriscopeDepth",
+                                      "PeriscopeDepth-v1", "PeriscopeDepthWaves"])
 def test_the_full_scale_boat_flies_the_models_episode_froude_scaled(scenario) -> None:  # type: ignore[no-untyped-def]
     """With the control period scaled too (dt x sqrt(lambda)), the full-scale episode is the model's in
     scaled units, step by step, with the same rewards and the same end. (NearCritical's heave-force
-    disturbance keeps its 30 s time constant, which is not scaled: its draws match, not its states.)"""
-    model = gym.make(f"subenv/{scenario}-v0", vehicle=MODEL)
-    full = gym.make(f"subenv/{scenario}-v0", vehicle=FULL, dt=0.5 * math.sqrt(RATIO))
+    disturbance keeps its 30 s time constant, which is not scaled: its draws match, not its states.)
+    Near the surface this checks that the free surface's suction and the sea's forces scale as lambda^3
+    (the suction as rho u^2 S^2 / h^2, the sea through its height and period)."""
+    env_id = get_scenario(scenario).env_id
+    model = gym.make(env_id, vehicle=MODEL)
+    full = gym.make(env_id, vehicle=FULL, dt=0.5 * math.sqrt(RATIO))
     (a, rewards_a, end_a), (b, rewards_b, end_b) = _fly(model, 400), _fly(full, 400)
     assert len(a) == len(b) and end_a == end_b
     if scenario == "NearCritical":

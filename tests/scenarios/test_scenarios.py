@@ -8,6 +8,8 @@ import numpy as np
 import pytest
 
 import subenv
+from subenv.dynamics.free_surface import FreeSurface
+from subenv.dynamics.model import PARAM_FIELDS
 from subenv.scenarios import Scenario, SpeedRamp, get_scenario, register_scenario, scenario_names
 from subenv.scenarios.presets import BASE_SCENARIOS
 
@@ -24,6 +26,7 @@ def _episodes(name: str, n: int = 40, **env_kwargs):
 def test_registry_lists_and_rejects():
     assert scenario_names()[:7] == ["Nominal", "LowSpeed", "NearCritical", "SpeedTransient",
                                     "PeriscopeDepth", "BallastOffset", "Randomized"]
+    assert scenario_names()[-2:] == ["PeriscopeDepth-v1", "PeriscopeDepthWaves"]
     with pytest.raises(ValueError, match=r"scenario='Slow' is unknown: must be one of \['Nominal'"):
         get_scenario("Slow")
     with pytest.raises(ValueError, match="already registered"):
@@ -55,6 +58,27 @@ def test_periscope_depth_is_near_the_surface_and_light():
     for episode, vehicle, info, _ in _episodes("PeriscopeDepth", 10):
         assert 1.0 <= info["depth_command_m"] <= 1.2
         assert 2e-4 <= vehicle.excess_buoyancy_N / vehicle.weight_N <= 1e-3
+
+
+def test_periscope_depth_v1_is_neutral_with_the_free_surface_and_the_waves_draw_a_sea_per_seed():
+    for episode, vehicle, info, env in _episodes("PeriscopeDepth-v1", 10):
+        assert 1.0 <= info["depth_command_m"] <= 1.2 and vehicle.excess_buoyancy_N == 0.0
+        assert episode.free_surface is not None and episode.sea_state is None
+        assert env._episode["params"][0][PARAM_FIELDS.index("rho_suction")] == vehicle.water_density_kg_m3
+    seas = [episode.wave_uniforms for episode, _, _, _ in _episodes("PeriscopeDepthWaves", 3)]
+    again = [episode.wave_uniforms for episode, _, _, _ in _episodes("PeriscopeDepthWaves", 3)]
+    assert seas == again and len(set(seas)) == 3  # a seed gives its sea, another seed another
+    assert len(seas[0]) == 2 * get_scenario("PeriscopeDepthWaves").sea_state.waves
+    # Version 0 keeps its name, a later version is registered beside it.
+    assert get_scenario("PeriscopeDepth").excess_buoyancy_fraction == (2e-4, 1e-3)
+    assert get_scenario("PeriscopeDepth-v1").env_id == "subenv/PeriscopeDepth-v1"
+
+
+def test_bad_versions_and_free_surfaces_name_the_field():
+    with pytest.raises(ValueError, match="version"):
+        get_scenario("Nominal").replace(version=-1)
+    with pytest.raises(ValueError, match="a mixture takes its free surface and sea from its components"):
+        Scenario(name="Mix", description="", components=("Nominal",), free_surface=FreeSurface())
 
 
 def test_ballast_offset_draws_both_signs():

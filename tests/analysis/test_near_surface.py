@@ -1,0 +1,123 @@
+"""Level flight near the free surface: trims, the shallowest depth held, the critical speed's shift."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from subenv.analysis import critical_speed
+from subenv.analysis.free_surface import min_level_flight_depth, surface_critical_speed, surface_trim
+from subenv.dynamics import derivatives, model_params
+from subenv.dynamics.free_surface import FreeSurface
+from subenv.scenarios.presets import PERISCOPE_SEA
+from subenv.vehicles import load_vehicle
+
+SUBOFF = load_vehicle("suboff")
+U_CR = critical_speed(SUBOFF, 0.0)
+RADIUS = max(SUBOFF.hull.breadth_m) / 2
+
+
+@pytest.mark.parametrize("depth_m", [0.35, 0.6, 1.0, 2.0])
+def test_the_critical_speed_near_the_surface_is_the_same_two_ways_and_falls_towards_the_surface(depth_m):
+    # The closed form (eq. 3.9 with the suction's pitch derivatives) against the root of the steady
+    # depth-rate gain of the linearised right-hand side.
+    found = surface_critical_speed(SUBOFF, depth_m)
+    assert found.speed_numerical_mps == pytest.approx(found.speed_mps, rel=1e-5)
+    assert found.deep_speed_mps == pytest.approx(U_CR, rel=1e-12)
+    assert found.speed_mps < U_CR and found.suction_M_theta > 0  # the bow pitched up is pulled harder
+
+
+def test_the_critical_speed_shift_grows_monotonically_towards_the_surface_and_vanishes_at_depth():
+    shifts = [surface_critical_speed(SUBOFF, h).shift for h in (0.3, 0.5, 1.0, 2.0, 20.0)]
+    assert all(np.diff(shifts) > 0)
+    assert abs(shifts[-1]) < 1e-6
+
+
+@pytest.mark.parametrize("ratio", [0.6, 1.5])
+def test_a_trim_balances_the_one_right_hand_side_and_deep_down_a_neutral_boat_flies_level(ratio):
+    trim = surface_trim(SUBOFF, ratio * U_CR, 1.0)
+    x = np.array([trim.pitch_rad, trim.heave_mps, 0.0, trim.depth_m])
+    rates = derivatives(x, trim.speed_mps, trim.plane_rad, 0.0, model_params(SUBOFF, FreeSurface()))
+    np.testing.assert_allclose(rates, 0.0, atol=1e-12)
+    assert trim.suction_N < 0  # pulled up
+    deep = surface_trim(SUBOFF, ratio * U_CR, 40.0)
+    assert abs(deep.pitch_rad) < 1e-6 and abs(deep.plane_rad) < 1e-6
+
+
+@pytest.mark.parametrize("depth_m", [0.6, 1.0])
+def test_with_the_planes_held_level_flight_near_the_surface_is_unstable_in_depth(depth_m):
+    # Deeper means less suction: a boat pushed down keeps sinking, one pushed up keeps rising. The depth
+    # mode (a zero eigenvalue in deep water) turns real positive; for heave alone, Z'' = a Z + c Z' with
+    # a = dw_dot/dZ > 0 (the suction's slope) and c = dw_dot/dw < 0 (damping) grows at
+    # (c + sqrt(c^2 + 4 a)) / 2, which the 4x4 eigenvalue (with pitch coupled) must be close to.
+    trim = surface_trim(SUBOFF, 0.5 * U_CR, depth_m)
+    growth = max(trim.eigenvalues.real)
+    assert not trim.stable
+    params = model_params(SUBOFF, FreeSurface())
+    x = np.array([trim.pitch_rad, trim.heave_mps, 0.0, trim.depth_m])
+
+    def slope(i: int) -> float:
+        step = np.zeros(4)
+        step[i] = 1e-6
+        return (derivatives(x + step, trim.speed_mps, trim.plane_rad, 0.0, params)[1]
+                - derivatives(x - step, trim.speed_mps, trim.plane_rad, 0.0, params)[1]) / 2e-6
+
+    a, c = slope(3), slope(1)
+    assert a > 0 > c
+    assert growth == pytest.approx((c + math.sqrt(c * c + 4 * a)) / 2, rel=0.05)
+
+
+def test_bad_depth_and_speed_name_the_parameter():
+    with pytest.raises(ValueError, match="depth_m"):
+        surface_trim(SUBOFF, 0.5, 0.2)
+    with pytest.raises(ValueError, match="speed_mps"):
+        surface_trim(SUBOFF, -0.5, 1.0)
+    with pytest.raises(ValueError, match="alpha"):
+        surface_critical_speed(SUBOFF, 1.0, alpha=3.0)
+
+
+@pytest.mark.parametrize("ratio", [0.5, 0.7])
+def test_well_below_critical_the_shallowest_depth_held_is_where_the_trim_reaches_the_plane_limit(ratio):
+    found = min_level_flight_depth(SUBOFF, ratio * U_CR)
+    assert found.limited_by == "planes" and found.min_depth_m > RADIUS
+    held = surface_trim(SUBOFF, ratio * U_CR, found.min_depth_m)
+    assert held.within_limits and abs(held.plane_rad) == pytest.approx(SUBOFF.planes.limit_rad, abs=2e-3)
+    above = surface_trim(SUBOFF, ratio * U_CR, found.min_depth_m - 2e-3, start=(held.pitch_rad, held.plane_rad))
+    assert not above.within_limits
+
+
+def _balance_determinant(trim, alpha: float) -> float:
+    """det d(w_dot, q_dot)/d(theta, delta) at a trim (w = u tan(theta), q = 0 held)."""
+    params = model_params(SUBOFF, FreeSurface())
+
+    def balance(theta: float, delta: float) -> np.ndarray:
+        x = np.array([theta, trim.speed_mps * math.tan(theta), 0.0, trim.depth_m])
+        return derivatives(x, trim.speed_mps, delta, alpha * delta, params)[1:3]
+
+    e = 1e-7
+    columns = [(balance(trim.pitch_rad + e, trim.plane_rad) - balance(trim.pitch_rad - e, trim.plane_rad)) / (2 * e),
+               (balance(trim.pitch_rad, trim.plane_rad + e) - balance(trim.pitch_rad, trim.plane_rad - e)) / (2 * e)]
+    return float(np.linalg.det(np.column_stack(columns)))
+
+
+@pytest.mark.parametrize(("ratio", "alpha"), [(0.9, 0.0), (0.95, 0.0), (1.1, 1.0)])
+def test_near_critical_level_flight_is_lost_in_a_fold_near_the_surface(ratio, alpha):
+    # At a saddle-node the balance's Jacobian is singular, and along the branch it shrinks as the square
+    # root of the distance to the fold: 1 mm from it, about sqrt(1/300) of its value 0.3 m below.
+    found = min_level_flight_depth(SUBOFF, ratio * U_CR, alpha)
+    assert found.limited_by == "no trim" and found.min_depth_m > RADIUS
+    fold = found.min_depth_m
+    near = surface_trim(SUBOFF, ratio * U_CR, fold, alpha)
+    far = surface_trim(SUBOFF, ratio * U_CR, fold + 0.3, alpha)
+    assert near.within_limits
+    ratio_det = abs(_balance_determinant(near, alpha) / _balance_determinant(far, alpha))
+    assert ratio_det < 0.15
+
+
+def test_a_seas_mean_suction_deepens_the_shallowest_depth_held():
+    calm = min_level_flight_depth(SUBOFF, 0.9 * U_CR).min_depth_m
+    sea = min_level_flight_depth(SUBOFF, 0.9 * U_CR, sea_state=PERISCOPE_SEA).min_depth_m
+    assert sea > calm
+    assert math.isfinite(sea)
