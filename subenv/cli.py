@@ -288,19 +288,41 @@ def _grid_axis(text: str) -> tuple[str, tuple[float, ...]]:
     return name.strip(), points
 
 
+DEFAULT_MAPS: dict[str, list[tuple[str, tuple[float, ...]]]] = {
+    "x_GB": [("speed_ratio", tuple(np.round(np.linspace(0.3, 2.0, 10), 6).tolist())),
+             ("x_GB_m", tuple(np.round(np.linspace(0.0, 0.003, 7), 6).tolist()))],
+    "excess_buoyancy": [("speed_ratio", tuple(np.round(np.linspace(0.3, 2.0, 10), 6).tolist())),
+                        ("excess_buoyancy_fraction", tuple(np.round(np.linspace(-0.001, 0.001, 9), 6).tolist()))],
+}
+"""What ``subenv sweep`` without ``--grid`` runs: the two performance maps, over (u/u_cr, x_GB) and over
+(u/u_cr, (B - W)/W), each into its own subfolder of ``--out``."""
+
+
 def sweep(args: argparse.Namespace) -> int:
     from subenv.evaluation.rollout import resolve_controllers
-    from subenv.sweep import SweepSpec, run_sweep
+    from subenv.sweep import SweepSpec
 
     _installed_controllers(args.controllers)
     controllers = args.controllers or [c.name for c in resolve_controllers(None)]
+    grids = {"": args.grid} if args.grid is not None else DEFAULT_MAPS
     try:
-        spec = SweepSpec(controllers=tuple(controllers), scenarios=tuple(args.scenarios), grid=tuple(args.grid or ()),
-                         episodes=args.episodes, seed=args.seed, vehicle=args.vehicle,
-                         chunk_episodes=args.chunk_episodes)
+        specs = {name: SweepSpec(controllers=tuple(controllers), scenarios=tuple(args.scenarios), grid=tuple(grid),
+                                 episodes=args.episodes, seed=args.seed, vehicle=args.vehicle,
+                                 chunk_episodes=args.chunk_episodes) for name, grid in grids.items()}
     except ValueError as exc:
         raise SystemExit(f"subenv sweep: {exc}") from None
-    out = args.out or f"results/sweep/{time.strftime('%Y%m%d-%H%M%S')}"
+    out = Path(args.out or f"results/sweep/{time.strftime('%Y%m%d-%H%M%S')}")
+    for name, spec in specs.items():
+        if len(specs) > 1:
+            print(f"## {name}: " + " x ".join(f"{axis} ({len(values)})" for axis, values in spec.grid), flush=True)
+        _sweep_one(spec, out / name if name else out, args)
+    return 0
+
+
+def _sweep_one(spec: Any, out: Path, args: argparse.Namespace) -> None:
+    """Run (or resume) one sweep, print its success per grid point, draw its maps."""
+    from subenv.sweep import run_sweep
+
     try:
         path = run_sweep(spec, out, address=args.address, num_cpus=args.num_cpus, progress=not args.no_progress)
     except FileExistsError as exc:
@@ -329,7 +351,6 @@ def sweep(args: argparse.Namespace) -> int:
             print(f"(no performance maps: {exc})", file=sys.stderr)
         else:
             print(f"performance maps in {maps}")
-    return 0
 
 
 def _names(text: str) -> list[str]:
@@ -386,7 +407,8 @@ def _parser() -> argparse.ArgumentParser:
                          help="comma-separated scenario names (default: LowSpeed)")
     p_sweep.add_argument("--grid", type=_grid_axis, action="append",
                          help="a grid axis, name=v1,v2,... or name=start:stop:count, repeatable; names: "
-                              + ", ".join(sorted(PARAMETERS)) + " (default: speed_ratio=0.3:1.5:13)")
+                              + ", ".join(sorted(PARAMETERS)) + " (default: the two performance maps, speed_ratio=0.3:2:10 with "
+                              "x_GB_m=0:0.003:7, and with excess_buoyancy_fraction=-0.001:0.001:9)")
     p_sweep.add_argument("--episodes", type=int, default=20, help="episodes per grid point (default: %(default)s)")
     p_sweep.add_argument("--seed", type=int, default=10000, help="base seed (default: %(default)s)")
     p_sweep.add_argument("--vehicle", default="suboff", help="vehicle name or file (default: %(default)s)")
@@ -414,8 +436,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command is None:
             parser.print_help(sys.stderr)
             return 2
-        if args.command == "sweep" and args.grid is None:
-            args.grid = [("speed_ratio", tuple(float(v) for v in np.linspace(0.3, 1.5, 13)))]
         commands = {"evaluate": evaluate, "demo": demo, "analyze": analyze, "list": list_environments, "sweep": sweep}
         return commands[args.command](args)
     except MissingExtra as exc:

@@ -233,14 +233,20 @@ def run_sweep(
 
 def plot_performance_maps(results: str | os.PathLike[str], out: str | os.PathLike[str],
                           vehicle: str = "suboff") -> Path:
-    """Success rate over a sweep's two grid axes, one panel per controller, with the physics overlaid.
+    """Success rate and plane effort over a sweep's two grid axes, one column per controller, with the
+    physics overlaid.
 
     The x axis is u / u_cr (``grid_speed_ratio``), the y axis the sweep's other parameter (x_GB as
-    x_GB / L). Overlaid: the critical speed (u / u_cr = 1, Riedel 1993 eq. 3.9); with x_GB on the y axis,
-    the saturation cusp for one plane command (alpha = 0: beyond it the depth-holding state of dual
-    control needs more than the plane limit, eqs 4.43-4.45, :func:`subenv.analysis.saturation_cusp`);
-    and, hatched, the grid points whose episodes have no depth-holding trim within the limits for any
-    allocation (the ``winnable`` column: no controller can win there). Needs the ``plot`` extra.
+    x_GB / L, excess buoyancy as (B - W) / W). Top row: the success rate; bottom row: the mean plane RMS
+    [rad] (sqrt of the time mean of stern^2 + bow^2), one colour scale for all controllers. Overlaid: the
+    critical speed (u / u_cr = 1, Riedel 1993 eq. 3.9); the fold (hysteresis) set of one plane command
+    (alpha = 0), where two steady states merge and the steady pitch jumps (eq. 4.3;
+    :func:`subenv.analysis.exact_bifurcation_set` for x_GB, :func:`subenv.analysis.buoyancy_bifurcation_set`
+    for the excess buoyancy); with x_GB on the y axis, the saturation cusp for one plane command (beyond it
+    the depth-holding state needs more than the plane limit, eqs 4.43-4.45,
+    :func:`subenv.analysis.saturation_cusp`); and, hatched, the grid points whose episodes have no
+    depth-holding trim within the limits for any allocation (the ``winnable`` column: no controller can win
+    there). Written whole or not at all. Needs the ``plot`` extra.
     """
     require("plot", "the performance maps", "matplotlib")
     import matplotlib
@@ -248,8 +254,15 @@ def plot_performance_maps(results: str | os.PathLike[str], out: str | os.PathLik
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     import numpy as np
+    from matplotlib.patches import Rectangle
 
-    from subenv.analysis import critical_speed, saturation_cusp
+    from subenv.analysis import (
+        buoyancy_bifurcation_set,
+        critical_speed,
+        exact_bifurcation_set,
+        saturation_cusp,
+    )
+    from subenv.evaluation.plots import save_figure
     from subenv.vehicles import load_vehicle
 
     rows = _read_rows(Path(results))
@@ -263,41 +276,64 @@ def plot_performance_maps(results: str | os.PathLike[str], out: str | os.PathLik
     xs = sorted({r["grid_speed_ratio"] for r in rows})
     ys = sorted({r[other] for r in rows})
     controllers = list(dict.fromkeys(r["controller"] for r in rows))
-    fig, panels = plt.subplots(1, len(controllers), figsize=(3.6 * len(controllers) + 1.2, 3.8), sharey=True,
-                               layout="constrained", squeeze=False)
-    image = None
-    for ax, controller in zip(panels[0], controllers):
-        success = np.full((len(ys), len(xs)), np.nan)
-        blocked = np.zeros((len(ys), len(xs)), dtype=bool)
-        for j, y in enumerate(ys):
-            for i, x in enumerate(xs):
-                cell = [r for r in rows if r["controller"] == controller and r["grid_speed_ratio"] == x and r[other] == y]
-                if cell:
-                    success[j, i] = float(np.mean([r["success"] for r in cell]))
-                    blocked[j, i] = not all(r["winnable"] for r in cell)
-        image = ax.pcolormesh(_edges(xs), _edges([y * scale for y in ys]), success, vmin=0.0, vmax=1.0,
-                              cmap="viridis", shading="flat")
-        ax.contourf(xs, [y * scale for y in ys], blocked.astype(float), levels=[0.5, 1.5], colors="none",
-                    hatches=["xx"])
-        ax.axvline(1.0, color="w", ls="--", lw=1.2)
-        if other == "grid_x_GB_m":
-            ucr = critical_speed(boat)
-            ratios = np.linspace(min(xs), max(xs), 200)
-            x_plus, x_minus = saturation_cusp(boat, ratios * ucr)
-            ax.plot(ratios, x_plus * scale, color="tab:red", lw=1.2)
-            ax.plot(ratios, x_minus * scale, color="tab:red", lw=1.2)
-            ax.set_ylim(min(ys) * scale, max(ys) * scale) if min(ys) != max(ys) else None
-        ax.set(title=controller, xlabel="u / u_cr")
-    panels[0][0].set_ylabel(label)
-    fig.colorbar(image, ax=panels[0].tolist(), label="success rate")
-    fig.suptitle("Success over the sweep's grid. Dashed: the critical speed; red: the saturation cusp "
-                 "(alpha = 0);\nhatched: no depth-holding trim within the limits (no controller can win)",
+    shape = (len(ys), len(xs))
+    success, effort = {c: np.full(shape, np.nan) for c in controllers}, {c: np.full(shape, np.nan) for c in controllers}
+    blocked = np.zeros(shape, dtype=bool)
+    for (c, x, y), cell in _cells(rows, other).items():
+        j, i = ys.index(y), xs.index(x)
+        success[c][j, i] = float(np.mean([r["success"] for r in cell]))
+        effort[c][j, i] = float(np.mean([r["plane_rms_rad"] for r in cell]))
+        blocked[j, i] |= not all(r["winnable"] for r in cell)
+    # The physics, over the plotted speeds (alpha = 0: one plane command, the allocation of lqr and thesis).
+    ucr = critical_speed(boat)
+    ratios = np.linspace(min(xs), max(xs), 120)
+    curves: list[tuple[np.ndarray, str, str]] = []
+    if other == "grid_x_GB_m":
+        curves += [(c * scale, "tab:red", "-") for c in saturation_cusp(boat, ratios * ucr)]
+        curves += [(c * scale, "white", ":") for c in exact_bifurcation_set(boat, ratios * ucr)]
+    elif other == "grid_excess_buoyancy_fraction":
+        curves += [(c, "white", ":") for c in buoyancy_bifurcation_set(boat, ratios * ucr)]
+    x_edges, y_edges = _edges(xs), _edges([y * scale for y in ys])
+    effort_max = max(float(np.nanmax(e)) for e in effort.values())
+    fig, panels = plt.subplots(2, len(controllers), figsize=(3.4 * len(controllers) + 1.4, 6.6), sharex=True,
+                               sharey=True, layout="constrained", squeeze=False)
+    images = []
+    for k, controller in enumerate(controllers):
+        for row, (values, cmap, vmax) in enumerate(((success[controller], "viridis", 1.0),
+                                                    (effort[controller], "magma", effort_max))):
+            ax = panels[row][k]
+            images.append(ax.pcolormesh(x_edges, y_edges, values, vmin=0.0, vmax=vmax, cmap=cmap, shading="flat"))
+            for j, i in zip(*np.nonzero(blocked)):  # whole cells, hatched
+                ax.add_patch(Rectangle((x_edges[i], y_edges[j]), x_edges[i + 1] - x_edges[i], y_edges[j + 1] - y_edges[j],
+                                       fill=False, hatch="xx", edgecolor="0.8" if row == 0 else "0.2", lw=0.0))
+            ax.axvline(1.0, color="w", ls="--", lw=1.2)
+            for curve, color, style in curves:
+                ax.plot(ratios, curve, color=color, ls=style, lw=1.4)
+            ax.set_ylim(y_edges[0], y_edges[-1])
+            if row == 0:
+                ax.set_title(controller)
+            else:
+                ax.set_xlabel("u / u_cr")
+        panels[0][k].set_xlim(x_edges[0], x_edges[-1])
+    panels[0][0].set_ylabel(f"{label}\n(success)")
+    panels[1][0].set_ylabel(f"{label}\n(plane RMS)")
+    fig.colorbar(images[0], ax=panels[0].tolist(), label="success rate")
+    fig.colorbar(images[1], ax=panels[1].tolist(), label="plane RMS [rad]")
+    cusp = "; red: the saturation cusp" if other == "grid_x_GB_m" else ""
+    fig.suptitle("Dashed: the critical speed; dotted: the fold (hysteresis) set of one plane command (alpha = 0)"
+                 f"{cusp};\nhatched: no depth-holding trim within the limits for any allocation (no controller can win)",
                  fontsize="medium")
-    path = Path(out)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=100)
+    path = save_figure(fig, out)
     plt.close(fig)
     return path
+
+
+def _cells(rows: Sequence[Mapping[str, Any]], other: str) -> dict[tuple[Any, ...], list[Mapping[str, Any]]]:
+    """The rows of each (controller, speed ratio, other axis) grid cell."""
+    cells: dict[tuple[Any, ...], list[Mapping[str, Any]]] = {}
+    for r in rows:
+        cells.setdefault((r["controller"], r["grid_speed_ratio"], r[other]), []).append(r)
+    return cells
 
 
 def _edges(centres: Sequence[float]) -> list[float]:

@@ -20,6 +20,7 @@
 
 from subenv.analysis.bifurcation import (
     approximate_cusp,
+    buoyancy_bifurcation_set,
     exact_bifurcation_set,
     exact_cusp,
     saturation_cusp,
@@ -75,6 +76,7 @@ __all__ = [
     "SurfaceCriticalSpeed",
     "SurfaceTrim",
     "approximate_cusp",
+    "buoyancy_bifurcation_set",
     "closed_loop_eigenvalues",
     "continue_equilibria",
     "continue_periodic_orbits",

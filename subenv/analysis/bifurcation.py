@@ -15,6 +15,7 @@ printed one with u in ft/s, as the thesis's Fig. 4-2 did.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Literal
 
 import numpy as np
@@ -28,6 +29,7 @@ from subenv.vehicles.vehicle import Vehicle
 
 __all__ = [
     "approximate_cusp",
+    "buoyancy_bifurcation_set",
     "exact_bifurcation_set",
     "exact_cusp",
     "offset_from_beta",
@@ -110,18 +112,55 @@ def exact_bifurcation_set(
         g0 = float(steady_state_residual(base, u, theta, alpha, drag_moment, hull))
         return -g0 / (W * Z_d * math.cos(theta))
 
+    return _fold_edges(offset, speeds_mps)
+
+
+def buoyancy_bifurcation_set(
+    vehicle: Vehicle,
+    speeds_mps: FloatArray,
+    alpha: float = 0.0,
+    drag_moment: DragMoment = "consistent",
+    hull: HullIntegral = "full",
+) -> tuple[FloatArray, FloatArray]:
+    """Excess buoyancy fractions (B - W) / W at which the exact steady-state equation folds, per speed.
+
+    The counterpart of :func:`exact_bifurcation_set` for the other imperfection of the pitchfork (Riedel 1993
+    Ch. V.C): eq. 4.3 is affine in B (through (W - B) M_d, x_B B and z_B B, W kept), so each pitch theta is a
+    steady state for one B(theta), and a fold is an extremum of B(theta). Below the critical speed there
+    are two, one on each side of the neutral boat's; NaN above it. Uses the vehicle's own x_GB, z_GB and C_D.
+
+    Returns
+    -------
+    low, high : ndarray
+        The two edges of the bifurcation set as (B - W) / W, NaN where there is none.
+    """
+    W = vehicle.weight_N
+    neutral, heavier = vehicle.variant(excess_buoyancy_N=0.0), vehicle.variant(excess_buoyancy_N=W)
+
+    def excess(theta: float, u: float) -> float:
+        r0 = float(steady_state_residual(neutral, u, theta, alpha, drag_moment, hull))
+        r1 = float(steady_state_residual(heavier, u, theta, alpha, drag_moment, hull)) - r0  # per W of excess
+        return -r0 / r1
+
+    return _fold_edges(excess, speeds_mps)
+
+
+def _fold_edges(parameter: Callable[[float, float], float], speeds_mps: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The two extrema of ``parameter(theta, u)`` nearest zero over theta, per speed: the folds of the
+    steady states (two merge where the parameter that puts theta at a steady state turns back)."""
     lows, highs = [], []
     for u in np.asarray(speeds_mps, dtype=float):
         grid = np.linspace(-1.2, 1.2, 481)
-        values = np.array([offset(t, u) for t in grid])
+        values = np.array([parameter(t, u) for t in grid])
         slope = np.diff(values)
         turns = np.flatnonzero(np.sign(slope[:-1]) * np.sign(slope[1:]) < 0) + 1
         extrema = []
         for i in turns:
-            res = minimize_scalar(lambda t: -offset(t, u) if slope[i - 1] > 0 else offset(t, u),
+            sign = -1.0 if slope[i - 1] > 0 else 1.0  # (a maximum, or a minimum)
+            res = minimize_scalar(lambda t, u=u, sign=sign: sign * parameter(t, u),
                                   bounds=(grid[i - 1], grid[i + 1]), method="bounded",
                                   options={"xatol": 1e-10})
-            extrema.append(offset(float(res.x), u))
+            extrema.append(parameter(float(res.x), u))
         inner = sorted(extrema, key=abs)[:2]
         if len(inner) == 2:
             lows.append(min(inner))

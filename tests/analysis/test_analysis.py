@@ -251,3 +251,21 @@ def test_unlimited_planes_return_every_root_of_eq_4_3(thesis_boat):
     assert abs(unlimited[0].plane_rad) > thesis_boat.planes.limit_rad  # beyond what the planes can do
     limited = equilibria(thesis_boat, u)
     assert [e.saturated for e in limited] == [True, False, True]
+
+
+def test_the_buoyancy_bifurcation_set_is_where_the_number_of_steady_states_changes(suboff):
+    # Independent check: count the roots of eq. 4.3 just inside and just outside each edge.
+    from subenv.analysis import buoyancy_bifurcation_set
+
+    u = 0.5 * critical_speed(suboff)
+    low, high = buoyancy_bifurcation_set(suboff, np.array([u]))
+    assert low[0] < 0.0 < high[0]
+    W = suboff.weight_N
+
+    def count(fraction: float) -> int:
+        return len(np.unique(np.round(_roots_of_eq_4_3(suboff.variant(excess_buoyancy_N=fraction * W), u), 6)))
+
+    for edge in (low[0], high[0]):  # two steady states merge at the edge and are gone beyond it
+        assert count(0.99 * edge) - count(1.01 * edge) == 2
+    above, _ = buoyancy_bifurcation_set(suboff, np.array([1.2 * critical_speed(suboff)]))
+    assert np.isnan(above[0])  # above the critical speed the pitchfork has no fold
