@@ -27,6 +27,7 @@ import numpy as np
 
 import subenv  # noqa: F401  (registers the environments)
 from subenv.analysis import THESIS_POLES, critical_speed, thesis_gain
+from subenv.atomic import atomic_write_text
 from subenv.extras import MissingExtra, require
 from subenv.sweep import PARAMETERS
 from subenv.thesis import THESIS_DESIGN_SPEED_MPS
@@ -288,6 +289,9 @@ def _grid_axis(text: str) -> tuple[str, tuple[float, ...]]:
     return name.strip(), points
 
 
+_PRINTED_POINTS = 60
+"""A sweep with more grid points x controllers than this prints one line per controller (the table is in success.md)."""
+
 DEFAULT_MAPS: dict[str, list[tuple[str, tuple[float, ...]]]] = {
     "x_GB": [("speed_ratio", tuple(np.round(np.linspace(0.3, 2.0, 10), 6).tolist())),
              ("x_GB_m", tuple(np.round(np.linspace(0.0, 0.003, 7), 6).tolist()))],
@@ -334,13 +338,19 @@ def _sweep_one(spec: Any, out: Path, args: argparse.Namespace) -> None:
     cells: dict[tuple[Any, ...], list[bool]] = {}
     for row in rows:
         cells.setdefault((row["controller"], row["scenario"], *(row[a] for a in axes)), []).append(row["success"])
-    print("| controller | scenario | " + " | ".join(name for name, _ in spec.grid) + (" | " if axes else "")
-          + "success |")
-    print("|---" * (3 + len(axes)) + "|")
+    table = ["| controller | scenario | " + " | ".join(name for name, _ in spec.grid) + (" | " if axes else "")
+             + "success |", "|---" * (3 + len(axes)) + "|"]
     for key, successes in cells.items():
         values = " | ".join(f"{v:.4g}" if isinstance(v, float) else str(v) for v in key)
-        print(f"| {values} | {sum(successes) / len(successes):.0%} |")
-    print(f"\n{len(rows)} episodes; results in {path}")
+        table.append(f"| {values} | {sum(successes) / len(successes):.0%} |")
+    atomic_write_text(path.parent / "success.md", "\n".join(table) + "\n")
+    if len(cells) <= _PRINTED_POINTS:
+        print("\n".join(table))
+    else:  # (a map's hundreds of points: one line per controller here, every point in success.md)
+        for controller in spec.controllers:
+            mine = [r["success"] for r in rows if r["controller"] == controller]
+            print(f"{controller}: {sum(mine) / len(mine):.0%} success over {len(mine)} episodes")
+    print(f"\n{len(rows)} episodes; results in {path}, success per grid point in {path.parent / 'success.md'}")
     names = [name for name, _ in spec.grid]
     if not args.no_plots and "speed_ratio" in names and len(names) == 2:
         from subenv.sweep import plot_performance_maps

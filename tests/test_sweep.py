@@ -119,6 +119,7 @@ def test_the_command_line_sweeps_a_grid_and_prints_success_per_point(local_ray, 
     # Below u_cr the thesis design fails, above it holds depth (on these seeds).
     assert "| thesis | LowSpeed | 0.5 | 0% |" in printed and "| thesis | LowSpeed | 1.5 | 100% |" in printed
     assert (out / "results.parquet").is_file() and (out / "manifest.json").is_file()
+    assert "| thesis | LowSpeed | 0.5 | 0% |" in (out / "success.md").read_text()
     with pytest.raises(SystemExit) as error:
         main(["sweep", "--grid", "speed_ratio=1:2", "--out", str(tmp_path / "bad")])
     assert error.value.code == 2 and not (tmp_path / "bad").exists()
