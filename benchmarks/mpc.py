@@ -30,6 +30,7 @@ def _controller(name: str) -> Controller:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--suite", default="default")
+    parser.add_argument("--scenarios", help="comma-separated scenario names instead of the suite's")
     parser.add_argument("--episodes", type=int, default=20)
     parser.add_argument("--controllers", nargs="+", default=["reversal_aware", "mpc"])
     args = parser.parse_args()
@@ -39,7 +40,8 @@ def main() -> None:
     for name in args.controllers:
         controller = _controller(name)
         start = time.perf_counter()
-        results = evaluate([controller], args.suite, episodes=args.episodes, progress=False)
+        suite = args.scenarios.split(",") if args.scenarios else args.suite
+        results = evaluate([controller], suite, episodes=args.episodes, progress=False)
         elapsed = time.perf_counter() - start
         steps = sum(r.steps for r in results)
         times = np.array(getattr(controller, "solve_times_s", []))
