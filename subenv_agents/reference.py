@@ -207,7 +207,8 @@ def run_reference(out_dir: str | Path, plan: Plan = Plan(), *, max_concurrent: i
                                       failure_config=tune.FailureConfig(max_failures=1),
                                       callbacks=[_progress_lines(len(pending), say)]),
         ), address)
-    return summarize_reference(out, plan, run_time_s=time.perf_counter() - started, baselines=baselines)
+    run_time_s = time.perf_counter() - started if pending else None  # (None: a summary of earlier runs' trials)
+    return summarize_reference(out, plan, run_time_s=run_time_s, baselines=baselines)
 
 
 def _progress_lines(total: int, say: Any) -> Any:
@@ -300,7 +301,7 @@ def summarize_reference(out_dir: str | Path, plan: Plan = Plan(), *, run_time_s:
                       for n in names},
         "per_scenario": per_scenario,
         "learning_curves": curves,
-        "time": {"run_s": None if run_time_s is None else round(run_time_s, 1),
+        "time": {"trials_run_s": None if run_time_s is None else round(run_time_s, 1),
                  "train_s": {a: [r["train_time_s"] for r in records if r["algo"] == a] for a in plan.timesteps},
                  "timesteps_trained": {a: sorted({r["timesteps_trained"] for r in records if r["algo"] == a})
                                        for a in plan.timesteps}},
@@ -415,18 +416,20 @@ def _plot(out: Path, summary: Mapping[str, Any], profiles: Mapping[str, np.ndarr
     save_figure(fig, out / "learning_curves.png")
     plt.close(fig)
 
-    fig, ax = plt.subplots(figsize=(7, 4.2))
+    fig, ax = plt.subplots(figsize=(8.4, 4.2))
     for name, profile in profiles.items():
         multi = summary["runs"][name] > 1
+        shipped = summary["kinds"][name].startswith("shipped")
         (line,) = ax.plot(100 * taus, profile, lw=2.0 if multi else 1.2, ls="-" if multi else "--",
-                          label=f"{name} ({summary['runs'][name]} seeds)" if multi else name)
+                          label=f"{name} ({summary['runs'][name]} seeds)" if multi else
+                          f"{name} (shipped)" if shipped else name)
         if multi:
             ax.fill_between(100 * taus, profile_ci[name][0], profile_ci[name][1], color=line.get_color(), alpha=0.15)
     ax.set_xlabel(r"success over winnable episodes $\tau$ [%]")
     ax.set_ylabel(r"fraction of runs x scenarios with success > $\tau$")
     ax.set_title("Performance profiles on the default suite (dashed: one deterministic run)", fontsize=9)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, ncol=2)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.tight_layout()
     save_figure(fig, out / "performance_profiles.png")
     plt.close(fig)
