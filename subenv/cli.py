@@ -306,6 +306,7 @@ def sweep(args: argparse.Namespace) -> int:
     from subenv.evaluation.rollout import resolve_controllers
     from subenv.sweep import SweepSpec
 
+    require("ray", "subenv sweep", "ray", "pyarrow")  # (before anything is printed or made)
     _installed_controllers(args.controllers)
     controllers = args.controllers or [c.name for c in resolve_controllers(None)]
     grids = {"": args.grid} if args.grid is not None else DEFAULT_MAPS

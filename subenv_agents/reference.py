@@ -47,7 +47,7 @@ from typing import Any, Final
 import numpy as np
 
 from subenv.atomic import atomic_write_text
-from subenv.extras import require
+from subenv.extras import MissingExtra, require
 
 __all__ = ["DEFAULT_TIMESTEPS", "Plan", "main", "run_reference", "summarize_reference"]
 
@@ -458,7 +458,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         plan = Plan(timesteps=_timesteps(args.timesteps), seeds=args.seeds, episodes=args.episodes)
         summary = run_reference(args.out, plan, max_concurrent=args.max_concurrent, address=args.address)
-    except (ValueError, FileNotFoundError, RuntimeError) as exc:
+    except (ValueError, FileNotFoundError, RuntimeError, MissingExtra) as exc:
         raise SystemExit(f"subenv_agents.reference: {exc}") from None
     print(reference_markdown(summary))
     print(f"written to {args.out}/: reference.md, reference.json, scores.csv, learning_curves.png, "

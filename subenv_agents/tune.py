@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any, Final
 
 from subenv.atomic import atomic_write_text
-from subenv.extras import require
+from subenv.extras import MissingExtra, require
 
 __all__ = ["DEFAULT_SPACE", "SELECTION_SCENARIOS", "fit", "main", "search", "tune_space"]
 
@@ -181,7 +181,7 @@ def main(argv: list[str] | None = None) -> int:
         space = json.loads(args.space) if args.space else DEFAULT_SPACE
         best = search(args.algo, args.env, args.out, space=space, samples=args.samples, timesteps=args.n_timesteps,
                       seed=args.seed, episodes=args.episodes, max_concurrent=args.max_concurrent, address=args.address)
-    except (ValueError, FileExistsError, RuntimeError, json.JSONDecodeError) as exc:
+    except (ValueError, FileExistsError, RuntimeError, json.JSONDecodeError, MissingExtra) as exc:
         raise SystemExit(f"subenv_agents.tune: {exc}") from None
     print(f"best: {best['values']} success {best['success_rate']:.0%}, plane RMS {best['plane_rms_rad']:.4f} rad; "
           f"run folder {best['run_dir']}; all trials in {Path(args.out) / 'best.json'}")

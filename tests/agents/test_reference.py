@@ -91,3 +91,14 @@ def test_a_bad_hyperparameter_is_refused_before_anything_runs(tmp_path) -> None:
     with pytest.raises(ValueError, match="learning_rat"):
         run_reference(tmp_path / "bad", Plan(timesteps={"ppo": 256}, overrides={"learning_rat": 1e-3}), progress=False)
     assert not (tmp_path / "bad").exists()
+
+
+def test_without_an_extra_the_command_says_which_in_one_line_and_makes_nothing(monkeypatch, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    import subenv.extras
+    from subenv_agents.reference import main
+
+    real = subenv.extras.find_spec
+    monkeypatch.setattr(subenv.extras, "find_spec", lambda name: None if name == "rliable" else real(name))
+    with pytest.raises(SystemExit, match=r"^subenv_agents.reference: the 'stats' extra is needed .*subenv\[stats\]"):
+        main(["--out", str(tmp_path / "out")])
+    assert not (tmp_path / "out").exists()
