@@ -230,6 +230,8 @@ def evaluate(args: argparse.Namespace) -> int:
                          f"in the {ENTRY_POINT_GROUP!r} entry-point group, or see --plugins")
     suite = DEFAULT_SUITE if args.suite is None else args.suite[0] if len(args.suite) == 1 else args.suite
     _note_other_scale(args.vehicle)
+    if not args.no_plots:
+        require("plot", "the plots (or pass --no-plots)", "matplotlib")
     out = args.out or f"results/evaluation/{time.strftime('%Y%m%d-%H%M%S')}"
     try:
         comparison = run_comparison(

@@ -86,7 +86,7 @@ def test_wheel_installs_into_a_clean_venv_and_evaluates(tmp_path: Path):
     evaluate = ("evaluate", "--suite", "tiny", "--episodes", "1", "--controllers", "thesis", "--no-progress", "--out", out)
     refused = _run(subenv, *evaluate, cwd=tmp_path, ok=False)  # matplotlib is not installed
     assert refused.returncode == 1 and refused.stderr.count("\n") == 1 and not out.exists()
-    assert refused.stderr.startswith("subenv evaluate: the 'plot' extra is needed for the plots: "
+    assert refused.stderr.startswith("subenv evaluate: the 'plot' extra is needed for the plots (or pass --no-plots): "
                                      'pip install "subenv[plot]" (or pip install "matplotlib>=3.7"; ')
     _run(subenv, *evaluate, "--no-plots", cwd=tmp_path)
     rows = list(csv.DictReader((out / "results.csv").open()))
