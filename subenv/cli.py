@@ -192,8 +192,10 @@ def _installed_controllers(requested: Sequence[str] | None) -> None:
             print(f"(skipped {', '.join(names)}: {reason})", file=sys.stderr)
 
 
-def _note_other_scale(vehicle_name: str) -> None:
-    """On a vehicle of another length the comparison is Froude-scaled, but the agents are not."""
+def _note_other_vehicle(vehicle_name: str, controllers: Sequence[str] | None) -> None:
+    """On a vehicle of another length the comparison is Froude-scaled, but the agents are not; on one without bow
+    planes the controllers that move them are left out of the default comparison."""
+    from subenv.evaluation.rollout import needs_bow_planes, resolve_controllers
     from subenv.thesis import reference_length_ratio
     from subenv.vehicles import load_vehicle
 
@@ -201,6 +203,10 @@ def _note_other_scale(vehicle_name: str) -> None:
         vehicle = load_vehicle(vehicle_name)
     except ValueError as exc:
         raise SystemExit(f"subenv evaluate: {exc}") from None
+    if controllers is None and not vehicle.planes.has_bow_planes:
+        bow = [c.name for c in resolve_controllers(None) if needs_bow_planes(c)]
+        if bow:
+            print(f"(skipped {', '.join(bow)}: they move the bow planes, and {vehicle_name} has none)", file=sys.stderr)
     ratio = reference_length_ratio(vehicle)
     if ratio != 1.0:
         print(f"(--vehicle {vehicle_name}: the scenarios, the success criterion and the classical baselines' "
@@ -229,7 +235,7 @@ def evaluate(args: argparse.Namespace) -> int:
         raise SystemExit(f"subenv evaluate: no controllers are registered: install a package that declares some "
                          f"in the {ENTRY_POINT_GROUP!r} entry-point group, or see --plugins")
     suite = DEFAULT_SUITE if args.suite is None else args.suite[0] if len(args.suite) == 1 else args.suite
-    _note_other_scale(args.vehicle)
+    _note_other_vehicle(args.vehicle, args.controllers)
     if not args.no_plots:
         require("plot", "the plots (or pass --no-plots)", "matplotlib")
     out = args.out or f"results/evaluation/{time.strftime('%Y%m%d-%H%M%S')}"

@@ -164,7 +164,7 @@ def test_force_replaces_only_an_earlier_result_of_the_command(tmp_path: Path, no
 
 @pytest.mark.parametrize(
     ("vehicle", "reason"),
-    [("nope", r"vehicle='nope' is unknown: must be one of \['suboff', 'suboff_fullscale'\]"),
+    [("nope", r"vehicle='nope' is unknown: must be one of \['remus100', 'suboff', 'suboff_fullscale'\]"),
      ("missing.toml", r"vehicle file 'missing.toml' does not exist")],
 )
 def test_analyze_with_a_bad_vehicle_is_a_one_line_error(tmp_path: Path, no_work, vehicle, reason):
@@ -316,6 +316,6 @@ def test_evaluate_takes_a_vehicle_and_says_what_is_not_scaled(tmp_path: Path, ca
     assert "--vehicle suboff_fullscale: the scenarios, the success criterion and the classical baselines' designs are " \
            "Froude-scaled to its 102.3 m (x24)" in err
     assert json.loads((out / "run.json").read_text())["vehicle"] == "suboff_fullscale"
-    with pytest.raises(SystemExit, match=r"vehicle='boat' is unknown: must be one of \['suboff', 'suboff_fullscale'\]"):
+    with pytest.raises(SystemExit, match=r"vehicle='boat' is unknown: must be one of \['remus100', 'suboff', 'suboff_fullscale'\]"):
         main(["evaluate", "--vehicle", "boat", "--out", str(tmp_path / "none")])
     assert not (tmp_path / "none").exists()

@@ -14,7 +14,7 @@
 - :mod:`~subenv.analysis.free_surface`: beyond the thesis (its Ch. VI's first recommendation): level
   flight near the free surface, its stability, the shallowest depth a speed holds, the critical
   speed's shift.
-- :mod:`~subenv.analysis.winnable`: depth-holding trims with both plane pairs free (can an episode be won).
+- :mod:`~subenv.analysis.winnable`: depth-holding trims with every plane pair free (can an episode be won).
 - :mod:`~subenv.analysis.report`: the reproduction report (``subenv analyze``).
 """
 

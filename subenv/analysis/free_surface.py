@@ -24,6 +24,8 @@ from subenv.analysis.linear import check_alpha, plane_derivatives
 from subenv.dynamics.free_surface import FreeSurface, suction
 from subenv.dynamics.model import ModelParams, derivatives, model_params
 from subenv.dynamics.waves import SeaState
+from subenv.thesis import reference_length_ratio
+from subenv.vehicles.scaling import froude_factor
 from subenv.vehicles.vehicle import Vehicle
 
 __all__ = [
@@ -38,10 +40,11 @@ __all__ = [
 _EPS: Final = 1e-6  # central-difference step of the Jacobians (rad, m/s, rad/s, m)
 _RESIDUAL: Final = 1e-12  # m/s^2 and rad/s^2: a trim's heave and pitch accelerations, at most
 _PITCH_STARTS_RAD: Final = (0.0, 0.1, -0.1, 0.2, -0.2, 0.4, -0.4)  # the trim search's starts
-_DEPTH_STEPS: Final = 400  # depths from 5 m to the hull radius, geometric (steps below 1 % of the depth)
+_DEPTH_STEPS: Final = 400  # depths from the deepest (5 m on SUBOFF) to the hull radius, geometric (steps below 1 % of the depth)
 _BRANCH_JUMP_RAD: Final = 0.05  # a trim this far in pitch from the one below is another branch
 _DEPTH_TOLERANCE_M: Final = 1e-3  # of the shallowest depth held
-_DEEPEST_M: Final = 5.0  # the search's deepest depth: there SUBOFF's suction is below 0.1 % of its plane force
+_DEEPEST_M: Final = 5.0  # the search's deepest depth on SUBOFF (Froude-scaled on another vehicle, as its
+# episodes are): there SUBOFF's suction is below 0.1 % of its plane force
 
 
 @dataclass(frozen=True)
@@ -269,10 +272,11 @@ def min_level_flight_depth(vehicle: Vehicle, speed_mps: float, alpha: float = 0.
             return None, "no trim"
         return trim, "" if trim.within_limits else "planes"
 
-    held = surface_trim(vehicle, u, _DEEPEST_M, alpha, free_surface, sea_state)
+    deepest = _DEEPEST_M * froude_factor("length", reference_length_ratio(vehicle))  # (x 1.0 exactly on SUBOFF)
+    held = surface_trim(vehicle, u, deepest, alpha, free_surface, sea_state)
     if not held.within_limits:
-        raise ValueError(f"speed_mps={u!r}: level flight cannot be held even at {_DEEPEST_M} m")
-    for h in np.geomspace(_DEEPEST_M, radius * (1.0 + 1e-6), _DEPTH_STEPS)[1:]:
+        raise ValueError(f"speed_mps={u!r}: level flight cannot be held even at {deepest:.6g} m")
+    for h in np.geomspace(deepest, radius * (1.0 + 1e-6), _DEPTH_STEPS)[1:]:
         trim, why = follow(float(h), held)
         if why:
             lost = float(h)

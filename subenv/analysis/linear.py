@@ -36,6 +36,8 @@ def plane_derivatives(vehicle: Vehicle, alpha: Allocation) -> tuple[float, float
     """
     c = vehicle.coefficients
     if alpha == BOW_PLANES_ONLY:
+        check.require("alpha", alpha, vehicle.planes.has_bow_planes,
+                      f"a number in [-1, 1]: vehicle {vehicle.name!r} has no bow planes")
         return c.Z_delta_b, c.M_delta_b
     alpha = check_alpha(alpha)  # type: ignore[arg-type]
     return c.Z_delta_s + alpha * c.Z_delta_b, c.M_delta_s + alpha * c.M_delta_b

@@ -41,8 +41,10 @@ from subenv.analysis.reversal import level_flight_trim
 from subenv.atomic import atomic_output_dir
 from subenv.dynamics.free_surface import FreeSurface, suction
 from subenv.dynamics.model import model_params
+from subenv.thesis import reference_length_ratio
 from subenv.units import FOOT_M, mps_to_fps
 from subenv.vehicles.loader import load_vehicle
+from subenv.vehicles.scaling import froude_factor
 from subenv.vehicles.vehicle import Vehicle
 
 __all__ = ["REPORT_KIND", "HopfFindings", "ReportRow", "SurfaceFindings", "critical_speed_three_ways", "env_growth_rate",
@@ -67,6 +69,16 @@ class ReportRow:
     @property
     def difference(self) -> float:
         return self.computed - self.thesis
+
+
+@dataclass(frozen=True)
+class VehicleRow:
+    """One line of the report's table for a vehicle the thesis did not study."""
+
+    quantity: str
+    computed: float
+    unit: str
+    note: str = ""
 
 
 def _deg(x: float) -> float:
@@ -136,8 +148,41 @@ def _path_a_crossings(vehicle: Vehicle) -> tuple[float, float]:
     return max(crossings), min(crossings)
 
 
+def has_suboff_shape(vehicle: Vehicle) -> bool:
+    """Whether ``vehicle`` is SUBOFF at some size: the thesis's non-dimensional derivatives and hull shape, so that
+    its published numbers (Froude numbers, angles, ratios) apply to it (``suboff``, ``suboff_fullscale``)."""
+    suboff = load_vehicle("suboff")
+    ratio = vehicle.length_m / suboff.length_m
+    return (vehicle.hydro == suboff.hydro and vehicle.planes == suboff.planes
+            and np.allclose(vehicle.hull.x_m, np.array(suboff.hull.x_m) * ratio, rtol=1e-9, atol=0.0)
+            and np.allclose(vehicle.hull.breadth_m, np.array(suboff.hull.breadth_m) * ratio, rtol=1e-9, atol=0.0))
+
+
+def vehicle_numbers(vehicle: Vehicle) -> list[VehicleRow]:
+    """The critical speed (three ways), critical and saturation Froude numbers of any vehicle: the report's table
+    for a vehicle of another shape than SUBOFF's, where the thesis's numbers do not apply."""
+    three = critical_speed_three_ways(vehicle)
+    theta_sat, fn_sat = _saturation_pitch_and_froude(vehicle, 0.0)
+    rows = [
+        VehicleRow("u_cr, eq. 3.9 closed form", three["closed_form"], "m/s", "stern planes"),
+        VehicleRow("u_cr, closed-loop eigenvalue crossing zero (as Fig. 3-4)", three["eigenvalue"], "m/s",
+                   "the pole-placement gain of eq. 2.98 at the Froude-scaled design speed"),
+        VehicleRow("u_cr, controllability matrix singular (as Fig. 3-14)", three["controllability"], "m/s"),
+        VehicleRow("critical Froude number u_cr / sqrt(g z_GB)", critical_froude(vehicle, 0.0), "-", "eq. 4.25"),
+        VehicleRow("critical Froude number u_cr / sqrt(g L)", three["closed_form"] / math.sqrt(
+            vehicle.gravity_m_s2 * vehicle.length_m), "-"),
+        VehicleRow("saturation Froude number, symmetric pitchfork (as Figs 3-5, 3-6)", fn_sat, "-"),
+        VehicleRow("pitch at saturation (as Figs 3-5, 4-6)", _deg(theta_sat), "deg"),
+    ]
+    if vehicle.planes.has_bow_planes:
+        rows.append(VehicleRow("critical Froude number, bow planes only (as Fig. 5-4)",
+                               critical_froude(vehicle, BOW_PLANES_ONLY), "-"))
+    return rows
+
+
 def reproduce_numbers(vehicle: Vehicle) -> list[ReportRow]:
-    """The thesis's published numbers next to the values the package computes for ``vehicle``."""
+    """The thesis's published numbers next to the values the package computes for ``vehicle`` (of SUBOFF's shape:
+    :func:`has_suboff_shape`)."""
     rows = []
     gain = thesis_gain(vehicle)
     gain_ft = gain * np.array([1.0, FOOT_M, 1.0, FOOT_M])
@@ -270,8 +315,10 @@ def _hopf_markdown(vehicle: Vehicle, found: HopfFindings) -> list[str]:
         (f"cycle pitch amplitude at {found.orbit_speeds_mps[0]:.3g} m/s: continuation / normal form",
          f"{math.degrees(found.orbit_amplitudes_rad[0]):.2f}", "deg",
          f"normal form {math.degrees(p.predicted_amplitude_rad(vehicle, found.orbit_speeds_mps[0])):.2f} deg"),
-        ("speed at which the cycle reaches the 0.6 rad pitch limit", f"{found.pitch_limit_speed_mps:.3f}", "m/s",
-         "zero action ends on pitch_limit above it"),
+        ("speed at which the cycle reaches the 0.6 rad pitch limit", *(
+            (f"{found.pitch_limit_speed_mps:.3f}", "m/s", "zero action ends on pitch_limit above it")
+            if math.isfinite(found.pitch_limit_speed_mps) else
+            ("not reached", "", f"up to {max(found.orbit_speeds_mps):.3g} m/s, the fastest cycle continued"))),
         ("speed above which the pair is real (divergence)", f"{found.splitting_speed_mps:.3f}", "m/s", ""),
     ]
     lines = ["| quantity | value | unit | note |", "|---|---:|---|---|"]
@@ -293,11 +340,24 @@ def _hopf_markdown(vehicle: Vehicle, found: HopfFindings) -> list[str]:
 
 
 _SURFACE_DEPTHS_M: Final = (0.3, 0.35, 0.4, 0.5, 0.6, 0.8, 1.0, 1.2, 1.5, 2.0, 3.0)
-"""Depths of midship [m] at which the report gives the critical speed near the surface."""
+"""Depths of midship [m] at which the report gives the critical speed near the surface (SUBOFF's; Froude-scaled on
+another vehicle: :func:`_surface_depths`)."""
 _SURFACE_SPEED_RATIOS: Final = (0.3, 0.5, 0.7, 0.8, 0.85, 0.9, 0.93, 0.95, 0.97, 1.03, 1.05, 1.1, 1.15, 1.2, 1.5, 2.0)
 """u / u_cr (deep water, alpha = 0) at which the report gives the shallowest depth held."""
 _SURFACE_ALPHAS: Final = (0.0, 1.0)  # stern planes only; both pairs, equal
 _PERISCOPE_DEPTHS_M: Final = (1.0, 1.2)  # PeriscopeDepth's ordered depths (subenv.scenarios.presets)
+
+
+def _surface_depths(vehicle: Vehicle, depths: tuple[float, ...] = _SURFACE_DEPTHS_M) -> tuple[float, ...]:
+    """SUBOFF's depths Froude-scaled to ``vehicle``'s length, as the scenarios' are; those where its hull (of
+    another shape) would broach are left out."""
+    length = froude_factor("length", reference_length_ratio(vehicle))
+    radius = 0.5 * max(vehicle.hull.breadth_m)
+    return tuple(h * length for h in depths if h * length > radius)
+
+
+def _surface_alphas(vehicle: Vehicle) -> tuple[float, ...]:
+    return _SURFACE_ALPHAS if vehicle.planes.has_bow_planes else (0.0,)
 
 
 @dataclass(frozen=True)
@@ -317,11 +377,13 @@ def surface_findings(vehicle: Vehicle) -> SurfaceFindings:
     """The free-surface section's numbers: the critical speed two ways, the shallowest depth held, the
     suction and the stability of level flight against depth."""
     ucr = critical_speed(vehicle)
-    critical = tuple(surface_critical_speed(vehicle, h) for h in _SURFACE_DEPTHS_M)
-    held = {a: tuple(min_level_flight_depth(vehicle, r * ucr, a) for r in _SURFACE_SPEED_RATIOS) for a in _SURFACE_ALPHAS}
-    trims = [surface_trim(vehicle, 0.5 * ucr, h) for h in _SURFACE_DEPTHS_M]
+    depths = _surface_depths(vehicle)
+    critical = tuple(surface_critical_speed(vehicle, h) for h in depths)
+    held = {a: tuple(min_level_flight_depth(vehicle, r * ucr, a) for r in _SURFACE_SPEED_RATIOS)
+            for a in _surface_alphas(vehicle)}
+    trims = [surface_trim(vehicle, 0.5 * ucr, h) for h in depths]
     params = model_params(vehicle, FreeSurface())
-    suction_at_ucr, _ = suction(params.hull, 0.0, np.array(_SURFACE_DEPTHS_M), ucr, params.rho_suction)
+    suction_at_ucr, _ = suction(params.hull, 0.0, np.array(depths), ucr, params.rho_suction)
     return SurfaceFindings(critical=critical, held=held, suction_N=tuple(float(z) for z in suction_at_ucr),
                            growth_per_s=tuple(float(max(t.eigenvalues.real)) for t in trims))
 
@@ -334,10 +396,11 @@ def _surface_markdown(vehicle: Vehicle, found: SurfaceFindings) -> list[str]:
     for c, z, g in zip(found.critical, found.suction_N, found.growth_per_s):
         lines.append(f"| {c.depth_m:.2f} | {z:.3f} | {c.speed_mps:.4f} | {c.speed_numerical_mps:.4f} | "
                      f"{100 * c.shift:+.2f} % | {g:+.4f} |")
-    held = [("| u / u_cr | " + " | ".join(f"alpha = {a:g}" for a in _SURFACE_ALPHAS) + " |"),
-            "|---:|" + "---|" * len(_SURFACE_ALPHAS)]
+    alphas = tuple(found.held)
+    held = [("| u / u_cr | " + " | ".join(f"alpha = {a:g}" for a in alphas) + " |"),
+            "|---:|" + "---|" * len(alphas)]
     for k, r in enumerate(_SURFACE_SPEED_RATIOS):
-        cells = [f"{found.held[a][k].min_depth_m:.3f} m ({found.held[a][k].limited_by})" for a in _SURFACE_ALPHAS]
+        cells = [f"{found.held[a][k].min_depth_m:.3f} m ({found.held[a][k].limited_by})" for a in alphas]
         held.append(f"| {r:g} | " + " | ".join(cells) + " |")
     return [
         "## Beyond the thesis: level flight near the free surface",
@@ -355,7 +418,8 @@ def _surface_markdown(vehicle: Vehicle, found: SurfaceFindings) -> list[str]:
         "",
         "With the planes held, level flight near the surface is unstable in depth: the suction weakens with",
         "depth, so a boat pushed down keeps sinking and one pushed up keeps rising (the growth rate above).",
-        "The shallowest depth at which level flight is held with the planes within 0.4 rad (the trim followed",
+        (f"The shallowest depth at which level flight is held with the planes within {vehicle.planes.limit_rad:.2g} rad "
+         "(the trim followed"),
         "up from deep water; `planes`: the plane limit; `no trim`: the trim meets another in a fold and",
         "vanishes; `broaching`: held up to the hull radius):",
         "",
@@ -367,15 +431,17 @@ def _surface_markdown(vehicle: Vehicle, found: SurfaceFindings) -> list[str]:
 def _surface_figure(fig: Any, vehicle: Vehicle, found: SurfaceFindings) -> str:
     ucr = critical_speed(vehicle)
     left, right = fig.subplots(1, 2)
-    depths = np.geomspace(0.27, 3.0, 120)
+    top, bottom = _surface_depths(vehicle, (3.0, 2.0))
+    shallowest = max(0.27 * froude_factor("length", reference_length_ratio(vehicle)), 0.51 * max(vehicle.hull.breadth_m))
+    depths = np.geomspace(shallowest, top, 120)
     closed = [surface_critical_speed(vehicle, h).speed_mps / ucr for h in depths]
     left.plot(closed, depths, lw=1.2, label="eq. 3.9 with the suction's\npitch derivatives")
     left.plot([c.speed_numerical_mps / ucr for c in found.critical], [c.depth_m for c in found.critical], "o", ms=4,
               label="root of the linearised\nsteady depth-rate gain")
-    left.set(xlabel="u_cr(depth) / u_cr(deep)", ylabel="depth of midship [m]", ylim=(3.0, 0.0))
+    left.set(xlabel="u_cr(depth) / u_cr(deep)", ylabel="depth of midship [m]", ylim=(top, 0.0))
     left.legend(fontsize="small", loc="lower left")
     markers = {"planes": "o", "no trim": "x", "broaching": "^"}
-    for k, a in enumerate(_SURFACE_ALPHAS):
+    for k, a in enumerate(found.held):
         rows = found.held[a]
         right.plot(_SURFACE_SPEED_RATIOS, [r.min_depth_m for r in rows], "-", color=f"C{k}", lw=1,
                    label=f"alpha = {a:g}")
@@ -385,22 +451,24 @@ def _surface_figure(fig: Any, vehicle: Vehicle, found: SurfaceFindings) -> str:
                 right.plot(*zip(*pts), marker, color=f"C{k}", ms=5)
     for why, marker in markers.items():
         right.plot([], [], marker, color="0.3", label=why)
-    right.axhspan(*_PERISCOPE_DEPTHS_M, color="0.85", label="PeriscopeDepth's\nordered depths")
-    both = critical_speed(vehicle, 1.0) / ucr
-    for k, x in enumerate((1.0, both)):
+    right.axhspan(*_surface_depths(vehicle, _PERISCOPE_DEPTHS_M), color="0.85", label="PeriscopeDepth's\nordered depths")
+    both = critical_speed(vehicle, 1.0) / ucr if vehicle.planes.has_bow_planes else None
+    for k, x in enumerate((1.0, both) if both is not None else (1.0,)):
         right.axvline(x, color=f"C{k}", ls=":", lw=1)
     right.set(xlabel="u / u_cr (deep water, alpha = 0)", ylabel="shallowest depth held [m]",
-              ylim=(2.0, 0.0), xlim=(0.25, 2.05))
+              ylim=(bottom, 0.0), xlim=(0.25, 2.05))
     right.legend(fontsize="small", loc="lower right")
     worst = max((r for r in found.held[0.0] if r.speed_mps < ucr), key=lambda r: r.min_depth_m)
-    shift = next(c for c in found.critical if c.depth_m == 1.0).shift
-    return (f"Left: the critical speed falls towards the surface ({100 * shift:+.1f} % at 1 m, "
+    one_metre = _surface_depths(vehicle, (1.0,))[0]
+    shift = next(c for c in found.critical if c.depth_m == one_metre).shift
+    both_text = ("" if both is None else f" With both pairs (alpha = 1, u_cr = {both:.2f} u_cr(alpha = 0)) the band "
+                 "moves up in speed and shallower.")
+    return (f"Left: the critical speed falls towards the surface ({100 * shift:+.1f} % at {one_metre:.3g} m, "
             f"{100 * found.critical[0].shift:+.0f} % at {found.critical[0].depth_m:g} m), the two ways agreeing. "
             "Right (dotted: each allocation's deep-water u_cr): "
             f"just below each allocation's critical speed level flight cannot be held near the surface: its "
             f"trim vanishes in a fold (stern planes alone, at {worst.speed_mps / ucr:.2f} u_cr not above "
-            f"{worst.min_depth_m:.2f} m, deeper than PeriscopeDepth's ordered depths). With both pairs (alpha = 1, "
-            f"u_cr = {both:.2f} u_cr(alpha = 0)) the band moves up in speed and shallower.")
+            f"{worst.min_depth_m:.2f} m, deeper than PeriscopeDepth's ordered depths).{both_text}")
 
 
 # --- figures ----------------------------------------------------------------------------------
@@ -693,7 +761,15 @@ def _hopf_figure(fig: Any, vehicle: Vehicle, found: HopfFindings) -> str:
     return (f"Beyond the thesis: with the planes held, level flight's pitch/heave oscillation grows above "
             f"u_H = {p.speed_mps:.3f} m/s ({p.period_s:.0f} s period; the environment's measured growth rates "
             f"agree). The bifurcation is {p.criticality}: stable cycles grow linearly with u - u_H (the quadratic "
-            f"drag's signature) and reach the pitch limit at {found.pitch_limit_speed_mps:.2f} m/s.")
+            f"drag's signature)" + (f" and reach the pitch limit at {found.pitch_limit_speed_mps:.2f} m/s."
+                                    if math.isfinite(found.pitch_limit_speed_mps) else
+                                    f", within the pitch limit up to {max(found.orbit_speeds_mps):.2f} m/s."))
+
+
+def _vehicle_table(rows: list[VehicleRow]) -> str:
+    lines = ["| quantity | value | unit | note |", "|---|---:|---|---|"]
+    lines += [f"| {r.quantity} | {r.computed:.5g} | {r.unit} | {r.note} |" for r in rows]
+    return "\n".join(lines)
 
 
 def _table(rows: list[ReportRow]) -> str:
@@ -731,12 +807,17 @@ def write_report(out_dir: str | Path, vehicle: Vehicle | None = None, overwrite:
     vehicle = vehicle or load_vehicle("suboff")
     started = time.perf_counter()
     with atomic_output_dir(out_dir, overwrite=overwrite, kind=REPORT_KIND) as folder:
-        rows = reproduce_numbers(vehicle)
+        suboff_shape = has_suboff_shape(vehicle)
+        table = _table(reproduce_numbers(vehicle)) if suboff_shape else _vehicle_table(vehicle_numbers(vehicle))
         captions = []
         found = hopf_findings(vehicle)
         surface = surface_findings(vehicle)
+        # Figures of the bow/stern allocation need bow planes; Fig. 5-7 redraws the thesis's own inputs (its
+        # truncated SUBOFF hull), so it is SUBOFF's alone.
+        skipped = (() if vehicle.planes.has_bow_planes else ("fig3-9", "fig3-13", "fig5-4")) + \
+            (() if suboff_shape else ("fig5-7",))
         figures = {
-            **_figures(vehicle),
+            **{name: draw for name, draw in _figures(vehicle).items() if name not in skipped},
             "hopf": lambda fig: _hopf_figure(fig, vehicle, found),
             "free_surface": lambda fig: _surface_figure(fig, vehicle, surface),
         }
@@ -749,21 +830,40 @@ def write_report(out_dir: str | Path, vehicle: Vehicle | None = None, overwrite:
             plt.close(fig)
             captions.append((name, caption))
         elapsed = time.perf_counter() - started
+        if suboff_shape:
+            intro = [
+                "# Reproduction of Riedel (1993) with subenv",
+                "",
+                f"Vehicle: {vehicle.name} ({vehicle.description}). Figures 3-4 to 5-4 use C_D = 0 as the thesis's",
+                "did (so neither the hull integral nor the drag-moment sign enters them). The supplementary Fig. 5-7",
+                "has drag: it is drawn with the thesis's inputs (truncated hull integral, printed moment sign) next",
+                "to the full hull with the physically consistent sign.",
+                "",
+                "## Published numbers",
+                "",
+                table,
+                "",
+                "Equation 4.37 as printed is not dimensionless; Fig. 4-2 shows it evaluated as printed (u in fps) next",
+                "to the dimensionally consistent form, which agrees with the exact folds of eq. 4.3.",
+                "",
+            ]
+        else:
+            intro = [
+                f"# Riedel (1993)'s analysis of {vehicle.name} with subenv",
+                "",
+                f"Vehicle: {vehicle.name} ({vehicle.description}); source: {vehicle.source}. The thesis studied",
+                "SUBOFF, so its published numbers do not apply here: the same analysis code computes this vehicle's.",
+                "The figures are the thesis's, drawn for this vehicle, with C_D = 0 as the thesis's Ch. III-IV did"
+                + ("." if vehicle.planes.has_bow_planes else "; it has no bow planes, so the figures of the bow/stern"
+                   " allocation (3-9, 3-13, 5-4) are left out."),
+                "",
+                "## Critical speed and saturation",
+                "",
+                table,
+                "",
+            ]
         text = [
-            "# Reproduction of Riedel (1993) with subenv",
-            "",
-            f"Vehicle: {vehicle.name} ({vehicle.description}). Figures 3-4 to 5-4 use C_D = 0 as the thesis's",
-            "did (so neither the hull integral nor the drag-moment sign enters them). The supplementary Fig. 5-7",
-            "has drag: it is drawn with the thesis's inputs (truncated hull integral, printed moment sign) next",
-            "to the full hull with the physically consistent sign.",
-            "",
-            "## Published numbers",
-            "",
-            _table(rows),
-            "",
-            "Equation 4.37 as printed is not dimensionless; Fig. 4-2 shows it evaluated as printed (u in fps) next",
-            "to the dimensionally consistent form, which agrees with the exact folds of eq. 4.3.",
-            "",
+            *intro,
             *_hopf_markdown(vehicle, found),
             *_surface_markdown(vehicle, surface),
             "## Figures",

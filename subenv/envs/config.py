@@ -122,6 +122,10 @@ class DivePlaneConfig:
                 f"alpha={self.alpha!r} is invalid with control='independent': must be 0 "
                 "(the bow planes have their own action)"
             )
+        if not self.base_vehicle.planes.has_bow_planes and (self.control == "independent" or self.alpha != 0.0):
+            name, value = ("control", self.control) if self.control == "independent" else ("alpha", self.alpha)
+            raise ValueError(f"{name}={value!r} is invalid for vehicle {self.base_vehicle.name!r}, which has no bow "
+                             "planes: must be control='dual' with alpha=0 (the stern planes alone)")
         put(self, "dt", check.positive("dt", self.dt, upper=10.0))
         put(self, "substeps", check.integer("substeps", self.substeps, 1, 1000))
         if self.plane_rate_limit_radps is not None:

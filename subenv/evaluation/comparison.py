@@ -45,6 +45,7 @@ from subenv.evaluation.results import (
 )
 from subenv.evaluation.rollout import EpisodeResult, Trajectory, evaluate, resolve_controllers, resolve_suite
 from subenv.evaluation.suites import DEFAULT_SEED, DEFAULT_SUITE, Suite
+from subenv.vehicles.loader import load_vehicle
 from subenv.vehicles.vehicle import Vehicle
 
 __all__ = ["DEFAULT_OUT_DIR", "RESULTS_KIND", "Comparison", "run_comparison", "write_comparison"]
@@ -139,7 +140,8 @@ def run_comparison(
     ImportError
         ``plots`` without matplotlib installed.
     """
-    ctrls = resolve_controllers(controllers)
+    boat = vehicle if isinstance(vehicle, Vehicle) else load_vehicle(vehicle)
+    ctrls = resolve_controllers(controllers, boat)
     the_suite = resolve_suite(suite)
     n = the_suite.episodes if episodes is None else episodes
     if not (isinstance(n, int) and not isinstance(n, bool) and n >= 1):
@@ -154,7 +156,7 @@ def run_comparison(
         out_dir, overwrite=overwrite, kind=RESULTS_KIND)
     with folder_block as folder:
         start = time.perf_counter()
-        results = evaluate(ctrls, the_suite, n, seed, progress, vehicle=vehicle, keep_trajectories=1)
+        results = evaluate(ctrls, the_suite, n, seed, progress, vehicle=boat, keep_trajectories=1)
         elapsed = time.perf_counter() - start
         summary = summarize(results)
         board = leaderboard_markdown(results, title=f"Leaderboard: suite '{the_suite.name}'")

@@ -416,8 +416,8 @@ def leaderboard_markdown(
     n_first = sum(1 for r in results if r.controller == first)
     ranking = (
         f"Ranked by the success over the winnable episodes ({n_winnable} of {n_first} here: those whose "
-        "loading has a depth-holding trim within the plane and pitch limits at their final speed, with both "
-        "plane pairs free; subenv.analysis.winnable), then over all. " if judged else ""
+        "loading has a depth-holding trim within the plane and pitch limits at their final speed, with every "
+        "plane pair the vehicle has free; subenv.analysis.winnable), then over all. " if judged else ""
     )
     note = (
         f"Success rate with {100 * confidence:.0f}% Wilson intervals, {per} episodes per scenario "

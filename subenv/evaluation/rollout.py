@@ -52,6 +52,7 @@ __all__ = [
     "evaluate",
     "make_env",
     "make_vector_env",
+    "needs_bow_planes",
     "resolve_controllers",
     "resolve_suite",
     "run_episode",
@@ -189,7 +190,7 @@ class EpisodeResult:
     trajectory: Trajectory | None = field(default=None, repr=False, compare=False)
     winnable: bool | None = None
     """Whether the episode's loading has a depth-holding trim within the plane limits and the pitch limit
-    at the speed it is to hold at its end, with both plane pairs free (:func:`subenv.analysis.winnable`):
+    at the speed it is to hold at its end, with every plane pair the vehicle has free (:func:`subenv.analysis.winnable`):
     where it has none no controller can succeed. None: not determined."""
 
     def row(self) -> dict[str, Any]:
@@ -506,16 +507,24 @@ def _result(controller: Controller, scenario: str, seed: int, episode: int, traj
     )
 
 
-def resolve_controllers(controllers: Sequence[Controller | str] | None) -> list[Controller]:
-    """Controllers from instances or registered names (None: every registered controller but those whose
-    ``in_default_comparison`` attribute is False).
+def needs_bow_planes(controller: Controller) -> bool:
+    """Whether ``controller`` moves the bow planes (``control="independent"``, or dual control with alpha != 0)."""
+    return controller.control == "independent" or float(controller.alpha) != 0.0
 
-    Raises ValueError for an unknown name (listing the known ones), an empty selection, or two
-    controllers with one name; TypeError for an object that is not a
-    :class:`~subenv.evaluation.Controller`.
+
+def resolve_controllers(controllers: Sequence[Controller | str] | None,
+                        vehicle: Vehicle | None = None) -> list[Controller]:
+    """Controllers from instances or registered names (None: every registered controller but those whose
+    ``in_default_comparison`` attribute is False, and on a ``vehicle`` without bow planes those that move them,
+    :func:`needs_bow_planes`).
+
+    Raises ValueError for an unknown name (listing the known ones), an empty selection, two
+    controllers with one name, or a named controller that moves bow planes ``vehicle`` does not have;
+    TypeError for an object that is not a :class:`~subenv.evaluation.Controller`.
     """
     from subenv.evaluation.controller import controller_names
 
+    named = controllers is not None
     if controllers is None:
         names = controller_names()
         if not names:
@@ -541,6 +550,12 @@ def resolve_controllers(controllers: Sequence[Controller | str] | None) -> list[
     duplicates = sorted({n for n in names if names.count(n) > 1})
     if duplicates:
         raise ValueError(f"controller names {duplicates} appear more than once: the tables are keyed by name")
+    if vehicle is not None and not vehicle.planes.has_bow_planes:
+        bow = [c.name for c in resolved if needs_bow_planes(c)]
+        if bow and named:
+            raise ValueError(f"controllers {bow} move the bow planes (control='independent' or alpha != 0), and "
+                             f"vehicle {vehicle.name!r} has none: leave them out")
+        resolved = [c for c in resolved if not needs_bow_planes(c)] or resolved
     return resolved
 
 
@@ -610,14 +625,14 @@ def evaluate(
     list of EpisodeResult
         Ordered by controller, then scenario, then episode.
     """
-    ctrls = resolve_controllers(controllers)
+    design_vehicle = vehicle if isinstance(vehicle, Vehicle) else load_vehicle(vehicle)
+    ctrls = resolve_controllers(controllers, design_vehicle)
     the_suite = resolve_suite(suite)
     n = the_suite.episodes if episodes is None else episodes
     if not (isinstance(n, int) and not isinstance(n, bool) and n >= 1):
         raise ValueError(f"episodes={episodes!r} is invalid: must be an integer >= 1")
     if not (isinstance(seed, int) and not isinstance(seed, bool) and seed >= 0):
         raise ValueError(f"seed={seed!r} is invalid: must be an integer >= 0")
-    design_vehicle = vehicle if isinstance(vehicle, Vehicle) else load_vehicle(vehicle)
 
     results: list[EpisodeResult] = []
 

@@ -10,14 +10,11 @@ and ``tests/vehicles/test_scaling.py`` checks that the shipped file is exactly i
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import sys
-from importlib import resources
-from pathlib import Path
 from typing import Final
 
-from subenv.vehicles.loader import load_vehicle, vehicle_to_toml
+from subenv.vehicles.loader import load_vehicle, vehicle_to_toml, write_shipped_file
 from subenv.vehicles.scaling import froude_scaled
 from subenv.vehicles.vehicle import Vehicle
 
@@ -70,22 +67,8 @@ def suboff_fullscale_toml() -> str:
     return vehicle_to_toml(vehicle, header)
 
 
-def _shipped_path() -> Path:
-    return Path(str(resources.files("subenv.vehicles.data").joinpath(f"{SUBOFF_FULLSCALE_NAME}.toml")))
-
-
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description="Write (or check) subenv/vehicles/data/suboff_fullscale.toml.")
-    parser.add_argument("--check", action="store_true", help="only check that the shipped file is up to date")
-    args = parser.parse_args(argv)
-    path, text = _shipped_path(), suboff_fullscale_toml()
-    if args.check:
-        current = path.read_text("utf-8") if path.is_file() else None
-        print(f"{path}: {'up to date' if current == text else 'OUT OF DATE: run python -m subenv.vehicles.fullscale'}")
-        return 0 if current == text else 1
-    path.write_text(text, "utf-8")
-    print(f"wrote {path}")
-    return 0
+    return write_shipped_file(SUBOFF_FULLSCALE_NAME, suboff_fullscale_toml(), "subenv.vehicles.fullscale", argv)
 
 
 if __name__ == "__main__":

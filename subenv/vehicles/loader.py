@@ -25,7 +25,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - exercised on Python 3.10 only
     import tomli as tomllib
 
-__all__ = ["available_vehicles", "load_vehicle", "vehicle_from_dict", "vehicle_to_toml"]
+__all__ = ["available_vehicles", "load_vehicle", "vehicle_from_dict", "vehicle_to_toml", "write_shipped_file"]
 
 # Dimension of every key a vehicle file may hold, by section; "-" marks non-dimensional values.
 _SCHEMA: dict[str, dict[str, str]] = {
@@ -54,6 +54,8 @@ _SCHEMA: dict[str, dict[str, str]] = {
     },
     "hull": {"max_diameter": "length", "stations": "list", "radius_ratio": "list"},
 }
+# Keys that may be left out, and their value then: a vehicle without bow planes leaves out their derivatives.
+_OPTIONAL = {("planes", "Z_delta_b"): 0.0, ("planes", "M_delta_b"): 0.0}
 # Keys whose value must be > 0 (checked on the file's own value, so the message quotes it).
 _POSITIVE = {
     ("environment", "water_density"),
@@ -178,9 +180,9 @@ def vehicle_from_dict(data: Mapping[str, Any], origin: str = "<dict>") -> Vehicl
             )
         si[section] = {}
         for key, dimension in keys.items():
-            if key not in table:
+            if key not in table and (section, key) not in _OPTIONAL:
                 raise ValueError(f"{where}: missing key {section}.{key}")
-            value = table[key]
+            value = table.get(key, _OPTIONAL.get((section, key)))
             if dimension == "list":
                 if not isinstance(value, list) or not all(check.is_number(v) for v in value):
                     raise ValueError(f"{where}: {section}.{key}={value!r} is invalid: must be a list of numbers")
@@ -287,7 +289,9 @@ def vehicle_to_toml(vehicle: Vehicle, header: str = "") -> str:
         f"crossflow_drag = {number(vehicle.crossflow_drag)}",
         "",
         "[planes]",
-        *(f"{name} = {number(getattr(p, name))}" for name in ("Z_delta_s", "M_delta_s", "Z_delta_b", "M_delta_b")),
+        *(f"{name} = {number(getattr(p, name))}"
+          for name in ("Z_delta_s", "M_delta_s", *(("Z_delta_b", "M_delta_b") if p.has_bow_planes else ()))),
+        *(() if p.has_bow_planes else ("# No bow planes: Z_delta_b and M_delta_b left out (0).",)),
         f"limit = {number(p.limit_rad)}  # rad",
         "",
         "[hull]",
@@ -297,3 +301,22 @@ def vehicle_to_toml(vehicle: Vehicle, header: str = "") -> str:
         f"radius_ratio = {numbers([b / max_breadth for b in breadth])}",
     ]
     return "\n".join(lines) + "\n"
+
+
+def write_shipped_file(name: str, text: str, module: str, argv: list[str] | None = None) -> int:
+    """The command line of a module that writes a shipped vehicle file (``python -m <module> [--check]``): write
+    ``text`` as ``subenv/vehicles/data/<name>.toml``, or with ``--check`` only say whether the file is ``text``
+    (exit status 1 if not)."""
+    import argparse
+
+    parser = argparse.ArgumentParser(description=f"Write (or check) subenv/vehicles/data/{name}.toml.")
+    parser.add_argument("--check", action="store_true", help="only check that the shipped file is up to date")
+    args = parser.parse_args(argv)
+    path = Path(str(resources.files(_DATA_PACKAGE).joinpath(f"{name}.toml")))
+    if args.check:
+        current = path.read_text("utf-8") if path.is_file() else None
+        print(f"{path}: {'up to date' if current == text else f'OUT OF DATE: run python -m {module}'}")
+        return 0 if current == text else 1
+    path.write_text(text, "utf-8")
+    print(f"wrote {path}")
+    return 0

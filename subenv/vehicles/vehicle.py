@@ -52,23 +52,39 @@ class HydroCoefficients:
 
 @dataclass(frozen=True)
 class PlaneCoefficients:
-    """Non-dimensional control derivatives of the stern (s) and bow (b) planes, and their limit."""
+    """Non-dimensional control derivatives of the stern (s) and bow (b) planes, and their limit.
+
+    A vehicle without bow planes (the REMUS 100 steers in pitch with its stern planes alone) has
+    ``Z_delta_b = M_delta_b = 0``: :attr:`has_bow_planes` is False, and the environments refuse the
+    control modes that would move them.
+    """
 
     Z_delta_s: float
     M_delta_s: float
-    Z_delta_b: float
-    M_delta_b: float
+    Z_delta_b: float = 0.0
+    M_delta_b: float = 0.0
     limit_rad: float = 0.4
 
     def __post_init__(self) -> None:
-        for name in ("Z_delta_s", "M_delta_s", "Z_delta_b", "M_delta_b"):
+        for name in ("Z_delta_s", "M_delta_s"):
             value = check.number(f"planes.{name}", getattr(self, name))
             # Each plane pair acts behind or ahead of the centre, so it makes a heave force and a pitch
             # moment; a zero derivative leaves a plane without effect (and eq. 3.9 without a critical speed).
             check.require(f"planes.{name}", value, value != 0, "a non-zero number (a plane with effect)")
+        bow = [check.number(f"planes.{name}", getattr(self, name)) for name in ("Z_delta_b", "M_delta_b")]
+        if (bow[0] == 0) != (bow[1] == 0):  # bow planes with effect, or none at all
+            name, value = ("Z_delta_b", bow[0]) if bow[0] == 0 else ("M_delta_b", bow[1])
+            check.require(f"planes.{name}", value, False,
+                          "a non-zero number (a plane with effect), or 0 for both Z_delta_b and M_delta_b "
+                          "(no bow planes)")
         limit = self.limit_rad
         check.require("planes.limit_rad", limit, check.is_number(limit) and 0 < limit <= math.pi / 2,
                       "in (0, pi/2] rad")
+
+    @property
+    def has_bow_planes(self) -> bool:
+        """Whether the vehicle has bow planes (non-zero bow derivatives)."""
+        return self.Z_delta_b != 0
 
 
 @dataclass(frozen=True)

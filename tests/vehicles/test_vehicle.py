@@ -158,7 +158,7 @@ def test_invalid_vehicle_data_names_field_value_and_allowed(section, key, value,
 
 
 def test_unknown_vehicle_name_lists_the_shipped_ones():
-    with pytest.raises(ValueError, match=r"vehicle='seawolf' is unknown: must be one of \['suboff', 'suboff_fullscale'\]"):
+    with pytest.raises(ValueError, match=r"vehicle='seawolf' is unknown: must be one of \['remus100', 'suboff', 'suboff_fullscale'\]"):
         load_vehicle("seawolf")
     with pytest.raises(FileNotFoundError, match="does not exist"):
         load_vehicle("/nonexistent/sub.toml")
