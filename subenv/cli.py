@@ -314,9 +314,15 @@ def sweep(args: argparse.Namespace) -> int:
     from subenv.evaluation.rollout import resolve_controllers
     from subenv.sweep import SweepSpec
 
+    from subenv.vehicles import load_vehicle
+
     require("ray", "subenv sweep", "ray", "pyarrow")  # (before anything is printed or made)
     _installed_controllers(args.controllers)
-    controllers = args.controllers or [c.name for c in resolve_controllers(None)]
+    try:
+        # (on a vehicle without bow planes the default leaves out, and a name is refused, what moves them)
+        controllers = [c.name for c in resolve_controllers(args.controllers, load_vehicle(args.vehicle))]
+    except ValueError as exc:
+        raise SystemExit(f"subenv sweep: {exc}") from None
     grids = {"": args.grid} if args.grid is not None else DEFAULT_MAPS
     try:
         specs = {name: SweepSpec(controllers=tuple(controllers), scenarios=tuple(args.scenarios), grid=tuple(grid),

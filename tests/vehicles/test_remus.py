@@ -184,3 +184,22 @@ def test_the_shipped_report_is_this_code_s(remus):
     assert f"| u_cr, eq. 3.9 closed form | {critical_speed(remus):.5g} | m/s |" in text
     (hopf,) = hopf_points(remus)
     assert f"| Hopf speed u_H, eigenvalues of level flight (planes held) | {hopf.speed_mps:.4f} | m/s |" in text
+
+
+def test_the_command_line_runs_the_comparison_on_remus_without_the_bow_plane_controllers(tmp_path, capsys):
+    import json
+
+    from subenv.cli import main
+
+    out = tmp_path / "remus"
+    main(["evaluate", "--vehicle", REMUS100_NAME, "--controllers", "thesis,lqr", "--suite", "tiny", "--episodes", "1",
+          "--no-plots", "--no-progress", "--out", str(out)])
+    run = json.loads((out / "run.json").read_text())
+    assert run["vehicle"] == REMUS100_NAME and [c["name"] for c in run["controllers"]] == ["thesis", "lqr"]
+    with pytest.raises(SystemExit, match=r"subenv evaluate: controllers \['reversal_aware'\] move the bow planes"):
+        main(["evaluate", "--vehicle", REMUS100_NAME, "--controllers", "reversal_aware", "--suite", "tiny",
+              "--episodes", "1", "--no-plots", "--out", str(tmp_path / "refused")])
+    assert not (tmp_path / "refused").exists()
+    with pytest.raises(SystemExit, match=r"subenv sweep: controllers \['reversal_aware'\] move the bow planes"):
+        main(["sweep", "--vehicle", REMUS100_NAME, "--controllers", "reversal_aware", "--out", str(tmp_path / "s")])
+    assert not (tmp_path / "s").exists()
