@@ -313,7 +313,6 @@ DEFAULT_MAPS: dict[str, list[tuple[str, tuple[float, ...]]]] = {
 def sweep(args: argparse.Namespace) -> int:
     from subenv.evaluation.rollout import resolve_controllers
     from subenv.sweep import SweepSpec
-
     from subenv.vehicles import load_vehicle
 
     require("ray", "subenv sweep", "ray", "pyarrow")  # (before anything is printed or made)

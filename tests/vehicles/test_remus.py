@@ -20,7 +20,14 @@ from subenv.dynamics.model import model_params
 from subenv.evaluation.controller import Controller
 from subenv.evaluation.rollout import needs_bow_planes, resolve_controllers
 from subenv.vehicles import PlaneCoefficients, available_vehicles, load_vehicle
-from subenv.vehicles.remus import PRESTERO_2001, REMUS100_NAME, crossflow_check, myring_radius, remus100, remus100_toml
+from subenv.vehicles.remus import (
+    PRESTERO_2001,
+    REMUS100_NAME,
+    crossflow_check,
+    myring_radius,
+    remus100,
+    remus100_toml,
+)
 
 P = PRESTERO_2001
 
