@@ -184,17 +184,25 @@ def reproduce_numbers(vehicle: Vehicle) -> list[ReportRow]:
     """The thesis's published numbers next to the values the package computes for ``vehicle`` (of SUBOFF's shape:
     :func:`has_suboff_shape`)."""
     rows = []
+    # On SUBOFF at another size (Froude-similar, lambda = L / L_SUBOFF) the published dimensional numbers are
+    # compared Froude-scaled: a speed x sqrt(lambda), the gains on (theta, w, q, Z) x (1, 1/sqrt(lambda),
+    # sqrt(lambda), 1/lambda) (the poles, rates, scale as 1/sqrt(lambda)); exactly the published ones on SUBOFF.
+    ratio = reference_length_ratio(vehicle)
+    speed = froude_factor("speed", ratio)
+    scaled = "" if ratio == 1.0 else f"; published value Froude-scaled to lambda = {ratio:.4g}"
     gain = thesis_gain(vehicle)
     gain_ft = gain * np.array([1.0, FOOT_M, 1.0, FOOT_M])
+    gain_scale = (1.0, 1.0 / speed, speed, 1.0 / froude_factor("length", ratio))
     for i, (name, published) in enumerate(zip(("k_theta", "k_w", "k_q", "k_Z"), (-0.9917, -0.8333, -0.6026, 0.0351))):
-        rows.append(ReportRow(f"eq. 2.98 gain {name}", published, float(gain_ft[i]),
-                              "ft units", "poles (-0.3,-0.31,-0.32,-0.33) at 5 fps"))
+        rows.append(ReportRow(f"eq. 2.98 gain {name}", published * gain_scale[i], float(gain_ft[i]),
+                              "ft units", "poles (-0.3,-0.31,-0.32,-0.33) at 5 fps" + scaled))
     three = critical_speed_three_ways(vehicle)
-    rows.append(ReportRow("u_cr, eq. 3.9 closed form", 1.8979, mps_to_fps(three["closed_form"]), "fps", "alpha = 0"))
-    rows.append(ReportRow("u_cr, closed-loop eigenvalue crossing zero (Fig. 3-4)", 1.8979,
-                          mps_to_fps(three["eigenvalue"]), "fps", "thesis gain"))
-    rows.append(ReportRow("u_cr, controllability matrix singular (Fig. 3-14)", 1.8979,
-                          mps_to_fps(three["controllability"]), "fps"))
+    rows.append(ReportRow("u_cr, eq. 3.9 closed form", 1.8979 * speed, mps_to_fps(three["closed_form"]), "fps",
+                          "alpha = 0" + scaled))
+    rows.append(ReportRow("u_cr, closed-loop eigenvalue crossing zero (Fig. 3-4)", 1.8979 * speed,
+                          mps_to_fps(three["eigenvalue"]), "fps", "thesis gain" + scaled))
+    rows.append(ReportRow("u_cr, controllability matrix singular (Fig. 3-14)", 1.8979 * speed,
+                          mps_to_fps(three["controllability"]), "fps", scaled.removeprefix("; ")))
     rows.append(ReportRow("critical Fn, alpha = -1 (Fig. 3-9)", 0.81, critical_froude(vehicle, -1.0), "-"))
     rows.append(ReportRow("critical Fn, alpha = +1 (Fig. 3-9)", 1.22, critical_froude(vehicle, 1.0), "-"))
     rows.append(ReportRow("critical Fn, bow planes only (Fig. 5-4)", 2.05, critical_froude(vehicle, BOW_PLANES_ONLY), "-"))
