@@ -8,6 +8,7 @@ are not installed (matplotlib for plots, Stable-Baselines3 for the agents).
 from __future__ import annotations
 
 import csv
+import os
 import subprocess
 import sys
 import venv
@@ -38,7 +39,10 @@ def test_every_controller_is_declared_as_an_entry_point():
 
 
 def _run(*command: str | Path, cwd: Path, ok: bool = True) -> subprocess.CompletedProcess[str]:
-    done = subprocess.run([str(c) for c in command], check=False, capture_output=True, text=True, cwd=cwd)
+    # Without PYTHONPATH: set (to a checkout) where the suite runs, it would put the checkout before the
+    # clean venv's site-packages.
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    done = subprocess.run([str(c) for c in command], check=False, capture_output=True, text=True, cwd=cwd, env=env)
     assert (done.returncode == 0) == ok, (done.returncode, done.stdout, done.stderr)
     return done
 
