@@ -6,7 +6,7 @@ import contextlib
 import io
 import os
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import pytest
 
@@ -50,7 +50,42 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addoption("--run-slow", action="store_true", help="also run tests marked slow (minutes)")
 
 
+# Under pytest-xdist (./dev test runs ``-n auto --dist loadfile``) a test file's tests run in one worker,
+# so that a module-scoped fixture (the shipped cards' 300 episodes, the training runs per algorithm, the
+# rl_zoo3 trainings) is computed once. The files that share an expensive session fixture run in one worker
+# too: these. (xdist's own grouping, --dist loadgroup with xdist_group marks, does nothing on pytest 9.2:
+# xdist 3.8 renames the node ids through an attribute pytest 9 no longer reads.) One Ray instance in the
+# suite also means that the sweep test which kills "a Ray worker running a chunk" finds its own.
+_SHARED_SESSION_FIXTURES = {
+    "analysis_report": ("tests/analysis/test_analysis.py", "tests/analysis/test_hopf.py", "tests/test_cli.py"),
+    "local_ray": ("tests/test_sweep.py", "tests/agents/test_tune.py", "tests/agents/test_reference.py"),
+    "small_run": ("tests/evaluation/test_results.py", "tests/evaluation/test_plots.py"),
+}
+_FILE_GROUP = {file: name for name, files in _SHARED_SESSION_FIXTURES.items() for file in files}
+
+
+@pytest.hookimpl(optionalhook=True)  # (a hook of pytest-xdist, which may not be installed)
+def pytest_xdist_make_scheduler(config: pytest.Config, log):  # type: ignore[no-untyped-def]
+    if config.getvalue("dist") != "loadfile":
+        return None
+    from xdist.scheduler import LoadFileScheduling
+
+    class SharedFixtureScheduling(LoadFileScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            file = super()._split_scope(nodeid)
+            return _FILE_GROUP.get(file, file)
+
+    return SharedFixtureScheduling(config, log)
+
+
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    for item in items:  # a new user of a shared fixture is added to its group above
+        file = item.nodeid.split("::", 1)[0]
+        for name in set(getattr(item, "fixturenames", ())) & _SHARED_SESSION_FIXTURES.keys():
+            # (tests/envs/test_rllib.py has a local_ray of its own: RLlib's, run in .venv-gym12/)
+            if file not in _SHARED_SESSION_FIXTURES[name] and file != "tests/envs/test_rllib.py":
+                raise pytest.UsageError(f"{file} uses the session fixture {name}: add it to "
+                                        f"_SHARED_SESSION_FIXTURES['{name}'] in tests/conftest.py")
     if config.getoption("--run-slow"):
         return
     skip = pytest.mark.skip(reason="slow: opt in with --run-slow")
@@ -60,13 +95,20 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
 
 
 @pytest.fixture
-def report():
-    """Record a measured figure; all of them are printed in the terminal summary."""
+def report(request: pytest.FixtureRequest):  # type: ignore[no-untyped-def]
+    """Record a measured figure; all of them are printed in the terminal summary.
+
+    They travel as the test's ``user_properties``, which pytest-xdist sends from its workers."""
 
     def _report(name: str, value: str) -> None:
-        _MEASURED.append((name, value))
+        request.node.user_properties.append(("measured", (name, value)))
 
     return _report
+
+
+def pytest_runtest_logreport(report: pytest.TestReport) -> None:
+    if report.when == "call":
+        _MEASURED.extend(tuple(value) for key, value in report.user_properties if key == "measured")
 
 
 def pytest_terminal_summary(terminalreporter, exitstatus, config) -> None:  # type: ignore[no-untyped-def]
@@ -89,6 +131,8 @@ class AnalysisReport(NamedTuple):
     exit_code: int
     printed: str
     """What the command printed (stdout)."""
+    hopf: Any
+    """``hopf_findings(load_vehicle("suboff"))`` (a ``HopfFindings``), which the report computed."""
 
 
 @pytest.fixture(scope="session")
@@ -99,14 +143,30 @@ def analysis_report(tmp_path_factory: pytest.TempPathFactory) -> AnalysisReport:
     load_vehicle("suboff"))``, so the tests of ``write_report`` (tests/analysis) and of the command
     (tests/test_cli.py) share this one folder. Its parent holds nothing else. Tests read it and must
     not change it; one that needs an existing report to replace works on a copy.
+
+    The Hopf findings the report computes (``hopf_findings(vehicle)``, half of its time) are kept as they
+    were returned, for tests/analysis/test_hopf.py, which would otherwise compute them again.
     """
+    import subenv.analysis.report
+    from subenv import load_vehicle
     from subenv.cli import main
+
+    computed = []
+    real = subenv.analysis.report.hopf_findings
+
+    def recorded(vehicle):  # type: ignore[no-untyped-def]
+        found = real(vehicle)
+        computed.append((vehicle, found))
+        return found
 
     folder = tmp_path_factory.mktemp("analysis") / "report"
     printed = io.StringIO()
-    with contextlib.redirect_stdout(printed):
+    with contextlib.redirect_stdout(printed), pytest.MonkeyPatch.context() as patch:
+        patch.setattr(subenv.analysis.report, "hopf_findings", recorded)
         exit_code = main(["analyze", "--out", str(folder)])
-    return AnalysisReport(folder, exit_code, printed.getvalue())
+    ((vehicle, hopf),) = computed
+    assert vehicle == load_vehicle("suboff")
+    return AnalysisReport(folder, exit_code, printed.getvalue(), hopf)
 
 
 @pytest.fixture(scope="session")

@@ -8,6 +8,8 @@ are not installed (matplotlib for plots, Stable-Baselines3 for the agents).
 from __future__ import annotations
 
 import csv
+import os
+import shutil
 import subprocess
 import sys
 import venv
@@ -38,15 +40,28 @@ def test_every_controller_is_declared_as_an_entry_point():
 
 
 def _run(*command: str | Path, cwd: Path, ok: bool = True) -> subprocess.CompletedProcess[str]:
-    done = subprocess.run([str(c) for c in command], check=False, capture_output=True, text=True, cwd=cwd)
+    # Without PYTHONPATH: set (to a checkout) where the suite runs, it would put the checkout before the
+    # clean venv's site-packages.
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    done = subprocess.run([str(c) for c in command], check=False, capture_output=True, text=True, cwd=cwd, env=env)
     assert (done.returncode == 0) == ok, (done.returncode, done.stdout, done.stderr)
     return done
 
 
 @pytest.mark.wheel
 def test_wheel_installs_into_a_clean_venv_and_evaluates(tmp_path: Path):
+    # Built from a copy of what the build reads (a few MB): setuptools writes build/ and subenv.egg-info/
+    # beside the sources, and in the checkout that would rewrite the metadata that other tests' processes
+    # read while they run (pytest-xdist), and could put a stale build/ in the wheel.
+    source = tmp_path / "source"
+    source.mkdir()
+    pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    for name in ("pyproject.toml", pyproject["project"]["readme"], *pyproject["project"]["license-files"]):
+        shutil.copy2(ROOT / name, source / name)
+    for package in {name.split(".")[0] for name in pyproject["tool"]["setuptools"]["packages"]["find"]["include"]}:
+        shutil.copytree(ROOT / package, source / package, ignore=shutil.ignore_patterns("__pycache__"))
     dist = tmp_path / "dist"
-    _run(sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w", dist, ROOT, cwd=tmp_path)
+    _run(sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w", dist, source, cwd=tmp_path)
     (wheel,) = dist.glob("subenv-*.whl")
     archive = zipfile.ZipFile(wheel)
     names = archive.namelist()

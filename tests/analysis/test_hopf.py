@@ -11,7 +11,7 @@ import pytest
 
 from subenv.analysis import thesis_gain
 from subenv.analysis.hopf import hopf_points, level_flight_eigenvalues, periodic_orbit
-from subenv.analysis.report import env_growth_rate, hopf_findings
+from subenv.analysis.report import env_growth_rate
 from subenv.envs import DivePlaneEnv
 from subenv.vehicles import load_vehicle
 
@@ -67,9 +67,9 @@ def test_a_closed_loop_with_a_zero_gain_has_the_open_loops_hopf_point_and_the_th
     assert hopf_points(SUBOFF, gain=thesis_gain(SUBOFF)) == []  # the design damps the mode up to 3 m/s
 
 
-def test_the_env_docstring_states_what_the_analysis_computes() -> None:
+def test_the_env_docstring_states_what_the_analysis_computes(analysis_report) -> None:  # type: ignore[no-untyped-def]
     doc = " ".join((DivePlaneEnv.__doc__ or "").split())
-    found = hopf_findings(SUBOFF)
+    found = analysis_report.hopf  # hopf_findings(SUBOFF), as the session's report computed it (tens of seconds)
     stated = re.search(r"Below u_H = ([\d.]+) m/s \(([\d.]+) u_cr\)", doc)
     assert stated is not None
     assert float(stated.group(1)) == round(found.point.speed_mps, 3)
