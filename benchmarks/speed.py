@@ -321,7 +321,7 @@ def cost_table(seconds: float) -> list[str]:
         report = np.empty((len(tr.REPORT_KEYS), n))
         active = np.ones(n, dtype=bool)
         state = vec._state.copy()
-        args = (state, vec._episode, a, active, vec._obs, vec._rngs, vec._constants, vec.config.hull, report)
+        args = (state, vec._episode, vec._seas, a, active, vec._obs, vec._rngs, vec._constants, vec.config.hull, report)
 
         def step() -> None:
             state[:] = vec._state  # the same states every time (no episode ends inside the timing)

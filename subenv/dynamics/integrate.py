@@ -130,9 +130,10 @@ def set_lane(block: FloatArray, j: int, theta: float, w: float, q: float, depth:
 
 
 @inline_kernel
-def _rhs_lanes(block: FloatArray, n: int, hull: FloatArray, waves: FloatArray) -> None:
+def _rhs_lanes(block: FloatArray, n: int, hull: FloatArray, waves: FloatArray, free_surface: bool) -> None:
     """rhs_point of columns 0 .. n-1, at the (theta, w, q, Z) in rows _STAGE .. _STAGE + 3 with the speed
-    in row _SPEED, into rows _SLOPE_OUT .. _SLOPE_OUT + 3.
+    in row _SPEED, into rows _SLOPE_OUT .. _SLOPE_OUT + 3. Without ``free_surface`` (no column has a
+    suction or a sea) the rows _FREE_SURFACE .. _FREE_SURFACE + 1 hold 0.0 and are not computed again.
 
     Each step is a loop over the columns with the same operations in every column, and every
     access is block[row * LANES + column] with a constant row: the compiler can tell the rows
@@ -143,7 +144,7 @@ def _rhs_lanes(block: FloatArray, n: int, hull: FloatArray, waves: FloatArray) -
     L = LANES
     theta, w, q, depth = _STAGE * L, (_STAGE + 1) * L, (_STAGE + 2) * L, (_STAGE + 3) * L
     rho_suction = (LANE_PARAMS + _RHO_SUCTION) * L
-    for j in range(n):  # the free surface: exactly 0.0 for a lane in deep water without a sea
+    for j in range(n if free_surface else 0):  # exactly 0.0 for a lane in deep water without a sea
         Z_fs, M_fs = suction_point(block[theta + j], block[depth + j], block[_SPEED * L + j], block[rho_suction + j],
                                    hull, SOURCE_ROW)
         Z_w, M_w = wave_force_point(block[_TIME * L + j], block[_DISTANCE * L + j], block[depth + j],
@@ -192,6 +193,15 @@ def control_period_lanes(block: FloatArray, n: int, dt: float, substeps: int, hu
     h = dt / substeps
     half = 0.5 * h
     sixth = h / 6.0
+    # Whether any column feels the free surface. In deep water (every scenario but the periscope-depth
+    # ones) its force is exactly 0.0: written once here, not computed at every stage.
+    free_surface = False
+    for j in range(n):
+        suction, waves_j = block[(LANE_PARAMS + _RHO_SUCTION) * L + j], block[LANE_WAVES * L + j]
+        free_surface = free_surface or suction != 0.0 or waves_j > 0.0
+    for j in range(n):
+        block[_FREE_SURFACE * L + j] = 0.0
+        block[(_FREE_SURFACE + 1) * L + j] = 0.0
     for i in range(substeps):
         # rk4_step, term by term: k1..k4 at (t, x), (t + h/2, x + h/2 k1), (t + h/2, x + h/2 k2),
         # (t + h, x + h k3). (One stage loop, so that the right-hand side is compiled once.)
@@ -205,13 +215,18 @@ def control_period_lanes(block: FloatArray, n: int, dt: float, substeps: int, hu
                 elapsed = t - t0 if stage == 0 else t + offset - t0
                 speed0, slope = block[LANE_SPEED0 * L + j], block[LANE_SPEED_SLOPE * L + j]
                 block[_SPEED * L + j] = speed0 + slope * elapsed
+            for j in range(n if free_surface else 0):  # (the time and distance of the stage: a sea's phase)
+                t0 = block[LANE_T0 * L + j]
+                t = t0 + i * h
+                elapsed = t - t0 if stage == 0 else t + offset - t0
+                speed0, slope = block[LANE_SPEED0 * L + j], block[LANE_SPEED_SLOPE * L + j]
                 block[_TIME * L + j] = t0 + elapsed
                 block[_DISTANCE * L + j] = block[LANE_DISTANCE * L + j] + elapsed * (speed0 + 0.5 * slope * elapsed)
             for r in range(4):
                 for j in range(n):
                     x = block[(LANE_PITCH + r) * L + j]
                     block[(_STAGE + r) * L + j] = x if stage == 0 else x + step * block[(previous + r) * L + j]
-            _rhs_lanes(block, n, hull, waves)
+            _rhs_lanes(block, n, hull, waves, free_surface)
             # Into k_stage here, not in _rhs_lanes: rows that depend on the stage would hide from the
             # compiler that they differ from the rows it reads, and it would not vectorize.
             for r in range(4):

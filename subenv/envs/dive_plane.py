@@ -16,7 +16,7 @@ from subenv.envs import transition as tr
 from subenv.envs._compiling import first_call
 from subenv.envs._interrupts import interrupts_deferred
 from subenv.envs.config import OBSERVATION_NAMES, ControlMode, DivePlaneConfig
-from subenv.envs.episodes import Loadings, check_options, draw_episode, write_episode
+from subenv.envs.episodes import Loadings, check_options, draw_episode, new_seas, write_episode, write_sea
 from subenv.envs.info import step_info
 from subenv.scenarios.scenario import EpisodeConfig, Scenario
 from subenv.vehicles.vehicle import Vehicle
@@ -233,6 +233,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         self._state = np.zeros(1, dtype=tr.STATE_DTYPE)
         self._episode = np.zeros(1, dtype=tr.EPISODE_DTYPE)
         self._episode["critical_speed_mps"] = math.nan
+        self._seas = new_seas(1)
         self._obs = np.zeros((1, tr.N_OBS), dtype=np.float32)
         self._obs_row = self._obs[0]
         self._report = np.zeros((len(tr.REPORT_KEYS), 1))
@@ -268,6 +269,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         self.vehicle, self.episode = loading.vehicle, draw
         write_episode(self._episode, 0, episode)
         write_episode(self._state, 0, state)
+        write_sea(self._seas, 0, episode)
         tr.observe(self._state, self._episode, _FIRST, self._obs, self._bound_rngs(), self._constants, self._report)
         self._history = [(0.0, state["depth_m"], episode["depth_command_m"])]
         if self.render_mode == "human":
@@ -286,8 +288,8 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
                 f"(control={self.config.control!r})"
             )
         rngs = self._rngs if self._rngs_source is self._np_random else self._bound_rngs()
-        if tr.step(self._state, self._episode, a, self._active, self._obs, rngs, self._constants, self._hull,
-                   self._report) >= 0:
+        if tr.step(self._state, self._episode, self._seas, a, self._active, self._obs, rngs, self._constants,
+                   self._hull, self._report) >= 0:
             raise ValueError(f"action={np.asarray(action).tolist()!r} is invalid: must be finite (no NaN or inf)")
         r = self._report.ravel().tolist()  # (its one column)
         if self.render_mode is not None:

@@ -3,7 +3,8 @@
 A reset draws an :class:`~subenv.scenarios.EpisodeConfig` from the scenario with the
 sub-environment's generator (:func:`draw_episode`), then the heave force's first value, and writes
 the episode's records (:data:`~subenv.envs.transition.EPISODE_DTYPE`,
-:data:`~subenv.envs.transition.STATE_DTYPE`): :func:`write_episode`. A vector environment whose
+:data:`~subenv.envs.transition.STATE_DTYPE`): :func:`write_episode`, and its sea, if it has one
+(:func:`write_sea`). A vector environment whose
 scenario draws every episode with one loading draws a batch of resets as arrays
 (:func:`draw_episode_batch`): the same numbers from the same generators, turned into records by the
 same :func:`write_episode`.
@@ -36,7 +37,7 @@ from subenv.scenarios.scenario import EpisodeConfig
 from subenv.vehicles.vehicle import Vehicle
 
 __all__ = ["OPTIONS", "Loading", "Loadings", "check_options", "draw_episode", "draw_episode_batch", "for_vehicle",
-           "write_episode"]
+           "new_seas", "write_episode", "write_sea"]
 
 OPTIONS: Final = ("speed", "depth_command", "initial_state")
 """The keys of ``reset(options=...)``."""
@@ -126,7 +127,8 @@ def episode_fields(config: DivePlaneConfig, draw: EpisodeConfig, loading: Loadin
     """The fields of the episode's and the state's records at a reset (the state's speed is set when
     it is observed: :func:`subenv.envs.transition.observe`).
 
-    A value is an array over the episodes where a batch's draw (or ``disturbance``) has one.
+    A value is an array over the episodes where a batch's draw (or ``disturbance``) has one. The
+    episode's ``"waves"`` are its sea (None: calm), for :func:`write_sea`, not a field of its record.
     """
     ucr = loading.critical_speed_mps
     if draw.speed_relative and not math.isfinite(ucr):
@@ -173,14 +175,14 @@ def episode_fields(config: DivePlaneConfig, draw: EpisodeConfig, loading: Loadin
     return episode, state
 
 
-def _sea(draw: EpisodeConfig, vehicle: Vehicle, knot_shape: Any) -> tuple[int, np.ndarray]:
-    """The episode's sea as its record holds it (:meth:`subenv.dynamics.waves.SeaState.components`),
-    one per episode of a batch: its number of waves (0: calm) and their numbers."""
+def _sea(draw: EpisodeConfig, vehicle: Vehicle, knot_shape: Any) -> tuple[int, np.ndarray | None]:
+    """The episode's sea as the transition reads it (:meth:`subenv.dynamics.waves.SeaState.components`,
+    shape (WAVE_FIELDS, MAX_WAVES)), one per episode of a batch: its number of waves and their numbers
+    (0 and None: calm)."""
     sea = draw.sea_state
     batch = knot_shape[0] if isinstance(knot_shape, tuple) else None
-    shape = (WAVE_FIELDS, MAX_WAVES) if batch is None else (batch, WAVE_FIELDS, MAX_WAVES)
     if sea is None:
-        return 0, np.zeros(shape)
+        return 0, None
     units = np.asarray(draw.wave_uniforms, dtype=float)  # (2 n,) or (2 n, batch)
     jitter, phase = units[: sea.waves], 2.0 * math.pi * units[sea.waves:]
     hull, rho, g = vehicle.hull, vehicle.water_density_kg_m3, vehicle.gravity_m_s2
@@ -200,6 +202,19 @@ def write_episode(records: np.ndarray, index: int | np.ndarray, fields: Mapping[
         return
     for name in names:
         records[name][index] = fields[name]
+
+
+def write_sea(seas: np.ndarray, index: int | np.ndarray, fields: Mapping[str, Any]) -> None:
+    """Write the sea of ``fields`` (:func:`episode_fields`) into ``seas[index]``
+    (:func:`subenv.envs.transition.step`'s ``seas``); nothing for a calm episode, whose row is not read."""
+    if fields["n_waves"] > 0:
+        seas[index] = fields["waves"]
+
+
+def new_seas(n: int) -> np.ndarray:
+    """The seas of ``n`` sub-environments (:func:`subenv.envs.transition.step`'s ``seas``), all calm.
+    (Zeros from the allocator: memory the calm ones never touch costs nothing.)"""
+    return np.zeros((n, WAVE_FIELDS, MAX_WAVES))
 
 
 def check_options(config: DivePlaneConfig, options: Mapping[str, Any] | None) -> dict[str, Any]:

@@ -9,7 +9,13 @@ What a sub-environment is made of, each a NumPy structured dtype whose fields nu
 - :data:`STATE_DTYPE`, what a step changes: the vehicle's state, the applied planes, the time, the
   disturbance, the speed;
 - :data:`EPISODE_DTYPE`, what a reset draws and a step only reads: the model parameters of the
-  episode's loading, the speed profile, the ordered depth, noise, duration, critical speed;
+  episode's loading, the speed profile, the ordered depth, noise, duration, critical speed, the
+  number of its sea's waves;
+- the seas, a float64 array of shape (n, :data:`~subenv.dynamics.waves.WAVE_FIELDS`,
+  :data:`~subenv.dynamics.waves.MAX_WAVES`): row i the sea of sub-environment i
+  (:meth:`subenv.dynamics.waves.SeaState.components`), read only where ``episode[i].n_waves`` > 0.
+  (Not a field of the episode's record: 1.7 kB in every record made every step of every
+  sub-environment, calm or not, a third slower at N = 4096.)
 - :data:`CONFIG_DTYPE`, one record the environment's configuration fixes
   (:meth:`subenv.envs.config.DivePlaneConfig.constants`);
 - the step's report, one row per :data:`REPORT_KEYS` and one column per sub-environment: the
@@ -103,8 +109,7 @@ EPISODE_DTYPE: Final = np.dtype([
     ("duration_s", np.float64),
     ("critical_speed_mps", np.float64),            # nan: none (z_GB <= 0)
     ("froude_scale_mps", np.float64),              # sqrt(g z_GB), nan for z_GB <= 0
-    ("n_waves", np.int64),                         # 0: no sea
-    ("waves", np.float64, (WAVE_FIELDS, MAX_WAVES)),  # the sea, subenv.dynamics.waves.SeaState.components
+    ("n_waves", np.int64),                         # 0: no sea; else the sea is the row of the seas
 ])
 """What a reset draws, per sub-environment (read-only during the episode)."""
 
@@ -320,8 +325,9 @@ def _first_non_finite(actions: FloatArray, active: np.ndarray) -> int:
 
 
 @kernel
-def step_block(state: np.ndarray, episode: np.ndarray, actions: FloatArray, active: np.ndarray, obs: np.ndarray,
-               rngs: numba.typed.List, config: np.ndarray, hull: FloatArray, report: FloatArray, b: int) -> None:
+def step_block(state: np.ndarray, episode: np.ndarray, seas: FloatArray, actions: FloatArray, active: np.ndarray,
+               obs: np.ndarray, rngs: numba.typed.List, config: np.ndarray, hull: FloatArray, report: FloatArray,
+               b: int) -> None:
     """One control period of the active sub-environments of block ``b`` (rows ``b * LANES`` up to
     ``(b + 1) * LANES``), integrated together; arguments as :func:`step`'s. Compiled once, as its own
     function, and called by both :func:`step` and :func:`step_parallel`."""
@@ -353,7 +359,7 @@ def step_block(state: np.ndarray, episode: np.ndarray, actions: FloatArray, acti
             set_lane(block, n, s.pitch_rad, s.heave_mps, s.pitch_rate_radps, s.depth_m, t0, u0, (u1 - u0) / dt,
                      stern, bow, s.disturbance_N, e.params, s.distance_m, e.n_waves)
             if e.n_waves > 0:
-                waves[n] = e.waves
+                waves[n] = seas[i]
             members[n] = i
             n += 1
     control_period_lanes(block, n, dt, cfg.substeps, hull, waves)
@@ -399,8 +405,8 @@ def step_block(state: np.ndarray, episode: np.ndarray, actions: FloatArray, acti
             report[c, members[j]] = block_report[c, j]
 
 
-def _step(state: np.ndarray, episode: np.ndarray, actions: FloatArray, active: np.ndarray, obs: np.ndarray,
-          rngs: numba.typed.List, config: np.ndarray, hull: FloatArray, report: FloatArray) -> int:
+def _step(state: np.ndarray, episode: np.ndarray, seas: FloatArray, actions: FloatArray, active: np.ndarray,
+          obs: np.ndarray, rngs: numba.typed.List, config: np.ndarray, hull: FloatArray, report: FloatArray) -> int:
     """The blocks of :func:`step_block`, one after the other (:func:`step`) or shared among threads
     (:func:`step_parallel`)."""
     bad = _first_non_finite(actions, active)
@@ -409,7 +415,7 @@ def _step(state: np.ndarray, episode: np.ndarray, actions: FloatArray, active: n
     for b in numba.prange((state.shape[0] + LANES - 1) // LANES):  # (a plain range in step: one thread)
         # (an int64 block index in both kernels: a parallel loop counts in uint64, and a second
         # signature would compile the block's code again)
-        step_block(state, episode, actions, active, obs, rngs, config, hull, report, np.int64(b))
+        step_block(state, episode, seas, actions, active, obs, rngs, config, hull, report, np.int64(b))
     return -1
 
 
@@ -421,6 +427,8 @@ Parameters
 state : ndarray of STATE_DTYPE, shape (n,)
     Updated in place.
 episode : ndarray of EPISODE_DTYPE, shape (n,)
+seas : ndarray, shape (n, WAVE_FIELDS, MAX_WAVES)
+    Row i: the sea of sub-environment i, read where ``episode[i].n_waves`` > 0 (:func:`subenv.envs.episodes.write_sea`).
 actions : ndarray, shape (n, n_actions)
     Clipped to [-1, 1]; a non-finite one stops the step before anything changes (see Returns).
 active : ndarray of bool, shape (n,)

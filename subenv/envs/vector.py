@@ -23,7 +23,9 @@ from subenv.envs.episodes import (
     draw_episode,
     draw_episode_batch,
     for_vehicle,
+    new_seas,
     write_episode,
+    write_sea,
 )
 from subenv.envs.info import step_infos
 from subenv.scenarios.scenario import EpisodeConfig, Scenario
@@ -167,6 +169,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         self._state = np.zeros(n, dtype=tr.STATE_DTYPE)
         self._episode = np.zeros(n, dtype=tr.EPISODE_DTYPE)
         self._episode["critical_speed_mps"] = np.nan
+        self._seas = new_seas(n)
         self._obs = np.zeros((n, tr.N_OBS), dtype=np.float32)
         self._generators: list[np.random.Generator | None] = [None] * n
         self._seeds: list[int | None] = [None] * n
@@ -254,7 +257,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         """What a reset changes (kept while its options are checked against the episodes drawn)."""
         return {"generators": list(self._generators), "seeds": list(self._seeds), "rngs": self._rngs,
                 "states": [g.bit_generator.state if g is not None else None for g in self._generators],
-                "records": (self._state.copy(), self._episode.copy(), self._obs.copy()),
+                "records": (self._state.copy(), self._episode.copy(), self._seas.copy(), self._obs.copy()),
                 "flags": (self._done.copy(), self._any_done, self._started.copy(), self._unbuilt.copy()),
                 "lists": (list(self.vehicles), list(self._episodes)), "interrupted": self._interrupted}
 
@@ -263,7 +266,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         for g, state in zip(self._generators, saved["states"]):
             if g is not None:
                 g.bit_generator.state = state
-        self._state[:], self._episode[:], self._obs[:] = saved["records"]
+        self._state[:], self._episode[:], self._seas[:], self._obs[:] = saved["records"]
         done, self._any_done, started, unbuilt = saved["flags"]
         self._done[:], self._started[:], self._unbuilt[:] = done, started, unbuilt
         self.vehicles, self._episodes = saved["lists"]
@@ -412,7 +415,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
     def _step_active(self, actions: np.ndarray, active: np.ndarray, report: np.ndarray) -> int:
         """The compiled step of the ``active`` sub-environments, on :attr:`threads` of numba's threads
         (:func:`subenv.envs.transition.step`: -1, or the first with a non-finite action)."""
-        args = (self._state, self._episode, actions, active, self._obs, self._rngs, self._constants,
+        args = (self._state, self._episode, self._seas, actions, active, self._obs, self._rngs, self._constants,
                 self.config.hull, report)
         if self.threads == 1:
             return int(tr.step(*args))
@@ -447,6 +450,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
                 draw, loading, episode, state = draw_episode(config, generators[i], loadings, options)  # type: ignore[arg-type]
                 write_episode(self._episode, i, episode)
                 write_episode(self._state, i, state)
+                write_sea(self._seas, i, episode)
                 self.vehicles[i], self._episodes[i] = loading.vehicle, draw
             self._unbuilt[index] = False
         tr.observe(self._state, self._episode, index, self._obs, self._rngs, self._constants, report)
@@ -470,6 +474,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         _, loading, episode, state = draw_episode_batch(self.config, uniforms, disturbances, self._loadings)
         write_episode(self._episode, index, episode)
         write_episode(self._state, index, state)
+        write_sea(self._seas, index, episode)
         vehicles = self.vehicles
         for i in index.tolist():
             vehicles[i] = loading.vehicle

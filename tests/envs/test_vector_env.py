@@ -173,6 +173,8 @@ def test_batch_resets_draw_exactly_what_one_reset_at_a_time_draws(scenario):
         write_episode(states, 0, state)
         assert batch._episode[i].tobytes() == episodes[0].tobytes(), i
         assert batch._state[i].tobytes() == states[0].tobytes(), i
+        if episode["n_waves"] > 0:  # and the sea, where the episode has one
+            assert batch._seas[i].tobytes() == episode["waves"].tobytes(), i
         assert batch.episodes[i] == draw and batch.vehicles[i] == loading.vehicle
         assert all(type(v) is float for v in (*draw.initial_state, draw.depth_command_m))
         assert batch._generators[i].random() == g.random()
