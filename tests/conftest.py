@@ -54,8 +54,10 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 # so that a module-scoped fixture (the shipped cards' 300 episodes, the training runs per algorithm, the
 # rl_zoo3 trainings) is computed once. The files that share an expensive session fixture run in one worker
 # too: these. (xdist's own grouping, --dist loadgroup with xdist_group marks, does nothing on pytest 9.2:
-# xdist 3.8 renames the node ids through an attribute pytest 9 no longer reads.) One Ray instance in the
-# suite also means that the sweep test which kills "a Ray worker running a chunk" finds its own.
+# xdist 3.8 renames the node ids through an attribute pytest 9 no longer reads: pytest-xdist#1386.
+# The scheduler below overrides LoadFileScheduling._split_scope, the one method loadgroup's overrides
+# too.) One Ray instance in the suite also means that the sweep test which kills "a Ray worker running a
+# chunk" finds its own.
 _SHARED_SESSION_FIXTURES = {
     "analysis_report": ("tests/analysis/test_analysis.py", "tests/analysis/test_hopf.py", "tests/test_cli.py"),
     "local_ray": ("tests/test_sweep.py", "tests/agents/test_tune.py", "tests/agents/test_reference.py"),
@@ -174,6 +176,11 @@ def local_ray():  # type: ignore[no-untyped-def]
     """One local Ray instance with 2 CPUs for every test that runs Ray tasks or Tune trials (a start costs
     5-10 s); the functions under test use it instead of starting their own."""
     ray = pytest.importorskip("ray", reason="the 'ray' extra is not installed")
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, configure_logging=False)
+    # Ray's raylet starts its workers at nice 15 (RAY_worker_niceness): beside other CPU-bound work, as on a
+    # busy CI machine, a Tune trial then got about 1% of a core and the suite did not end. At 0 they share
+    # the cores as the test process does (as Ray's own job manager sets it for a job's workers).
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("RAY_worker_niceness", "0")
+        ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, configure_logging=False)
     yield
     ray.shutdown()
