@@ -229,13 +229,9 @@ def control_period_lanes(block: FloatArray, n: int, dt: float, substeps: int, hu
                 elapsed = t - t0 if stage == 0 else t + offset - t0
                 speed0, slope = block[LANE_SPEED0 * L + j], block[LANE_SPEED_SLOPE * L + j]
                 block[_SPEED * L + j] = speed0 + slope * elapsed
-            for j in range(n if free_surface else 0):  # (the time and distance of the stage: a sea's phase)
-                t0 = block[LANE_T0 * L + j]
-                t = t0 + i * h
-                elapsed = t - t0 if stage == 0 else t + offset - t0
-                speed0, slope = block[LANE_SPEED0 * L + j], block[LANE_SPEED_SLOPE * L + j]
-                block[_TIME * L + j] = t0 + elapsed
-                block[_DISTANCE * L + j] = block[LANE_DISTANCE * L + j] + elapsed * (speed0 + 0.5 * slope * elapsed)
+                if free_surface:  # (the time and distance of the stage: a sea's phase)
+                    block[_TIME * L + j] = t0 + elapsed
+                    block[_DISTANCE * L + j] = block[LANE_DISTANCE * L + j] + elapsed * (speed0 + 0.5 * slope * elapsed)
             for r in range(4):
                 for j in range(n):
                     x = block[(LANE_PITCH + r) * L + j]
