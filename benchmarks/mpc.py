@@ -4,7 +4,7 @@
     .venv/bin/python benchmarks/mpc.py --episodes 100
 
 Both controllers meet the same episodes (``subenv.evaluation.evaluate``, batched). The MPC's solve time
-per control step is the wall time of one QP update and solve (OSQP) for one episode, collected over the
+per control step is the wall time of one QP solve (DAQP) for one episode, collected over the
 whole run; the MPC's total time per step (linearisation, observer and QP) is its wall time over its steps.
 """
 

@@ -5,8 +5,8 @@
 - ``lqr``: LQR with integral action on the stern planes, scheduled over speed.
 - ``reversal_aware``: LQR with integral action and a bow/stern allocation chosen to keep the
   critical speed away from the operating speed.
-- ``mpc``: linear time-varying model-predictive control of both planes (needs the ``mpc`` extra,
-  OSQP; :data:`OPTIONAL_CONTROLLERS`).
+- ``mpc``: model-predictive control of both planes, re-linearised every period (needs the ``mpc``
+  extra, DAQP; :data:`OPTIONAL_CONTROLLERS`).
 
 Every controller designs itself from :mod:`subenv.analysis` (linear model, critical speed) at its
 first reset, for the design vehicle the harness passes; none uses numbers typed in.

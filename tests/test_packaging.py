@@ -93,7 +93,7 @@ def test_wheel_installs_into_a_clean_venv_and_evaluates(tmp_path: Path):
     skipped = listed.stderr.splitlines()
     assert len(skipped) == 2
     assert skipped[0].startswith("(skipped mpc: the 'mpc' extra is needed for the MPC baseline (subenv_baselines.mpc): "
-                                 'pip install "subenv[mpc]" (or pip install "osqp>=1"; ')
+                                 'pip install "subenv[mpc]" (or pip install "daqp>=0.11"; ')
     assert skipped[1].startswith("(skipped ppo, sac: the 'rl' extra is needed for the shipped agents: "
                                  'pip install "subenv[rl]" (or pip install "stable-baselines3>=2.3" ')
 

@@ -532,8 +532,8 @@ def resolve_controllers(controllers: Sequence[Controller | str] | None,
                 "no controllers are registered: install a package that declares some in the "
                 "'subenv.controllers' entry-point group, or call subenv.evaluation.register_controller"
             )
-        # A controller whose class says in_default_comparison = False (the MPC: about 300 times the
-        # others' time) runs when named, not in the comparison of every registered one.
+        # A controller whose class says in_default_comparison = False (a plugin's that is too slow for
+        # the comparison of every registered one, say) runs when named only.
         made = [make_controller(name) for name in names]
         controllers = [c for c in made if getattr(c, "in_default_comparison", True)] or made
     if isinstance(controllers, str):

@@ -9,7 +9,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-pytest.importorskip("osqp")
+pytest.importorskip("daqp")
 
 from subenv.dynamics import model_params
 from subenv.evaluation import run_episodes
@@ -142,7 +142,9 @@ def test_surface_suction_is_trimmed_out():
 
 
 @pytest.mark.parametrize("kwargs, match", [
-    ({"horizon": 1}, r"horizon=1 is invalid: must be an integer >= 2"),
+    ({"blocks": (1,)}, r"blocks=\(1,\) is invalid: must be integers >= 1 \(control periods\), the first 1, at least 2"),
+    ({"blocks": (2, 4)}, r"blocks=\(2, 4\) is invalid"),
+    ({"blocks": (1, 0)}, r"blocks=\(1, 0\) is invalid"),
     ({"plane_rate_limit_radps": 0.0}, r"plane_rate_limit_radps=0.0 is invalid: must be None or > 0"),
 ])
 def test_invalid_settings_name_the_parameter(kwargs, match):
@@ -150,9 +152,9 @@ def test_invalid_settings_name_the_parameter(kwargs, match):
         DepthMPC(**kwargs)
 
 
-def test_without_osqp_the_module_names_the_extra(monkeypatch):
+def test_without_daqp_the_module_names_the_extra(monkeypatch):
     """The entry point's import fails with the one-line advice, so the harness skips ``mpc`` with a note."""
-    monkeypatch.setitem(sys.modules, "osqp", None)  # as if not installed
+    monkeypatch.setitem(sys.modules, "daqp", None)  # as if not installed
     monkeypatch.delitem(sys.modules, "subenv_baselines.mpc")
     with pytest.raises(MissingExtra, match=r"^the 'mpc' extra is needed for the MPC baseline .*subenv\[mpc\]"):
         importlib.import_module("subenv_baselines.mpc")
