@@ -184,7 +184,7 @@ class DepthMPC(SingleRowMixin):
     took 1.0-1.6 ms per episode-step (QP median 0.5 ms) and the default suite 614 s. This one linearises
     once per period (72 right-hand sides), condenses onto 18 variables and 56 rows, and DAQP solves that in
     0.02 ms (median; 0.08 ms at the 99th percentile, Python's call included): 0.07 ms per episode-step in all,
-    the default suite's 700 episodes in 47 s. It won and lost the same episodes on the default suite at
+    the default suite's 700 episodes in 47-57 s (two runs). It won and lost the same episodes on the default suite at
     100 episodes per scenario, and in one run of ``benchmarks/mpc.py --scenarios
     PeriscopeDepthWaves,BallastOffset --episodes 20 --controllers mpc`` the old one took 63.1 s and this one
     6.1 s, with the same successes and plane RMS within 0.002 rad. So ``./dev run``, with the MPC in its
@@ -322,7 +322,8 @@ class DepthMPC(SingleRowMixin):
             x, _, exitflag, _ = daqp.solve(qp.H[i], qp.f[i], qp.C[i], qp.upper[i], qp.lower[i])
             times.append(time.perf_counter() - start)
             u0[i], solved[i] = x[:N_U], exitflag >= 1
-        # No usable solution (does not happen in the suite): hold the planes.
+        # A solve without a usable solution (DAQP's exit flag < 1: infeasible, cycling, iteration limit) holds
+        # the planes.
         u0 = np.where((solved & np.all(np.isfinite(u0), axis=1))[:, None], u0, planes)
         u0 = np.clip(u0, first_low, first_high)
         self._planes = u0
@@ -521,8 +522,11 @@ def _condense(A: np.ndarray, B: np.ndarray, c: np.ndarray, y: np.ndarray, x_s: n
                     sa = S[r, a]
                     if sa != 0.0:
                         g[i, a] += e * sa
-                        for b in range(nv):
-                            H[i, a, b] += 2.0 * wr * sa * S[r, b]
+                        H[i, a, a] += 2.0 * wr * sa * sa
+                        for b in range(a + 1, nv):  # (symmetric to the last bit)
+                            h = 2.0 * wr * sa * S[r, b]
+                            H[i, a, b] += h
+                            H[i, b, a] += h
             # Soft rows: pitch - s_p <= bound, pitch + s_p >= -bound, depth - s_d <= high, depth + s_d >= low.
             for q, (state, slack, high, low) in enumerate(((0, nv - 2, pitch_bound, -pitch_bound),
                                                            (3, nv - 1, depth_high[i], depth_low[i]))):

@@ -180,3 +180,53 @@ def test_it_wins_exactly_the_winnable_episodes(scenario):
     for result in results:  # (the harness records subenv.analysis.winnable for every episode)
         assert (result.metrics.outcome == "success") == result.winnable, (result.seed, result.metrics.outcome)
     assert scenario != "BallastOffset" or [r.metrics.outcome == "success" for r in results] == [True, True, False]
+
+
+def test_the_condensed_qp_is_the_linear_model_stepped_and_its_cost():
+    """The compiled condensing: the pitch and depth its rows predict at the stages are x+ = A x + B u + c
+    stepped period by period with the planes held over each block, and 1/2 v' H v + f' v differs between two
+    plans by what the cost, summed stage by stage, does."""
+    from subenv_baselines.mpc import BLOCKS, MPCWeights, _CondensedQP
+
+    rng = np.random.default_rng(5)
+    n, weights = 3, MPCWeights()
+    qp = _CondensedQP(BLOCKS, weights)
+    A = np.eye(4) + 0.05 * rng.normal(size=(n, 4, 4))
+    B, c = 0.05 * rng.normal(size=(n, 4, 2)), 0.05 * rng.normal(size=(n, 4))
+    y, x_s, u_s = rng.normal(size=(n, 4)), rng.normal(size=(n, 4)), 0.1 * rng.normal(size=(n, 2))
+    planes = 0.1 * rng.normal(size=(n, 2))
+    high, low, pitch_bound, move = np.full(n, 30.0), np.full(n, 2.0), 0.1, 0.01
+    rows = qp.build(A, B, c, y, x_s, u_s, planes, 0.4, planes - move, planes + move, move, pitch_bound, high, low)
+    K, nv, M = len(qp.stages), qp.nv, len(BLOCKS)
+    assert rows.H.shape == (n, nv, nv) and rows.C.shape == (n, 4 * K + 2 * (M - 1), nv)
+    np.testing.assert_array_equal(rows.H, np.swapaxes(rows.H, 1, 2))
+
+    def stepped(i, U):  # the states after each period, and the planes of each period
+        u = np.repeat(U.reshape(M, 2), BLOCKS, axis=0)
+        x, xs = y[i], []
+        for k in range(sum(BLOCKS)):
+            x = A[i] @ x + B[i] @ u[k] + c[i]
+            xs.append(x)
+        return np.array(xs), u
+
+    def cost(i, U):  # summed stage by stage, the slacks 0
+        xs, u = stepped(i, U)
+        e = xs[qp.stages - 1] - x_s[i]
+        moves = np.diff(np.vstack([planes[i], U.reshape(M, 2)]), axis=0)
+        return (np.sum(qp.sqrt_state_weights**2 * e**2) + weights.plane * np.sum((u - u_s[i]) ** 2)
+                + weights.move * np.sum(moves**2))
+
+    for i in range(n):
+        U0, U1 = 0.2 * rng.normal(size=2 * M), 0.2 * rng.normal(size=2 * M)
+        xs, _ = stepped(i, U1)
+        v = np.r_[U1, 0.0, 0.0]
+        pitch = rows.C[i, :K] @ v + (pitch_bound - rows.upper[i, nv:nv + K])
+        depth = rows.C[i, 2 * K:3 * K] @ v + (high[i] - rows.upper[i, nv + 2 * K:nv + 3 * K])
+        np.testing.assert_allclose(pitch, xs[qp.stages - 1, 0], rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(depth, xs[qp.stages - 1, 3], rtol=1e-12, atol=1e-12)
+
+        def quadratic(U):
+            v = np.r_[U, 0.0, 0.0]
+            return 0.5 * v @ rows.H[i] @ v + rows.f[i] @ v
+
+        np.testing.assert_allclose(quadratic(U1) - quadratic(U0), cost(i, U1) - cost(i, U0), rtol=1e-10)
