@@ -110,10 +110,12 @@ def _differences(out: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 @dataclass(frozen=True)
 class MPCWeights:
-    """Stage cost, in SI units: sum over the horizon of
-    ``depth (Z - Z_cmd)^2 + pitch theta^2 + heave w^2 + pitch_rate q^2 + plane u^2 + move (u_k - u_{k-1})^2``,
-    the terminal stage's state terms times ``terminal``, and ``slack_linear s + slack_quadratic s^2`` per
-    violated soft constraint (an exact penalty: the constraint holds whenever it can)."""
+    """Stage cost, in SI units: over the horizon,
+    ``depth (Z - Z_cmd)^2 + pitch theta^2 + heave w^2 + pitch_rate q^2`` at the QP's stages, each times the
+    periods it stands for, and the last times ``terminal``; ``plane u^2`` every period and ``move (u_j - u_{j-1})^2``
+    at every change of the planes; and ``slack_linear s + slack_quadratic s^2`` for each family of soft
+    constraints (pitch, depth), s its largest violation (an exact penalty: the constraints hold whenever they
+    can)."""
 
     depth: float = 1.0
     pitch: float = 20.0
@@ -136,7 +138,7 @@ class ObserverNoise:
 
 
 class DepthMPC(SingleRowMixin):
-    """Linear time-varying MPC of both planes, re-linearised along the predicted trajectory every period.
+    """Linear MPC of both planes, re-linearised at the measured state every period.
 
     **Model.** The one right-hand side, :func:`subenv.dynamics.derivatives` (Riedel 1993 eqs 2.38-2.43, hull
     cross-flow drag included), integrated over a control period exactly as the environments do
@@ -234,7 +236,7 @@ class DepthMPC(SingleRowMixin):
                              "at least 2 periods in all")
         if plane_rate_limit_radps is not None and not plane_rate_limit_radps > 0:
             raise ValueError(f"plane_rate_limit_radps={plane_rate_limit_radps!r} is invalid: must be None or > 0")
-        self.blocks, self.horizon = blocks, sum(blocks)
+        self.blocks = blocks
         self.weights, self.noise = weights, noise
         self.dt_s, self.substeps = dt_s, substeps
         self.plane_rate_limit_radps = plane_rate_limit_radps
@@ -247,6 +249,11 @@ class DepthMPC(SingleRowMixin):
         self._params: ModelParams | None = None
         self.solve_times_s: list[float] = []
         """Wall time of every QP solve (DAQP) [s], one per episode per control period."""
+
+    @property
+    def horizon(self) -> int:
+        """The plan's length [control periods]: the sum of :attr:`blocks`."""
+        return sum(self.blocks)
 
     # --- the model ------------------------------------------------------------------------------
     def predict(self, state: np.ndarray, planes_rad: np.ndarray, speed_mps: Any,
@@ -428,9 +435,8 @@ class _CondensedQP:
     """
 
     def __init__(self, blocks: tuple[int, ...], weights: MPCWeights) -> None:
-        self.blocks, self.weights = blocks, weights
+        self.weights = weights
         M = self.M = len(blocks)
-        self.N = sum(blocks)
         self.nv = N_U * M + 2
         # The stages: within block j (length L) every max(1, L // 2) periods, so each lies in one block.
         self.steps: list[tuple[int, int]] = []  # (block, periods since the stage before)
