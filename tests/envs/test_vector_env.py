@@ -12,6 +12,7 @@ from gymnasium.vector import AutoresetMode, SyncVectorEnv
 
 import subenv
 from subenv.envs import DivePlaneVectorEnv
+from subenv.dynamics.integrate import LANES
 from subenv.envs import transition as tr
 from subenv.envs.episodes import Loadings, draw_episode, write_episode
 from subenv.scenarios import Scenario, SpeedRamp, get_scenario, scenario_names
@@ -112,9 +113,9 @@ def test_seed_lists_none_and_reset_mask_match_sync_vector_env():
 
 @pytest.mark.parametrize("scenario", ["Randomized", "Nominal"])
 def test_results_do_not_depend_on_the_number_of_threads(scenario):
-    # 200 sub-environments: four blocks of the compiled step, shared among numba's threads (the suite
-    # runs with NUMBA_NUM_THREADS >= 2, tests/conftest.py), with resets between the steps.
-    n, results, ends = 200, [], 0
+    # Three runs of blocks of the compiled step (the last one short), shared among numba's threads (the
+    # suite runs with NUMBA_NUM_THREADS >= 2, tests/conftest.py), with resets between the steps.
+    n, results, ends = 2 * tr.BLOCKS_PER_RUN * LANES + 88, [], 0
     for threads in (1, 2):
         env = DivePlaneVectorEnv(num_envs=n, threads=threads, scenario=scenario)
         assert env.threads == threads
@@ -222,11 +223,14 @@ def test_episodes_of_batches_from_different_scenarios_are_each_their_own():
     assert widths[0] == get_scenario("Nominal").uniforms_per_episode < widths[-1]  # SpeedTransient drew in a batch
 
 
+_TWO_RUNS = 2 * tr.BLOCKS_PER_RUN * LANES  # sub-environments that two threads share
+
+
 def _step_threaded_in_child(queue, inherited) -> None:  # runs in a forked process
-    env = DivePlaneVectorEnv(num_envs=256, threads=2)
+    env = DivePlaneVectorEnv(num_envs=_TWO_RUNS, threads=2)
     env.reset(seed=0)
-    queue.put(env.step(np.zeros((256, 1)))[0].shape)
-    queue.put([inherited.step(np.zeros((256, 1)))[0] for _ in range(3)])  # the parent's env, forked
+    queue.put(env.step(np.zeros((_TWO_RUNS, 1)))[0].shape)
+    queue.put([inherited.step(np.zeros((_TWO_RUNS, 1)))[0] for _ in range(3)])  # the parent's env, forked
 
 
 def test_threaded_stepping_survives_fork():
@@ -234,10 +238,10 @@ def test_threaded_stepping_survives_fork():
 
     # numba's TBB layer, after the parent has stepped on two threads: the forked child steps on two
     # threads too, its own env and its copy of the parent's, with the parent's results.
-    env = DivePlaneVectorEnv(num_envs=256, threads=2)
+    env = DivePlaneVectorEnv(num_envs=_TWO_RUNS, threads=2)
     env.reset(seed=0)
     for _ in range(5):
-        env.step(np.zeros((256, 1)))
+        env.step(np.zeros((_TWO_RUNS, 1)))
     assert numba.threading_layer() == "tbb"
     context = multiprocessing.get_context("fork")
     queue = context.Queue()
@@ -245,9 +249,9 @@ def test_threaded_stepping_survives_fork():
     child.start()
     shape, child_obs = queue.get(timeout=60), queue.get(timeout=60)
     child.join(60)
-    assert child.exitcode == 0 and shape == (256, 8)
+    assert child.exitcode == 0 and shape == (_TWO_RUNS, 8)
     for obs in child_obs:  # the child stepped its copy as the parent steps the original
-        np.testing.assert_array_equal(obs, env.step(np.zeros((256, 1)))[0])
+        np.testing.assert_array_equal(obs, env.step(np.zeros((_TWO_RUNS, 1)))[0])
 
 
 def test_autoreset_modes_are_declared_and_same_step_keeps_the_final_observation():
