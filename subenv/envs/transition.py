@@ -348,7 +348,8 @@ def step_blocks(state: np.ndarray, episode: np.ndarray, seas: FloatArray, action
     last_action = actions.shape[1] - 1
     cfg = config[0]
     dt = cfg.dt_s
-    hull = hull.copy()  # (this thread's own: see above)
+    if stop - first < (n_rows + LANES - 1) // LANES:
+        hull = hull.copy()  # (this thread's own where the blocks are shared: see above)
     block = np.empty(LANE_ROWS * LANES)
     block_report = np.empty((_N_REPORT, LANES))
     efforts = np.empty(LANES)
