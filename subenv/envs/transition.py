@@ -57,6 +57,7 @@ from subenv.dynamics.model import PARAM_FIELDS
 from subenv.dynamics.waves import MAX_WAVES, WAVE_FIELDS
 
 __all__ = [
+    "BLOCKS_PER_RUN",
     "CONFIG_DTYPE",
     "EPISODE_DTYPE",
     "MAX_KNOTS",
