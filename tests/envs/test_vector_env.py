@@ -11,8 +11,8 @@ import pytest
 from gymnasium.vector import AutoresetMode, SyncVectorEnv
 
 import subenv
-from subenv.envs import DivePlaneVectorEnv
 from subenv.dynamics.integrate import LANES
+from subenv.envs import DivePlaneVectorEnv
 from subenv.envs import transition as tr
 from subenv.envs.episodes import Loadings, draw_episode, write_episode
 from subenv.scenarios import Scenario, SpeedRamp, get_scenario, scenario_names
