@@ -328,7 +328,7 @@ def _first_non_finite(actions: FloatArray, active: np.ndarray) -> int:
 BLOCKS_PER_RUN: Final = 4
 """Blocks of :data:`~subenv.dynamics.integrate.LANES` sub-environments per call of :func:`step_blocks` (a
 thread's unit of work in :func:`step_parallel`): few enough runs that the threads rarely meet at the
-arguments' reference counts, enough that 2-4 threads share 1,024 sub-environments evenly."""
+arguments' reference counts, enough that two or four threads share 1,024 sub-environments evenly."""
 
 
 @kernel

@@ -113,8 +113,9 @@ def test_seed_lists_none_and_reset_mask_match_sync_vector_env():
 
 @pytest.mark.parametrize("scenario", ["Randomized", "Nominal"])
 def test_results_do_not_depend_on_the_number_of_threads(scenario):
-    # Three runs of blocks of the compiled step (the last one short), shared among numba's threads (the
-    # suite runs with NUMBA_NUM_THREADS >= 2, tests/conftest.py), with resets between the steps.
+    # 600 sub-environments: ten blocks (the last one partial) in three runs of the compiled step, shared
+    # among numba's threads (the suite runs with NUMBA_NUM_THREADS >= 2, tests/conftest.py), with resets
+    # between the steps.
     n, results, ends = 2 * tr.BLOCKS_PER_RUN * LANES + 88, [], 0
     for threads in (1, 2):
         env = DivePlaneVectorEnv(num_envs=n, threads=threads, scenario=scenario)
