@@ -44,14 +44,34 @@ from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
+import numba
 import numpy as np
 from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
 
 import subenv  # registers the environments
+from subenv.dynamics import integrate as ig
 
 SUBENV_IDS = ("subenv/Nominal-v0", "subenv/DivePlane-v0")
 VECTOR_SIZES = (1, 64, 1024, 4096)
 ROOT = Path(__file__).resolve().parents[1]
+
+
+@numba.njit
+def control_periods_in_blocks(x: np.ndarray, prm: np.ndarray, hull: np.ndarray, out: np.ndarray) -> None:
+    """One control period (0.5 s, speed 1 m/s, stern planes 0.05 rad) of the states ``x`` (rows) with
+    the loadings ``prm`` into ``out``: the environments' block integrator, 64 states at a time, the
+    inputs filled as the transition fills them (also ``benchmarks/jax_dynamics.py``'s reference)."""
+    L = ig.LANES
+    block = np.empty(ig.LANE_ROWS * L)
+    for b in range(0, x.shape[0], L):
+        m = min(L, x.shape[0] - b)
+        for j in range(m):
+            ig.set_lane(block, j, x[b + j, 0], x[b + j, 1], x[b + j, 2], x[b + j, 3], 0.0, 1.0, 0.0, 0.05, 0.0, 0.0,
+                        prm[b + j])
+        ig.control_period_lanes(block, m, ig.CONTROL_PERIOD_S, ig.SUBSTEPS, hull, ig.NO_WAVES)
+        for j in range(m):
+            for r in range(4):
+                out[b + j, r] = block[(ig.LANE_PITCH + r) * L + j]
 
 
 # --- timing ----------------------------------------------------------------------------------
@@ -155,12 +175,10 @@ def vector_env_table(seconds: float, repeats: int, sizes: tuple[int, ...]) -> li
 
 
 def integrator_table(seconds: float) -> list[str]:
-    import numba
     from scipy.integrate import solve_ivp
 
     from subenv.dynamics import CONTROL_PERIOD_S, SUBSTEPS, derivatives, model_params, rk4
     from subenv.dynamics.model import pack_params
-    from subenv.dynamics import integrate as ig
 
     vehicle = subenv.load_vehicle("suboff")  # C_D = 0.3: hull drag on
     params = model_params(vehicle)
@@ -226,11 +244,9 @@ def cost_table(seconds: float) -> list[str]:
     next to CartPoleVectorEnv."""
     import math
 
-    import numba
 
     from subenv.dynamics import CONTROL_PERIOD_S, SUBSTEPS, model_params
     from subenv.dynamics.model import pack_params, rhs_point
-    from subenv.dynamics import integrate as ig
     from subenv.dynamics.hull import crossflow_point
     from subenv.dynamics.sincos import sincos_point
     from subenv.envs import transition as tr
@@ -254,19 +270,8 @@ def cost_table(seconds: float) -> list[str]:
             for r in range(4):
                 out[i, r] = block[(ig.LANE_PITCH + r) * L]
 
-    @numba.njit
     def periods_in_blocks(x: np.ndarray, prm: np.ndarray, out: np.ndarray) -> None:
-        L = ig.LANES
-        block = np.empty(ig.LANE_ROWS * L)
-        for b in range(0, x.shape[0], L):
-            m = min(L, x.shape[0] - b)
-            for j in range(m):  # the inputs, as the transition fills them
-                ig.set_lane(block, j, x[b + j, 0], x[b + j, 1], x[b + j, 2], x[b + j, 3], 0.0, 1.0, 0.0, 0.05, 0.0, 0.0,
-                            prm[b + j])
-            ig.control_period_lanes(block, m, CONTROL_PERIOD_S, SUBSTEPS, hull, ig.NO_WAVES)
-            for j in range(m):
-                for r in range(4):
-                    out[b + j, r] = block[(ig.LANE_PITCH + r) * L + j]
+        control_periods_in_blocks(x, prm, hull, out)
 
     @numba.njit
     def rhs(x: np.ndarray, prm: np.ndarray, out: np.ndarray) -> None:
@@ -469,7 +474,6 @@ def free_cores_probe() -> str:
     process using a core shows as a speedup near 1)."""
     import threading
 
-    import numba
 
     @numba.njit(nogil=True)
     def spin(n: int) -> float:
@@ -544,7 +548,6 @@ def baseline_table(baseline: Path, seconds: float, repeats: int, sizes: tuple[in
 
 
 def machine() -> str:
-    import numba
 
     cpu = platform.processor() or "unknown CPU"
     try:

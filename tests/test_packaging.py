@@ -97,6 +97,11 @@ def test_wheel_installs_into_a_clean_venv_and_evaluates(tmp_path: Path):
     assert skipped[1].startswith("(skipped ppo, sac: the 'rl' extra is needed for the shipped agents: "
                                  'pip install "subenv[rl]" (or pip install "stable-baselines3>=2.3" ')
 
+    refused = _run(python, "-c", "import subenv.jax", cwd=tmp_path, ok=False)  # jax is not installed
+    assert refused.stderr.strip().splitlines()[-1].startswith(
+        "subenv.extras.MissingExtra: the 'jax' extra is needed for the physics on JAX (subenv.jax): "
+        'pip install "subenv[jax]" (or pip install "jax>=0.4.30"; ')
+
     out = tmp_path / "evaluation"
     evaluate = ("evaluate", "--suite", "tiny", "--episodes", "1", "--controllers", "thesis", "--no-progress", "--out", out)
     refused = _run(subenv, *evaluate, cwd=tmp_path, ok=False)  # matplotlib is not installed

@@ -40,7 +40,7 @@ from typing import Any, Final, TypeVar, cast
 import numba
 import numpy as np
 
-__all__ = ["KERNEL_OPTIONS", "KERNEL_SOURCES", "inline_kernel", "kernel", "parallel_kernel", "rows",
+__all__ = ["KERNEL_OPTIONS", "KERNEL_SOURCES", "inline_kernel", "kernel", "parallel_kernel", "rows", "select",
            "threading_layer_available"]
 
 KERNEL_OPTIONS: Final[dict[str, Any]] = {"cache": True, "nogil": True, "error_model": "numpy"}
@@ -87,7 +87,7 @@ def threading_layer_available() -> bool:
     steps on one thread.
     """
     try:
-        import numba.np.ufunc.tbbpool  # noqa: F401
+        import numba.np.ufunc.tbbpool
     except ImportError:
         if not _load_pip_tbb():
             return False
@@ -172,3 +172,11 @@ def _check_directory(directory: Path) -> None:
         stamp.touch()
     except OSError:  # a read-only or vanished cache directory: numba copes (it compiles)
         return
+
+
+@inline_kernel
+def select(condition: bool, if_true: Any, if_false: Any) -> Any:
+    """``if_true if condition else if_false``, both already computed: the physics' conditional
+    expressions are written as this call, so that the same source also traces under JAX (where
+    :mod:`subenv.jax` makes it ``jax.numpy.where``), and the compiler makes it a select, not a branch."""
+    return if_true if condition else if_false

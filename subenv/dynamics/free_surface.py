@@ -73,8 +73,12 @@ __all__ = [
     "SOURCE_ROWS",
     "FreeSurface",
     "dipole_suction_N",
+    "self_pair",
+    "source_pair",
     "source_rows",
+    "station_depth",
     "suction",
+    "suction_from_sums",
     "suction_point",
 ]
 
@@ -143,7 +147,7 @@ def suction_point(theta: float, depth: float, u: float, rho_suction: float, hull
     in rows ``first_row`` .. ``first_row + 2``. The Lagally force of the hull's sources in the flow
     of their rigid-lid images (module docstring), summed over pairs of segments.
     """
-    if rho_suction == 0.0:
+    if rho_suction == 0.0:  # (deep water: the sum below would be zero, and is not computed)
         return 0.0, 0.0
     n_seg = hull.shape[1] - 1
     xs, strength, radius = hull[first_row], hull[first_row + 1], hull[first_row + 2]
@@ -152,22 +156,49 @@ def suction_point(theta: float, depth: float, u: float, rho_suction: float, hull
     moment = 0.0  # the same with x_k weights
     for k in range(n_seg):
         xk = xs[k]
-        hk = max(depth - xk * s, radius[k])  # (a station above the surface is taken at its radius)
+        hk = station_depth(depth, xk, s, radius[k])
         sk = strength[k]
         # The self pair (image 2 h_k above), then each pair once, both ends weighted.
-        self_term = sk * sk / (4.0 * hk * hk)
+        self_term = self_pair(sk, hk)
         force += self_term
         moment += xk * self_term
         for m in range(k + 1, n_seg):
             xm = xs[m]
-            dz = hk + max(depth - xm * s, radius[m])
-            dx = (xk - xm) * c
-            r2 = dx * dx + dz * dz
-            pair = sk * strength[m] * dz / (r2 * math.sqrt(r2))
+            pair = source_pair(xk, hk, sk, xm, station_depth(depth, xm, s, radius[m]), strength[m], c)
             force += 2.0 * pair
             moment += (xk + xm) * pair
+    return suction_from_sums(force, moment, u, rho_suction, c)
+
+
+# The terms of suction_point's sum, one function each, so that the JAX twin (subenv.jax) sums the
+# same terms over arrays of segments.
+@inline_kernel
+def station_depth(depth: float, x: float, sin_theta: float, radius: float) -> float:
+    """Depth [m] of the hull's sources at station ``x`` [m] (a station above the surface is taken at its radius)."""
+    return max(depth - x * sin_theta, radius)
+
+
+@inline_kernel
+def self_pair(strength: float, h: float) -> float:
+    """A segment's sources with their own image, ``2 h`` above them: s_k^2 / (4 h_k^2)."""
+    return strength * strength / (4.0 * h * h)
+
+
+@inline_kernel
+def source_pair(xk: float, hk: float, sk: float, xm: float, hm: float, sm: float, cos_theta: float) -> float:
+    """Segment k's sources with segment m's image: s_k s_m (h_k + h_m) / r^3."""
+    dz = hk + hm
+    dx = (xk - xm) * cos_theta
+    r2 = dx * dx + dz * dz
+    return sk * sm * dz / (r2 * math.sqrt(r2))
+
+
+@inline_kernel
+def suction_from_sums(force: float, moment: float, u: float, rho_suction: float,
+                      cos_theta: float) -> tuple[float, float]:
+    """(Z_fs [N], M_fs [N m]) from the sums over the pairs (``force``: up positive; ``moment``: with x_k weights)."""
     scale = rho_suction * u * u / _FOUR_PI
-    return -scale * force * c, scale * moment * c
+    return -scale * force * cos_theta, scale * moment * cos_theta
 
 
 @kernel

@@ -27,7 +27,7 @@ from typing import Final
 import numpy as np
 
 from subenv._typing import FloatArray
-from subenv.dynamics._jit import inline_kernel, kernel, rows
+from subenv.dynamics._jit import inline_kernel, kernel, rows, select
 from subenv.dynamics.free_surface import SOURCE_ROWS, source_rows
 
 __all__ = [
@@ -111,7 +111,7 @@ def hull_segment(s: float, hull: FloatArray) -> int:
     """
     count = 0
     for k in range(1, hull.shape[1] - 1):
-        count += 1 if hull[0, k] <= s else 0
+        count += select(hull[0, k] <= s, 1, 0)
     return count
 
 
@@ -136,7 +136,7 @@ def moments_on_segment(s: float, c0: float, c1: float, o0: float, o1: float, o2:
 def cumulative_moments_point(s: float, hull: FloatArray) -> tuple[float, float, float, float]:
     """C_0..C_3 at one position ``s`` [m] (clipped to the hull); ``hull`` is :attr:`HullTable.packed`."""
     n_seg = hull.shape[1] - 1
-    s = min(max(s, hull[0, 0]), hull[0, n_seg]) if s == s else s
+    s = select(s == s, min(max(s, hull[0, 0]), hull[0, n_seg]), s)
     i = hull_segment(s, hull)
     return moments_on_segment(s, hull[1, i], hull[2, i], hull[3, i], hull[4, i], hull[5, i], hull[6, i])
 
@@ -146,13 +146,10 @@ def crossflow_root(w: float, q: float, hull: FloatArray) -> float:
     """The root x* = w / q of w_loc = w - x q, clipped to the hull; for q == 0 (w_loc has the sign of
     w everywhere) the end that reproduces that sign."""
     lo, hi = hull[0, 0], hull[0, hull.shape[1] - 1]
-    if q != 0:
-        root = w / q
-    elif w >= 0:
-        root = hi
-    else:
-        root = lo
-    return min(max(root, lo), hi) if root == root else root
+    # (w / 1.0 where q == 0, unused: no division by zero, which raises in a caller compiled with numba's
+    # default error model, and whose inf would poison JAX's gradients through the select)
+    root = select(q != 0, w / select(q != 0, q, 1.0), select(w >= 0, hi, lo))
+    return select(root == root, min(max(root, lo), hi), root)
 
 
 @inline_kernel
@@ -163,7 +160,7 @@ def crossflow_from_moments(w: float, q: float, C0: float, C1: float, C2: float, 
     T0, T1, T2, T3 = hull[3, n_seg], hull[4, n_seg], hull[5, n_seg], hull[6, n_seg]
     ww, wq2, qq = w * w, 2.0 * w * q, q * q
     # With F_k(s) = int_{tail}^{s} x^k b w_loc^2 dx: w_loc > 0 aft of the root when q > 0.
-    sigma = 1.0 if q >= 0 else -1.0
+    sigma = select(q >= 0, 1.0, -1.0)
     I0 = sigma * (2.0 * (ww * C0 - wq2 * C1 + qq * C2) - (ww * T0 - wq2 * T1 + qq * T2))
     I1 = sigma * (2.0 * (ww * C1 - wq2 * C2 + qq * C3) - (ww * T1 - wq2 * T2 + qq * T3))
     return I0, I1

@@ -27,7 +27,7 @@ from typing import Final
 
 import numpy as np
 
-from subenv.dynamics._jit import inline_kernel
+from subenv.dynamics._jit import inline_kernel, select
 
 __all__ = ["MAX_ARGUMENT", "sincos_point"]
 
@@ -45,14 +45,15 @@ _INV_PIO2 = 6.36619772367581382433e-01
 _PIO2_1, _PIO2_1T = 1.57079632673412561417e00, 6.07710050650619224932e-11
 _PIO2_2, _PIO2_2T = 6.07710050630396597660e-11, 2.02226624879595063154e-21
 _PIO2_3, _PIO2_3T = 2.02226624871116645580e-21, 8.47842766036889956997e-32
-_TO_INTEGER = 1.5 / 2.0**-52  # adding and subtracting it rounds to the nearest integer
 
 
 @inline_kernel
 def sincos_point(x: float) -> tuple[float, float]:
     """``(sin(x), cos(x))`` within 1 ulp for ``|x| <`` :data:`MAX_ARGUMENT`, else ``(nan, nan)``."""
     # x = n pi/2 + (y0 + y1), |y0 + y1| <= pi/4 (e_rem_pio2.c, all three refinements always).
-    n = (x * _INV_PIO2 + _TO_INTEGER) - _TO_INTEGER
+    # To the nearest integer, ties to even; + 0.0 makes a zero +0.0, so that sin(-0.0) is -0.0. (As a
+    # rounding call, not msun's (y + 1.5 2^52) - 1.5 2^52, which JAX's compiler folds to y.)
+    n = np.rint(x * _INV_PIO2) + 0.0
     r = x - n * _PIO2_1
     w = n * _PIO2_1T
     t = r
@@ -78,7 +79,7 @@ def sincos_point(x: float) -> tuple[float, float]:
     c = one_minus_hz + (((1.0 - one_minus_hz) - hz) + (z * rc - y0 * y1))
     # (Selects, not branches: the vectorizer needs straight-line code.)
     quadrant = n - 4.0 * np.floor(0.25 * n)  # n mod 4 (a float: no integer conversion of a nan)
-    sin_x = s if quadrant == 0.0 else (c if quadrant == 1.0 else (-s if quadrant == 2.0 else -c))
-    cos_x = c if quadrant == 0.0 else (-s if quadrant == 1.0 else (-c if quadrant == 2.0 else s))
+    sin_x = select(quadrant == 0.0, s, select(quadrant == 1.0, c, select(quadrant == 2.0, -s, -c)))
+    cos_x = select(quadrant == 0.0, c, select(quadrant == 1.0, -s, select(quadrant == 2.0, -c, s)))
     in_range = abs(x) < MAX_ARGUMENT  # false for inf and nan
-    return (sin_x if in_range else math.nan), (cos_x if in_range else math.nan)
+    return select(in_range, sin_x, math.nan), select(in_range, cos_x, math.nan)

@@ -1,0 +1,35 @@
+"""subenv's physics traced by JAX, from the same source that numba compiles (the ``jax`` extra).
+
+The vertical-plane dynamics of :mod:`subenv.dynamics` are written once, as scalar functions. numba
+compiles them for the environments; this package hands the very same functions (their code, not a
+copy of it) to JAX, with their names re-bound to JAX's operations (:func:`traced`), so that they run
+under ``jax.jit`` and ``jax.vmap``, on a CPU or an accelerator:
+
+- :func:`~subenv.jax.dynamics.derivatives`: d/dt of the state, batched as
+  :func:`subenv.dynamics.derivatives`;
+- :func:`~subenv.jax.dynamics.control_period`: one control period of the environments' integrator
+  (:func:`subenv.dynamics.rk4` over the right-hand side), batched.
+
+They agree with the compiled ones to about 1e-14, not bit for bit: XLA contracts multiply-adds and
+rewrites divisions by constants (``tests/jax/test_dynamics.py`` holds them within 1e-12 over 20
+control periods). Importing this package turns on JAX's 64-bit mode (``jax_enable_x64``): the
+physics is written for float64.
+
+Not here yet: the environment itself as a functional JAX environment (its transition, episodes and
+resets), and the sea's waves.
+"""
+
+from __future__ import annotations
+
+from subenv.extras import require
+
+require("jax", "the physics on JAX (subenv.jax)", "jax")
+
+import jax
+
+jax.config.update("jax_enable_x64", True)
+
+from subenv.jax._trace import traced
+from subenv.jax.dynamics import control_period, derivatives
+
+__all__ = ["control_period", "derivatives", "traced"]

@@ -1,0 +1,89 @@
+"""The JAX twin of a compiled scalar function of :mod:`subenv.dynamics` (:func:`traced`)."""
+
+from __future__ import annotations
+
+import math
+import types
+from collections.abc import Callable
+from typing import Any, Final
+
+import jax.numpy as jnp
+import numpy as np
+
+from subenv.dynamics import free_surface
+from subenv.dynamics._jit import select
+
+__all__ = ["traced"]
+
+_MATH: Final = types.SimpleNamespace(sin=jnp.sin, cos=jnp.cos, exp=jnp.exp, sqrt=jnp.sqrt, isfinite=jnp.isfinite,
+                                     floor=jnp.floor, nan=math.nan, inf=math.inf, pi=math.pi)
+"""What the physics takes from :mod:`math`, on JAX."""
+_NAMES: Final[dict[str, Any]] = {"math": _MATH, "np": jnp, "min": jnp.minimum, "max": jnp.maximum, "abs": jnp.abs}
+"""Names re-bound in a twin's globals: the modules and the builtins the physics calls."""
+_twins: dict[tuple[Callable[..., Any], bool], Callable[..., Any]] = {}
+
+
+def _suction_point(theta: Any, depth: Any, u: Any, rho_suction: Any, hull: Any, first_row: int) -> tuple[Any, Any]:
+    """:func:`subenv.dynamics.free_surface.suction_point` for JAX: the same terms (its twins), summed
+    over arrays of segments and pairs, not in loops (unrolled by the trace, the loops over the 276
+    pairs of SUBOFF's segments took 7 s to compile per right-hand side); and no deep-water
+    shortcut, a branch on a number (the terms sum to zero there)."""
+    n_seg = hull.shape[1] - 1
+    xs, strength, radius = hull[first_row, :n_seg], hull[first_row + 1, :n_seg], hull[first_row + 2, :n_seg]
+    s, c = jnp.sin(theta), jnp.cos(theta)
+    h = traced(free_surface.station_depth)(depth, xs, s, radius)
+    self_terms = traced(free_surface.self_pair)(strength, h)
+    k, m = np.triu_indices(n_seg, 1)
+    pairs = traced(free_surface.source_pair)(xs[k], h[k], strength[k], xs[m], h[m], strength[m], c)
+    force = jnp.sum(self_terms) + jnp.sum(2.0 * pairs)
+    moment = jnp.sum(xs * self_terms) + jnp.sum((xs[k] + xs[m]) * pairs)
+    return traced(free_surface.suction_from_sums)(force, moment, u, rho_suction, c)
+
+
+def _no_suction(theta: Any, depth: Any, u: Any, rho_suction: Any, hull: Any, first_row: int) -> tuple[float, float]:
+    """:func:`subenv.dynamics.free_surface.suction_point` in deep water (``rho_suction`` 0)."""
+    return 0.0, 0.0
+
+
+_SAME_AS: Final[dict[bool, dict[Any, Any]]] = {
+    True: {select: jnp.where, free_surface.suction_point: _suction_point},
+    False: {select: jnp.where, free_surface.suction_point: _no_suction},
+}
+
+
+def traced(kernel: Callable[..., Any], free_surface: bool = True) -> Callable[..., Any]:
+    """The function compiled as ``kernel`` (a numba kernel of :mod:`subenv.dynamics`), for JAX.
+
+    It is the kernel's own Python code (``kernel.py_func.__code__``), run with its module's globals
+    but for these names: ``math`` and ``np`` (NumPy) stand for :mod:`jax.numpy`; ``min``, ``max`` and
+    ``abs`` for their elementwise forms; every kernel it calls for that kernel's twin, and
+    :func:`~subenv.dynamics._jit.select` for ``jax.numpy.where``. So the equations exist once; what
+    runs under JAX is the same source, traced. The function takes and returns scalars (JAX arrays of
+    shape ()): batch it with ``jax.vmap`` or ``jax.numpy.vectorize``.
+
+    Only for functions written for it: straight-line arithmetic, loops over static ranges (array
+    shapes), conditions as :func:`~subenv.dynamics._jit.select` calls.
+
+    ``free_surface=False`` gives the twin for deep water only: the free surface's suction is left
+    out, not computed (the compiled code skips it where ``rho_suction`` is 0, a branch on a number;
+    JAX would compute it for every state: in deep water that made a control period seven times
+    slower, ``benchmarks/jax_dynamics.py``).
+    """
+    same_as = _SAME_AS[bool(free_surface)]
+    target = same_as.get(kernel, kernel)
+    if not hasattr(target, "py_func"):  # (already a JAX function)
+        return target
+    function = target.py_func
+    key = (function, bool(free_surface))
+    if key not in _twins:
+        namespace = dict(function.__globals__)
+        twin = types.FunctionType(function.__code__, namespace, function.__name__, function.__defaults__,
+                                  function.__closure__)
+        twin.__doc__, twin.__qualname__ = function.__doc__, function.__qualname__
+        _twins[key] = twin  # (before its callees: a kernel may be reached twice)
+        namespace.update(_NAMES)
+        for name in function.__code__.co_names:
+            value = namespace.get(name)
+            if hasattr(value, "py_func"):  # a kernel
+                namespace[name] = traced(value, free_surface)
+    return _twins[key]

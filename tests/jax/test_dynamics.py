@@ -1,0 +1,119 @@
+"""The dynamics on JAX (subenv.jax) against the compiled ones: the same source, traced."""
+
+import numpy as np
+import pytest
+
+jax = pytest.importorskip("jax")  # the jax extra (in dev)
+
+import jax.numpy as jnp
+
+import subenv
+import subenv.jax as sj
+from subenv.dynamics import derivatives, model, model_params, rk4, stack_params
+from subenv.dynamics.free_surface import FreeSurface
+from subenv.dynamics.model import pack_params
+from subenv.jax.dynamics import rhs_point
+
+TOLERANCE = 1e-12  # relative, and absolute for components near zero
+N = 400
+
+
+def _loadings(vehicle_name, rng, free_surface):
+    """N loadings of one vehicle (one hull): its own, and variants of its metacentric height,
+    longitudinal balance, excess buoyancy and cross-flow drag; near the surface with ``free_surface``."""
+    vehicle = subenv.load_vehicle(vehicle_name)
+    surface = FreeSurface() if free_surface else FreeSurface(suction_factor=0.0)
+    variants = [model_params(vehicle, surface)]
+    for _ in range(7):
+        variants.append(model_params(vehicle.variant(
+            z_GB_m=vehicle.z_GB_m * rng.uniform(0.2, 3.0), x_GB_m=rng.uniform(-0.01, 0.01) * vehicle.length_m,
+            excess_buoyancy_N=rng.uniform(-0.01, 0.01) * vehicle.weight_N, crossflow_drag=rng.uniform(0.0, 1.0)),
+            surface))
+    return stack_params([variants[i % len(variants)] for i in range(N)])
+
+
+def _inputs(rng, vehicle_name, free_surface):
+    params = _loadings(vehicle_name, rng, free_surface)
+    length = subenv.load_vehicle(vehicle_name).length_m
+    depth_low = 0.6 * length / 8.0 if free_surface else 5.0  # periscope depth: the suction is strong
+    state = np.column_stack([rng.uniform(-0.4, 0.4, N), rng.uniform(-0.5, 0.5, N), rng.uniform(-0.1, 0.1, N),
+                             rng.uniform(depth_low, depth_low + 3.0, N)])
+    state[:20, 1:3] = 0.0  # level flight: w = q = 0, the cross-flow's root at the hull's end
+    state[20:40, 2] = 0.0
+    inputs = {"speed": rng.uniform(0.2, 2.5, N), "stern": rng.uniform(-0.4, 0.4, N), "bow": rng.uniform(-0.4, 0.4, N),
+              "force": rng.normal(0.0, 0.01 * params.W_minus_B.max() + 10.0, N)}
+    return state, params, inputs
+
+
+@pytest.mark.parametrize("vehicle_name, free_surface", [("suboff", False), ("suboff", True), ("remus100", True)])
+def test_the_right_hand_side_on_jax_is_the_compiled_one(vehicle_name, free_surface):
+    rng = np.random.default_rng(11)
+    state, params, inputs = _inputs(rng, vehicle_name, free_surface)
+    moment = rng.normal(0.0, 50.0, N)
+    expected = derivatives(state, inputs["speed"], inputs["stern"], inputs["bow"], params, inputs["force"], moment)
+    got = jax.jit(sj.derivatives)(state, inputs["speed"], inputs["stern"], inputs["bow"], pack_params(params),
+                                  params.hull.packed, inputs["force"], moment)
+    assert got.dtype == jnp.float64
+    np.testing.assert_allclose(np.asarray(got), expected, rtol=TOLERANCE, atol=TOLERANCE)
+    if free_surface:  # (the suction is in the comparison: without it the answer differs)
+        deep = derivatives(state, inputs["speed"], inputs["stern"], inputs["bow"], params._replace(rho_suction=0.0 * params.rho_suction),
+                           inputs["force"], moment)
+        assert np.max(np.abs(deep - expected)) > 1e3 * TOLERANCE
+
+
+@pytest.mark.parametrize("vehicle_name, free_surface", [("suboff", False), ("suboff", True), ("remus100", False)])
+def test_twenty_control_periods_on_jax_are_the_compiled_ones(vehicle_name, free_surface):
+    """The environments' integrator (rk4 over the right-hand side, two steps per 0.5 s period; the
+    block integrator gives its bits, tests/dynamics/test_integrator.py) with speed ramps."""
+    rng = np.random.default_rng(12)
+    state, params, inputs = _inputs(rng, vehicle_name, free_surface)
+    slope = rng.uniform(-0.01, 0.01, N)
+    slope[: N // 2] = 0.0
+    prm, hull = pack_params(params), params.hull.packed
+    period = jax.jit(lambda x, t0: sj.control_period(x, t0, 0.5, inputs["speed"] + slope * t0, slope, inputs["stern"],
+                                                     inputs["bow"], prm, hull, inputs["force"]))
+    expected, got = state.copy(), jnp.asarray(state)
+    for k in range(20):
+        t0 = 0.5 * k
+        speed0 = inputs["speed"] + slope * t0
+
+        def rhs(t, x, t0=t0, speed0=speed0):
+            return derivatives(x, speed0 + slope * (t - t0), inputs["stern"], inputs["bow"], params, inputs["force"])
+
+        expected = rk4(rhs, t0, expected, 0.5, 2)
+        got = period(got, t0)
+    assert np.all(np.isfinite(expected))
+    assert np.max(np.abs(expected - state)) > 0.01  # (the states moved)
+    np.testing.assert_allclose(np.asarray(got), expected, rtol=TOLERANCE, atol=TOLERANCE)
+
+
+def test_the_jax_functions_run_the_kernels_own_code():
+    """No second copy of an equation: the twin is the compiled function's code object, re-bound."""
+    assert rhs_point.__code__ is model.rhs_point.py_func.__code__
+    assert sj.traced(model.rhs_given_drag).__code__ is model.rhs_given_drag.py_func.__code__
+    assert sj.traced(model.rhs_point) is rhs_point  # (one twin per kernel)
+
+
+def test_the_jax_right_hand_side_batches_and_differentiates():
+    params = model_params(subenv.load_vehicle("suboff"))
+    prm, hull = pack_params(params), params.hull.packed
+    state = jnp.array([0.01, 0.02, 0.001, 10.0])
+    one = sj.derivatives(state, 1.0, 0.1, 0.0, prm, hull)
+    assert one.shape == (4,)
+    many = jax.vmap(lambda x: sj.derivatives(x, 1.0, 0.1, 0.0, prm, hull))(jnp.stack([state, 2 * state]))
+    np.testing.assert_array_equal(np.asarray(many[0]), np.asarray(one))
+    # d(depth rate)/d(heave) = cos(theta) (Riedel 1993 eq. 2.41), through the traced code.
+    slope = jax.grad(lambda w: sj.derivatives(state.at[1].set(w), 1.0, 0.1, 0.0, prm, hull)[3])(0.02)
+    assert float(slope) == pytest.approx(np.cos(0.01), rel=1e-12)
+
+
+def test_deep_water_leaves_the_suction_out_and_refuses_a_free_surface():
+    rng = np.random.default_rng(13)
+    state, deep, inputs = _inputs(rng, "suboff", free_surface=False)
+    args = (state, inputs["speed"], inputs["stern"], inputs["bow"])
+    prm, hull = pack_params(deep), deep.hull.packed
+    without = sj.derivatives(*args, prm, hull, free_surface=False)  # (found from prm by default as well)
+    np.testing.assert_allclose(np.asarray(without), derivatives(*args, deep), rtol=TOLERANCE, atol=TOLERANCE)
+    near = pack_params(_loadings("suboff", rng, free_surface=True))
+    with pytest.raises(ValueError, match=r"free_surface=False is invalid for these loadings: 400 of them have a free"):
+        sj.derivatives(*args, near, hull, free_surface=False)
