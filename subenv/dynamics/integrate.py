@@ -42,6 +42,7 @@ __all__ = [
     "NO_WAVES",
     "SUBSTEPS",
     "control_period_lanes",
+    "distance_travelled",
     "rk4",
     "rk4_step",
     "set_lane",
@@ -127,6 +128,13 @@ def set_lane(block: FloatArray, j: int, theta: float, w: float, q: float, depth:
     block[LANE_WAVES * L + j] = n_waves
     for r in range(len(PARAM_FIELDS)):
         block[(LANE_PARAMS + r) * L + j] = prm[r]
+
+
+@inline_kernel
+def distance_travelled(distance0: float, elapsed: float, speed0: float, speed_slope: float) -> float:
+    """Distance travelled [m] ``elapsed`` seconds into a period that starts at ``distance0`` [m] with the
+    speed ``speed0 + speed_slope * elapsed`` [m/s] (a sea's phase: :func:`~subenv.dynamics.waves.wave_force_point`)."""
+    return distance0 + elapsed * (speed0 + 0.5 * speed_slope * elapsed)
 
 
 @kernel
@@ -231,7 +239,7 @@ def control_period_lanes(block: FloatArray, n: int, dt: float, substeps: int, hu
                 block[_SPEED * L + j] = speed0 + slope * elapsed
                 if free_surface:  # (the time and distance of the stage: a sea's phase)
                     block[_TIME * L + j] = t0 + elapsed
-                    block[_DISTANCE * L + j] = block[LANE_DISTANCE * L + j] + elapsed * (speed0 + 0.5 * slope * elapsed)
+                    block[_DISTANCE * L + j] = distance_travelled(block[LANE_DISTANCE * L + j], elapsed, speed0, slope)
             for r in range(4):
                 for j in range(n):
                     x = block[(LANE_PITCH + r) * L + j]

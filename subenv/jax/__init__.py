@@ -8,7 +8,7 @@ under ``jax.jit`` and ``jax.vmap``, on a CPU or an accelerator:
 - :func:`~subenv.jax.dynamics.derivatives`: d/dt of the state, batched as
   :func:`subenv.dynamics.derivatives`;
 - :func:`~subenv.jax.dynamics.control_period`: one control period of the environments' integrator
-  (:func:`subenv.dynamics.rk4` over the right-hand side), batched.
+  (:func:`subenv.dynamics.rk4` over the right-hand side), batched, in a sea if given one.
 
 They agree with the compiled ones to about 1e-14, not bit for bit: XLA contracts multiply-adds and
 rewrites divisions by constants (``tests/jax/test_dynamics.py`` holds them within 1e-12 over 20
@@ -16,7 +16,7 @@ control periods). Importing this package turns on JAX's 64-bit mode (``jax_enabl
 physics is written for float64.
 
 Not here yet: the environment itself as a functional JAX environment (its transition, episodes and
-resets), and the sea's waves.
+resets).
 """
 
 from __future__ import annotations

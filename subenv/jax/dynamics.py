@@ -9,6 +9,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from subenv.dynamics import integrate, model
+from subenv.dynamics.waves import wave_force_point
 from subenv.jax._trace import traced
 
 __all__ = ["control_period", "derivatives", "rhs_point"]
@@ -51,19 +52,50 @@ def derivatives(state: Any, speed: Any, stern: Any, bow: Any, prm: Any, hull: An
 
 def control_period(state: Any, t0: Any, dt: float, speed0: Any, speed_slope: Any, stern: Any, bow: Any, prm: Any,
                    hull: Any, force: Any = 0.0, substeps: int = integrate.SUBSTEPS,
-                   free_surface: bool | None = None) -> Any:
+                   free_surface: bool | None = None, waves: Any = None, distance0: Any = 0.0) -> Any:
     """The state after one control period ``dt`` [s] from time ``t0`` [s]: the environments' integrator,
     :func:`subenv.dynamics.rk4` (``substeps`` RK4 steps, the reference's own code) over
     :func:`derivatives`, with the planes and the heave ``force`` held and the speed
     ``speed0 + speed_slope (t - t0)`` [m/s]. Arguments as :func:`derivatives`'s; batched the same way.
-    (The sea's waves are not here yet.)"""
 
-    free_surface = _free_surface(prm, free_surface)
+    ``waves``: the sea of each state, shape (..., WAVE_FIELDS, MAX_WAVES)
+    (:meth:`subenv.dynamics.waves.SeaState.components`; zeros for a calm one), whose force
+    (:func:`~subenv.dynamics.waves.wave_force_point`, all MAX_WAVES columns: the unused ones are zero)
+    acts at every stage, at the stage's time, depth and distance travelled
+    (:func:`~subenv.dynamics.integrate.distance_travelled` from ``distance0`` [m] at ``t0``), as in
+    the environments; a sea implies ``free_surface``.
+    """
+    free_surface = True if waves is not None and free_surface is None else _free_surface(prm, free_surface)
+    wave_force = _wave_force(waves)
 
     def rhs(t: Any, x: Any) -> Any:
-        return derivatives(x, speed0 + speed_slope * (t - t0), stern, bow, prm, hull, force, free_surface=free_surface)
+        speed = speed0 + speed_slope * (t - t0)
+        if wave_force is None:
+            return derivatives(x, speed, stern, bow, prm, hull, force, free_surface=free_surface)
+        distance = traced(integrate.distance_travelled)(distance0, t - t0, speed0, speed_slope)
+        heave, pitch = wave_force(t, distance, x[..., 3], waves)
+        return derivatives(x, speed, stern, bow, prm, hull, force + heave, pitch, free_surface=free_surface)
 
     return integrate.rk4(rhs, t0, jnp.asarray(state), dt, substeps)
+
+
+def _wave_force(waves: Any) -> Any:
+    """The sea's (heave force, pitch moment) at (t, distance, depth) for seas ``waves`` (None: calm)."""
+    if waves is None:
+        return None
+    force_point = traced(wave_force_point)
+    columns = jnp.shape(waves)[-1]
+
+    def one(t: Any, distance: Any, depth: Any, sea: Any) -> Any:
+        return jnp.stack(force_point(t, distance, depth, sea, columns))
+
+    vectorized = jnp.vectorize(one, signature="(),(),(),(f,w)->(2)")
+
+    def force(t: Any, distance: Any, depth: Any, seas: Any) -> tuple[Any, Any]:
+        both = vectorized(t, distance, depth, jnp.asarray(seas))
+        return both[..., 0], both[..., 1]
+
+    return force
 
 
 def _free_surface(prm: Any, free_surface: bool | None) -> bool:

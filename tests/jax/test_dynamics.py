@@ -1,5 +1,6 @@
 """The dynamics on JAX (subenv.jax) against the compiled ones: the same source, traced."""
 
+import numba
 import numpy as np
 import pytest
 
@@ -9,9 +10,10 @@ import jax.numpy as jnp
 
 import subenv
 import subenv.jax as sj
-from subenv.dynamics import derivatives, model, model_params, rk4, stack_params
+from subenv.dynamics import derivatives, integrate, model, model_params, rk4, stack_params
 from subenv.dynamics.free_surface import FreeSurface
 from subenv.dynamics.model import pack_params
+from subenv.dynamics.waves import MAX_WAVES, WAVE_FIELDS, SeaState
 from subenv.jax.dynamics import rhs_point
 
 TOLERANCE = 1e-12  # relative, and absolute for components near zero
@@ -117,3 +119,70 @@ def test_deep_water_leaves_the_suction_out_and_refuses_a_free_surface():
     near = pack_params(_loadings("suboff", rng, free_surface=True))
     with pytest.raises(ValueError, match=r"free_surface=False is invalid for these loadings: 400 of them have a free"):
         sj.derivatives(*args, near, hull, free_surface=False)
+
+
+@numba.njit
+def _periods_in_blocks(x, t0, speed0, slope, stern, bow, force, prm, hull, distance, n_waves, seas):
+    """One control period of every row in the environments' block integrator, with each row's sea."""
+    lanes = integrate.LANES
+    block = np.empty(integrate.LANE_ROWS * lanes)
+    waves = np.zeros((lanes, seas.shape[1], seas.shape[2]))
+    out = np.empty_like(x)
+    for b in range(0, x.shape[0], lanes):
+        m = min(lanes, x.shape[0] - b)
+        for j in range(m):
+            i = b + j
+            integrate.set_lane(block, j, x[i, 0], x[i, 1], x[i, 2], x[i, 3], t0, speed0[i], slope[i], stern[i], bow[i],
+                               force[i], prm[i], distance[i], n_waves[i])
+            waves[j] = seas[i]
+        integrate.control_period_lanes(block, m, integrate.CONTROL_PERIOD_S, integrate.SUBSTEPS, hull, waves)
+        for j in range(m):
+            for r in range(4):
+                out[b + j, r] = block[(integrate.LANE_PITCH + r) * lanes + j]
+    return out
+
+
+def test_twenty_control_periods_in_a_sea_on_jax_are_the_environments_block_integrator():
+    """Waves at every stage (each state its own sea, some calm), the suction, speed ramps: JAX's control
+    period against the compiled block integrator itself."""
+    rng = np.random.default_rng(14)
+    _, _, inputs = _inputs(rng, "suboff", free_surface=True)
+    params = stack_params([model_params(subenv.load_vehicle("suboff"), FreeSurface())] * N)  # (one loading: a sea
+    # drives the light variants of the other tests out of the water within 20 periods)
+    state = np.column_stack([rng.uniform(-0.05, 0.05, N), rng.uniform(-0.05, 0.05, N), rng.uniform(-0.01, 0.01, N),
+                             rng.uniform(1.0, 2.0, N)])  # near level flight at periscope depth (SUBOFF: 4.4 m long)
+    inputs["stern"], inputs["bow"], inputs["force"] = 0.1 * inputs["stern"], 0.1 * inputs["bow"], 0.1 * inputs["force"]
+    inputs["speed"] = rng.uniform(0.3, 1.0, N)  # (PeriscopeDepth's speeds: faster, the suction broaches the boat)
+    vehicle = subenv.load_vehicle("suboff")
+    sea = SeaState(significant_height_m=0.03, peak_period_s=2.0, waves=12)
+    seas = np.stack([sea.components(rng.random(sea.waves), rng.uniform(0.0, 2.0 * np.pi, sea.waves), vehicle.hull.x_m,
+                                    vehicle.hull.breadth_m, vehicle.water_density_kg_m3, vehicle.gravity_m_s2)
+                     for _ in range(N)])
+    n_waves = np.full(N, sea.waves)
+    seas[: N // 4], n_waves[: N // 4] = 0.0, 0  # calm
+    assert seas.shape[1:] == (WAVE_FIELDS, MAX_WAVES)
+    slope = rng.uniform(-0.01, 0.01, N)
+    prm, hull = pack_params(params), params.hull.packed
+    distance = rng.uniform(0.0, 100.0, N)
+
+    @jax.jit
+    def period(x, t0, speed0, distance0):
+        return sj.control_period(x, t0, integrate.CONTROL_PERIOD_S, speed0, slope, inputs["stern"], inputs["bow"], prm,
+                                 hull, inputs["force"], waves=seas, distance0=distance0)
+
+    expected, got = state.copy(), jnp.asarray(state)
+    for k in range(20):
+        t0 = integrate.CONTROL_PERIOD_S * k
+        speed0 = inputs["speed"] + slope * t0
+        expected = _periods_in_blocks(expected, t0, speed0, slope, inputs["stern"], inputs["bow"], inputs["force"],
+                                      prm, hull, distance, n_waves, seas)
+        got = period(got, t0, speed0, distance)
+        speed1 = speed0 + slope * integrate.CONTROL_PERIOD_S
+        distance = distance + 0.5 * (speed0 + speed1) * integrate.CONTROL_PERIOD_S  # as the transition keeps it
+    assert np.all(np.isfinite(expected))
+    np.testing.assert_allclose(np.asarray(got), expected, rtol=TOLERANCE, atol=TOLERANCE)
+    calm = np.asarray(sj.control_period(state, 0.0, integrate.CONTROL_PERIOD_S, inputs["speed"], slope, inputs["stern"],
+                                        inputs["bow"], prm, hull, inputs["force"]))
+    first = np.asarray(period(jnp.asarray(state), 0.0, inputs["speed"], rng.uniform(0.0, 100.0, N)))
+    assert np.abs(first - calm)[N // 4:].max() > 1e-9  # (and the sea moves the states that have one)
+    np.testing.assert_allclose(first[: N // 4], calm[: N // 4], rtol=TOLERANCE, atol=TOLERANCE)  # (calm: not moved)
