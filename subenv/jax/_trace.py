@@ -10,7 +10,7 @@ from typing import Any, Final
 import jax.numpy as jnp
 import numpy as np
 
-from subenv.dynamics import free_surface
+from subenv.dynamics import free_surface as surface
 from subenv.dynamics._jit import select
 
 __all__ = ["traced"]
@@ -31,13 +31,13 @@ def _suction_point(theta: Any, depth: Any, u: Any, rho_suction: Any, hull: Any, 
     n_seg = hull.shape[1] - 1
     xs, strength, radius = hull[first_row, :n_seg], hull[first_row + 1, :n_seg], hull[first_row + 2, :n_seg]
     s, c = jnp.sin(theta), jnp.cos(theta)
-    h = traced(free_surface.station_depth)(depth, xs, s, radius)
-    self_terms = traced(free_surface.self_pair)(strength, h)
+    h = traced(surface.station_depth)(depth, xs, s, radius)
+    self_terms = traced(surface.self_pair)(strength, h)
     k, m = np.triu_indices(n_seg, 1)
-    pairs = traced(free_surface.source_pair)(xs[k], h[k], strength[k], xs[m], h[m], strength[m], c)
+    pairs = traced(surface.source_pair)(xs[k], h[k], strength[k], xs[m], h[m], strength[m], c)
     force = jnp.sum(self_terms) + jnp.sum(2.0 * pairs)
     moment = jnp.sum(xs * self_terms) + jnp.sum((xs[k] + xs[m]) * pairs)
-    return traced(free_surface.suction_from_sums)(force, moment, u, rho_suction, c)
+    return traced(surface.suction_from_sums)(force, moment, u, rho_suction, c)
 
 
 def _no_suction(theta: Any, depth: Any, u: Any, rho_suction: Any, hull: Any, first_row: int) -> tuple[float, float]:
@@ -46,8 +46,8 @@ def _no_suction(theta: Any, depth: Any, u: Any, rho_suction: Any, hull: Any, fir
 
 
 _SAME_AS: Final[dict[bool, dict[Any, Any]]] = {
-    True: {select: jnp.where, free_surface.suction_point: _suction_point},
-    False: {select: jnp.where, free_surface.suction_point: _no_suction},
+    True: {select: jnp.where, surface.suction_point: _suction_point},
+    False: {select: jnp.where, surface.suction_point: _no_suction},
 }
 
 

@@ -1,6 +1,5 @@
 """The dynamics on JAX (subenv.jax) against the compiled ones: the same source, traced."""
 
-import numba
 import numpy as np
 import pytest
 
@@ -11,6 +10,7 @@ import jax.numpy as jnp
 import subenv
 import subenv.jax as sj
 from subenv.dynamics import derivatives, integrate, model, model_params, rk4, stack_params
+from subenv.dynamics._jit import kernel
 from subenv.dynamics.free_surface import FreeSurface
 from subenv.dynamics.model import pack_params
 from subenv.dynamics.waves import MAX_WAVES, WAVE_FIELDS, SeaState
@@ -121,7 +121,7 @@ def test_deep_water_leaves_the_suction_out_and_refuses_a_free_surface():
         sj.derivatives(*args, near, hull, free_surface=False)
 
 
-@numba.njit
+@kernel  # (the package's compile options and cache, dropped when a kernel's source changes)
 def _periods_in_blocks(x, t0, speed0, slope, stern, bow, force, prm, hull, distance, n_waves, seas):
     """One control period of every row in the environments' block integrator, with each row's sea."""
     lanes = integrate.LANES
@@ -181,8 +181,9 @@ def test_twenty_control_periods_in_a_sea_on_jax_are_the_environments_block_integ
         distance = distance + 0.5 * (speed0 + speed1) * integrate.CONTROL_PERIOD_S  # as the transition keeps it
     assert np.all(np.isfinite(expected))
     np.testing.assert_allclose(np.asarray(got), expected, rtol=TOLERANCE, atol=TOLERANCE)
-    calm = np.asarray(sj.control_period(state, 0.0, integrate.CONTROL_PERIOD_S, inputs["speed"], slope, inputs["stern"],
-                                        inputs["bow"], prm, hull, inputs["force"]))
+    calm = np.asarray(jax.jit(sj.control_period, static_argnums=2)(
+        state, 0.0, integrate.CONTROL_PERIOD_S, inputs["speed"], slope, inputs["stern"], inputs["bow"], prm, hull,
+        inputs["force"]))
     first = np.asarray(period(jnp.asarray(state), 0.0, inputs["speed"], rng.uniform(0.0, 100.0, N)))
     assert np.abs(first - calm)[N // 4:].max() > 1e-9  # (and the sea moves the states that have one)
     np.testing.assert_allclose(first[: N // 4], calm[: N // 4], rtol=TOLERANCE, atol=TOLERANCE)  # (calm: not moved)
