@@ -5,9 +5,11 @@
 Control periods per second (0.5 s, two RK4 steps, SUBOFF, random states near level flight) at
 N = 64, 1024 and 4096 states: numba's block integrator on one thread
 (:func:`subenv.dynamics.integrate.control_period_lanes`, the environments' path, without the rest of
-a step: ``speed.py``'s ``control_periods_in_blocks``) and ``jax.jit`` of :func:`subenv.jax.control_period` on this machine's CPU (XLA's own
-threads), in deep water (``free_surface=False``: the suction left out of the trace) and at periscope
-depth (the free surface's suction); then the time JAX takes to trace and compile each. Every cell is the best of three runs of ``--seconds``.
+a step: ``speed.py``'s ``control_periods_in_blocks``) and ``jax.jit`` of
+:func:`subenv.jax.control_period` on this machine's CPU (XLA's own threads), in deep water
+(``free_surface=False``: the suction left out of the trace) and at periscope depth (the free
+surface's suction); then the time JAX takes to trace and compile each. Every cell is the best of
+three runs of ``--seconds``.
 """
 
 from __future__ import annotations
@@ -22,10 +24,10 @@ from collections.abc import Callable
 import jax
 import numba
 import numpy as np
+from speed import control_periods_in_blocks  # (this folder: the block integrator as speed.py times it)
 
 import subenv
 import subenv.jax as sj
-from speed import control_periods_in_blocks  # (this folder: the block integrator as speed.py times it)
 from subenv.dynamics import CONTROL_PERIOD_S, SUBSTEPS, model_params
 from subenv.dynamics.free_surface import FreeSurface
 from subenv.dynamics.model import pack_params

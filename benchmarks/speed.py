@@ -244,7 +244,6 @@ def cost_table(seconds: float) -> list[str]:
     next to CartPoleVectorEnv."""
     import math
 
-
     from subenv.dynamics import CONTROL_PERIOD_S, SUBSTEPS, model_params
     from subenv.dynamics.model import pack_params, rhs_point
     from subenv.dynamics.hull import crossflow_point
@@ -474,7 +473,6 @@ def free_cores_probe() -> str:
     process using a core shows as a speedup near 1)."""
     import threading
 
-
     @numba.njit(nogil=True)
     def spin(n: int) -> float:
         total = 0.0
@@ -548,7 +546,6 @@ def baseline_table(baseline: Path, seconds: float, repeats: int, sizes: tuple[in
 
 
 def machine() -> str:
-
     cpu = platform.processor() or "unknown CPU"
     try:
         for line in Path("/proc/cpuinfo").read_text().splitlines():

@@ -87,7 +87,7 @@ def threading_layer_available() -> bool:
     steps on one thread.
     """
     try:
-        import numba.np.ufunc.tbbpool
+        import numba.np.ufunc.tbbpool  # noqa: F401
     except ImportError:
         if not _load_pip_tbb():
             return False

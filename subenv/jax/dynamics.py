@@ -63,9 +63,10 @@ def control_period(state: Any, t0: Any, dt: float, speed0: Any, speed_slope: Any
     (:func:`~subenv.dynamics.waves.wave_force_point`, all MAX_WAVES columns: the unused ones are zero)
     acts at every stage, at the stage's time, depth and distance travelled
     (:func:`~subenv.dynamics.integrate.distance_travelled` from ``distance0`` [m] at ``t0``), as in
-    the environments; a sea implies ``free_surface``.
+    the environments. (Whether the suction is computed depends on the loadings alone, as in
+    :func:`derivatives`: a sea in deep water has none.)
     """
-    free_surface = True if waves is not None and free_surface is None else _free_surface(prm, free_surface)
+    free_surface = _free_surface(prm, free_surface)
     wave_force = _wave_force(waves)
 
     def rhs(t: Any, x: Any) -> Any:
