@@ -33,7 +33,8 @@ from subenv.dynamics.free_surface import FreeSurface
 from subenv.dynamics.model import pack_params
 
 
-def _best_rate(run: Callable[[], object], items: int, seconds: float) -> float:
+def best_of_three(run: Callable[[], object], items: int, seconds: float) -> float:
+    """The best rate of three runs of ``seconds`` each: ``items`` per call of ``run`` (after one call to warm up)."""
     run()
     best = 0.0
     for _ in range(3):
@@ -71,8 +72,8 @@ def main() -> None:
             period.lower(x, prm).compile()
             compile_s[(label, n)] = time.perf_counter() - start
             xj, prmj = jax.device_put(x), jax.device_put(prm)
-            numba_rate = _best_rate(functools.partial(control_periods_in_blocks, x, prm, hull, out), n, args.seconds)
-            jax_rate = _best_rate(lambda period=period, xj=xj, prmj=prmj: period(xj, prmj).block_until_ready(), n,
+            numba_rate = best_of_three(functools.partial(control_periods_in_blocks, x, prm, hull, out), n, args.seconds)
+            jax_rate = best_of_three(lambda period=period, xj=xj, prmj=prmj: period(xj, prmj).block_until_ready(), n,
                                   args.seconds)
             np.testing.assert_allclose(np.asarray(period(xj, prmj)), out, rtol=1e-12, atol=1e-12)
             print(f"| {n:,} | {label} | {numba_rate:,.0f} | {jax_rate:,.0f} | {jax_rate / numba_rate:.3f} |", flush=True)

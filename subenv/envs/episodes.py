@@ -19,6 +19,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any, Final, NamedTuple
 
 import numpy as np
+from gymnasium.utils import seeding
 
 from subenv import _validation as check
 from subenv.analysis.critical import critical_speed
@@ -36,8 +37,8 @@ from subenv.envs.config import (
 from subenv.scenarios.scenario import EpisodeConfig
 from subenv.vehicles.vehicle import Vehicle
 
-__all__ = ["OPTIONS", "Loading", "Loadings", "check_options", "draw_episode", "draw_episode_batch", "for_vehicle",
-           "new_seas", "write_episode", "write_sea"]
+__all__ = ["OPTIONS", "Loading", "Loadings", "check_options", "draw_episode", "draw_episode_batch", "episode_table",
+           "for_vehicle", "new_seas", "write_episode", "write_sea"]
 
 OPTIONS: Final = ("speed", "depth_command", "initial_state")
 """The keys of ``reset(options=...)``."""
@@ -106,6 +107,30 @@ def draw_episode(config: DivePlaneConfig, rng: np.random.Generator, loadings: Lo
     disturbance = float(rng.normal(0.0, std)) if std > 0 else 0.0
     loading = loadings.of(draw)
     return (draw, loading, *episode_fields(config, draw, loading, disturbance, options))
+
+
+def episode_table(config: DivePlaneConfig, seeds: Sequence[int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The episodes of resets seeded with ``seeds``, drawn ahead: row ``k`` is the episode that
+    ``DivePlaneEnv(config=config).reset(seed=seeds[k])`` draws (:func:`draw_episode`, from the
+    generator that seed gives the environment), for an environment that cannot draw its own
+    (:mod:`subenv.jax` resets from such a table).
+
+    Returns the episodes' records (:data:`~subenv.envs.transition.EPISODE_DTYPE`), their states at the
+    reset (:data:`~subenv.envs.transition.STATE_DTYPE`, speed not yet set: nan) and their seas
+    (:func:`new_seas`), one row per seed.
+    """
+    values = [check.integer(f"seeds[{k}]", seed, 0) for k, seed in enumerate(seeds)]
+    check.require("seeds", seeds, len(values) > 0, "at least one seed")
+    episodes, states = np.zeros(len(values), dtype=tr.EPISODE_DTYPE), np.zeros(len(values), dtype=tr.STATE_DTYPE)
+    seas = new_seas(len(values))
+    loadings = Loadings(config)
+    for k, seed in enumerate(values):
+        rng, _ = seeding.np_random(seed)
+        _, _, episode, state = draw_episode(config, rng, loadings)
+        write_episode(episodes, k, episode)
+        write_episode(states, k, state)
+        write_sea(seas, k, episode)
+    return episodes, states, seas
 
 
 def draw_episode_batch(config: DivePlaneConfig, uniforms: np.ndarray, disturbances: np.ndarray,

@@ -23,11 +23,15 @@ What a sub-environment is made of, each a NumPy structured dtype whose fields nu
   (:mod:`subenv.envs.info` hands them out).
 
 The physics is pure functions of scalars that return values: the planes (:func:`plane_angles`),
-the speed profile (:func:`speed_at`), the episode end (:func:`episode_end`), the reward
-(:func:`reward_terms`), the observation (:func:`observation`), and one control period of the
-shared right-hand side, integrated by :func:`subenv.dynamics.integrate.control_period_lanes` for a
-block of up to :data:`~subenv.dynamics.integrate.LANES` sub-environments (one SIMD-compiled path
-for any number of them). :func:`step` only reads the records, calls them and writes the results.
+the speed profile (:func:`speed_at`), a control period's start (:func:`period_start`: planes, effort,
+speed) and end (:func:`episode_end`, :func:`period_end`: the new state and the episode's end), the
+reward (:func:`reward_terms`), the observation (:func:`noise_values`, :func:`observation_values`)
+and the ``info`` (:func:`report_values`), around one control period of the shared right-hand side,
+integrated by :func:`subenv.dynamics.integrate.control_period_lanes` for a block of up to
+:data:`~subenv.dynamics.integrate.LANES` sub-environments (one SIMD-compiled path for any number of
+them). :func:`step` only reads the records, calls them and writes the results. The functions are
+branch-free (selects, fixed loops), so that :mod:`subenv.jax` traces these same functions into its
+functional environment (:func:`subenv.jax.make`), the randomness given as standard normal numbers.
 
 Random numbers come from each sub-environment's own ``numpy.random.Generator`` (numba runs NumPy's
 algorithms over the generator's own bit generator), in one order per step: the disturbance's
@@ -38,13 +42,13 @@ its own seed, never on the number of sub-environments, the blocks or the threads
 from __future__ import annotations
 
 import math
-from typing import Final
+from typing import Any, Final
 
 import numba
 import numpy as np
 
 from subenv._typing import FloatArray
-from subenv.dynamics._jit import inline_kernel, kernel, parallel_kernel, threading_layer_available
+from subenv.dynamics._jit import inline_kernel, kernel, parallel_kernel, select, threading_layer_available
 from subenv.dynamics.integrate import (
     LANE_PITCH,
     LANE_ROWS,
@@ -67,9 +71,14 @@ __all__ = [
     "STATE_DTYPE",
     "draw_reset_numbers",
     "episode_end",
+    "noise_values",
     "observation",
+    "observation_values",
     "observe",
+    "period_end",
+    "period_start",
     "plane_angles",
+    "report_values",
     "reward_terms",
     "sensor_noise",
     "speed_at",
@@ -159,32 +168,27 @@ _N_REPORT: Final = len(REPORT_KEYS)
 # --- the physics of a step, pure functions of scalars --------------------------------------------
 @inline_kernel
 def speed_at(t: float, n_knots: int, knot_time_s: FloatArray, knot_speed_mps: FloatArray) -> float:
-    """Speed [m/s] of a profile at time ``t`` [s]: ``numpy.interp`` over its first ``n_knots`` knots."""
-    n = n_knots
+    """Speed [m/s] of a profile at time ``t`` [s]: ``numpy.interp`` over its first ``n_knots`` knots (in
+    order of time)."""
     xs, ys = knot_time_s, knot_speed_mps
-    if n == 1:
-        return ys[0]
-    # numpy.interp (numpy/_core/src/multiarray/compiled_base.c, arr_interp), operation for operation.
-    if math.isnan(t):
-        return t
-    if t < xs[0]:
-        return ys[0]
-    if t > xs[n - 1]:
-        return ys[n - 1]
-    j = 1
-    while j < n and t >= xs[j]:
-        j += 1
-    j -= 1
-    if j == n - 1 or xs[j] == t:
-        return ys[j]
-    x0, x1, y0, y1 = xs[j], xs[j + 1], ys[j], ys[j + 1]
-    slope = (y1 - y0) / (x1 - x0)
+    last = n_knots - 1
+    # numpy.interp (numpy/_core/src/multiarray/compiled_base.c, arr_interp), operation for operation,
+    # with its branches as selects (each value computed, one taken) so that JAX traces this code too.
+    # Its search for the interval of t, as a count: the knots are in order.
+    j = 0
+    for k in range(1, MAX_KNOTS):
+        j = j + select((k <= last) & (t >= xs[k]), 1, 0)
+    after = min(j + 1, last)
+    x0, x1, y0, y1 = xs[j], xs[after], ys[j], ys[after]
+    slope = (y1 - y0) / select(x1 != x0, x1 - x0, 1.0)  # (x1 == x0 only where the slope is not used)
     u = slope * (t - x0) + y0
-    if math.isnan(u):
-        u = slope * (t - x1) + y1
-        if math.isnan(u) and y0 == y1:
-            u = y0
-    return u
+    u = select(math.isnan(u), slope * (t - x1) + y1, u)
+    u = select(math.isnan(u) & (y0 == y1), y0, u)
+    u = select((j == last) | (xs[j] == t), ys[j], u)
+    u = select(t > xs[last], ys[last], u)
+    u = select(t < xs[0], ys[0], u)
+    u = select(math.isnan(t), t, u)
+    return select(n_knots == 1, ys[0], u)
 
 
 @inline_kernel
@@ -212,17 +216,13 @@ def plane_angles(stern_rad: float, bow_rad: float, action0: float, action1: floa
 @inline_kernel
 def episode_end(x0: float, x1: float, x2: float, x3: float, depth_command_m: float, cfg: np.void) -> int:
     """The reason code (:data:`REASONS`) of the state (theta, w, q, Z) at the end of a step: 0 while
-    the episode goes on."""
-    if not (math.isfinite(x0) and math.isfinite(x1) and math.isfinite(x2) and math.isfinite(x3)
-            and abs(x1) <= cfg.max_heave_mps and abs(x2) <= cfg.max_pitch_rate_radps):
-        return _DIVERGED
-    if abs(x0) > cfg.max_pitch_rad:
-        return _PITCH_LIMIT
-    if x3 < cfg.broach_depth_m:
-        return _BROACHED
-    if abs(x3 - depth_command_m) > cfg.max_depth_error_m:
-        return _LEFT_DEPTH_BAND
-    return 0
+    the episode goes on (the first reason that holds, in the order of :data:`REASONS`)."""
+    bounded = (math.isfinite(x0) & math.isfinite(x1) & math.isfinite(x2) & math.isfinite(x3)
+               & (abs(x1) <= cfg.max_heave_mps) & (abs(x2) <= cfg.max_pitch_rate_radps))
+    reason = select(abs(x3 - depth_command_m) > cfg.max_depth_error_m, _LEFT_DEPTH_BAND, 0)
+    reason = select(x3 < cfg.broach_depth_m, _BROACHED, reason)
+    reason = select(abs(x0) > cfg.max_pitch_rad, _PITCH_LIMIT, reason)
+    return select(bounded, reason, _DIVERGED)
 
 
 @inline_kernel
@@ -235,83 +235,130 @@ def reward_terms(pitch_rad: float, depth_error_m: float, effort: float, terminat
     r_depth = 2.0 / (1.0 + math.exp(2.0 * abs(depth_error_m) / cfg.depth_scale_m))
     r_pitch = -cfg.pitch_weight * (ratio * ratio)
     r_effort = -cfg.effort_weight * effort
-    r_termination = -cfg.termination_penalty if terminated else 0.0
+    r_termination = select(terminated, -cfg.termination_penalty, 0.0)
     return r_depth, r_pitch, r_effort, r_termination
+
+
+@inline_kernel
+def period_start(s: np.void, e: np.void, action0: float, action1: float,
+                 cfg: np.void) -> tuple[float, float, float, float, float, float]:
+    """What a control period of state ``s`` in episode ``e`` holds, after the action (``action1``
+    read only with independent control): the applied planes (stern, bow) [rad], the effort term's
+    mean squared command, and the speed [m/s] at its start and end and its slope [m/s^2] (the
+    period's speed is linear in time)."""
+    stern, bow, effort = plane_angles(s.stern_plane_rad, s.bow_plane_rad, action0, action1, cfg)
+    t0 = s.time_s
+    u0 = speed_at(t0, e.n_knots, e.knot_time_s, e.knot_speed_mps)
+    u1 = speed_at(t0 + cfg.dt_s, e.n_knots, e.knot_time_s, e.knot_speed_mps)
+    return stern, bow, effort, u0, u1, (u1 - u0) / cfg.dt_s
+
+
+@inline_kernel
+def period_end(s: np.void, e: np.void, x0: float, x1: float, x2: float, x3: float, u0: float, u1: float,
+               reason: int, disturbance_draw: float, cfg: np.void) -> tuple[Any, ...]:
+    """The state's fields after a control period from ``s`` that integrated to (theta, w, q, Z) =
+    (``x0``, ``x1``, ``x2``, ``x3``) with the speed going from ``u0`` to ``u1``, and ended for
+    ``reason`` (:func:`episode_end`); ``disturbance_draw`` is the heave force's new random term
+    (normal, of the episode's standard deviation; read only where it is > 0).
+
+    Returns (pitch, heave, pitch rate, depth, time, steps, distance, speed, disturbance, terminated,
+    truncated): a diverged state keeps the last valid one.
+    """
+    dt = cfg.dt_s
+    distance = s.distance_m + 0.5 * (u0 + u1) * dt  # exact for the linear speed of the period
+    time = s.time_s + dt
+    # a first-order Gauss-Markov process with stationary standard deviation disturbance_std_N
+    disturbance = select(e.disturbance_std_N > 0.0,
+                         cfg.disturbance_decay * s.disturbance_N + cfg.disturbance_gain * disturbance_draw,
+                         s.disturbance_N)
+    kept = reason == _DIVERGED
+    pitch, heave = select(kept, s.pitch_rad, x0), select(kept, s.heave_mps, x1)
+    rate, depth = select(kept, s.pitch_rate_radps, x2), select(kept, s.depth_m, x3)
+    steps = s.steps + 1
+    terminated = reason != 0
+    # truncated at the scenario's duration, and as gymnasium.wrappers.TimeLimit (even on a terminal step)
+    truncated = ((reason == 0) & (time >= e.duration_s - 1e-9)) | (steps >= cfg.max_steps)
+    return pitch, heave, rate, depth, time, steps, distance, u1, disturbance, terminated, truncated
 
 
 _NO_NOISE: Final = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
 @inline_kernel
+def noise_values(z0: float, z1: float, z2: float, z3: float, z4: float, z5: float, z6: float, z7: float,
+                 cfg: np.void) -> tuple[float, ...]:
+    """The observation's noise from :data:`N_OBS` standard normal numbers: each times its standard
+    deviation, one depth sensor for components 0 and 7."""
+    std = cfg.noise_std
+    n7 = z7 * std[7]
+    return n7, z1 * std[1], z2 * std[2], z3 * std[3], z4 * std[4], z5 * std[5], z6 * std[6], n7
+
+
+@inline_kernel
 def sensor_noise(rng: np.random.Generator, cfg: np.void) -> tuple[float, ...]:
     """The observation's noise, :data:`N_OBS` values drawn from ``rng``: ``rng.normal(0, 1, size=8) *
-    std``, one depth sensor for components 0 and 7."""
-    std = cfg.noise_std
-    n0 = rng.normal(0.0, 1.0) * std[0]
-    n1 = rng.normal(0.0, 1.0) * std[1]
-    n2 = rng.normal(0.0, 1.0) * std[2]
-    n3 = rng.normal(0.0, 1.0) * std[3]
-    n4 = rng.normal(0.0, 1.0) * std[4]
-    n5 = rng.normal(0.0, 1.0) * std[5]
-    n6 = rng.normal(0.0, 1.0) * std[6]
-    n7 = rng.normal(0.0, 1.0) * std[7]
-    n0 = n7
-    return n0, n1, n2, n3, n4, n5, n6, n7
+    std``, one depth sensor for components 0 and 7 (:func:`noise_values`)."""
+    z0 = rng.normal(0.0, 1.0)
+    z1 = rng.normal(0.0, 1.0)
+    z2 = rng.normal(0.0, 1.0)
+    z3 = rng.normal(0.0, 1.0)
+    z4 = rng.normal(0.0, 1.0)
+    z5 = rng.normal(0.0, 1.0)
+    z6 = rng.normal(0.0, 1.0)
+    z7 = rng.normal(0.0, 1.0)
+    return noise_values(z0, z1, z2, z3, z4, z5, z6, z7, cfg)
+
+
+@inline_kernel
+def observation_values(s: np.void, e: np.void, noise: tuple[float, ...], cfg: np.void) -> tuple[float, ...]:
+    """The observation (:data:`N_OBS` values, float64) of state ``s`` in episode ``e``, with ``noise``
+    (:func:`noise_values`) added when the episode has sensor noise."""
+    depth = s.depth_m
+    n0, n1, n2, n3, n4, n5, n6, n7 = noise
+    noisy = e.sensor_noise
+    v0 = select(noisy, depth - e.depth_command_m + n0, depth - e.depth_command_m)
+    v1 = select(noisy, s.pitch_rad + n1, s.pitch_rad)
+    v2 = select(noisy, s.heave_mps + n2, s.heave_mps)
+    v3 = select(noisy, s.pitch_rate_radps + n3, s.pitch_rate_radps)
+    v4 = select(noisy, s.speed_mps + n4, s.speed_mps)
+    v5 = select(noisy, s.stern_plane_rad + n5, s.stern_plane_rad)
+    v6 = select(noisy, s.bow_plane_rad + n6, s.bow_plane_rad)
+    v7 = select(noisy, depth + n7, depth)
+    # Only a terminal state (or noise at zero speed) can reach the bounds.
+    lo, hi = cfg.obs_low, cfg.obs_high
+    return (min(max(v0, lo[0]), hi[0]), min(max(v1, lo[1]), hi[1]), min(max(v2, lo[2]), hi[2]),
+            min(max(v3, lo[3]), hi[3]), min(max(v4, lo[4]), hi[4]), min(max(v5, lo[5]), hi[5]),
+            min(max(v6, lo[6]), hi[6]), min(max(v7, lo[7]), hi[7]))
 
 
 @inline_kernel
 def observation(s: np.void, e: np.void, noise: tuple[float, ...], i: int, cfg: np.void, obs: np.ndarray) -> None:
-    """Write the observation of state ``s`` in episode ``e`` into row ``i`` of ``obs`` (float32,
-    :data:`N_OBS` columns), with ``noise`` (:func:`sensor_noise`) added when the episode has sensor
-    noise."""
-    depth = s.depth_m
-    v0 = depth - e.depth_command_m
-    v1, v2, v3 = s.pitch_rad, s.heave_mps, s.pitch_rate_radps
-    v4, v5, v6, v7 = s.speed_mps, s.stern_plane_rad, s.bow_plane_rad, depth
-    if e.sensor_noise:
-        n0, n1, n2, n3, n4, n5, n6, n7 = noise
-        v0, v1, v2, v3 = v0 + n0, v1 + n1, v2 + n2, v3 + n3
-        v4, v5, v6, v7 = v4 + n4, v5 + n5, v6 + n6, v7 + n7
-    # Only a terminal state (or noise at zero speed) can reach the bounds.
-    lo, hi = cfg.obs_low, cfg.obs_high
-    obs[i, 0] = min(max(v0, lo[0]), hi[0])
-    obs[i, 1] = min(max(v1, lo[1]), hi[1])
-    obs[i, 2] = min(max(v2, lo[2]), hi[2])
-    obs[i, 3] = min(max(v3, lo[3]), hi[3])
-    obs[i, 4] = min(max(v4, lo[4]), hi[4])
-    obs[i, 5] = min(max(v5, lo[5]), hi[5])
-    obs[i, 6] = min(max(v6, lo[6]), hi[6])
-    obs[i, 7] = min(max(v7, lo[7]), hi[7])
+    """Write :func:`observation_values` into row ``i`` of ``obs`` (float32, :data:`N_OBS` columns)."""
+    v0, v1, v2, v3, v4, v5, v6, v7 = observation_values(s, e, noise, cfg)
+    obs[i, 0], obs[i, 1], obs[i, 2], obs[i, 3] = v0, v1, v2, v3
+    obs[i, 4], obs[i, 5], obs[i, 6], obs[i, 7] = v4, v5, v6, v7
+
+
+@inline_kernel
+def report_values(s: np.void, e: np.void, r_depth: float, r_pitch: float, r_effort: float, r_termination: float,
+                  reason: int, terminated: bool, truncated: bool) -> tuple[float, ...]:
+    """The report (:data:`REPORT_KEYS`, in order, as floats) of state ``s`` in episode ``e``: its ``info``
+    and the step's outcome."""
+    depth, command, speed = s.depth_m, e.depth_command_m, s.speed_mps
+    froude_scale, ucr = e.froude_scale_mps, e.critical_speed_mps  # nan when z_GB <= 0 (then no Froude numbers)
+    return (s.time_s, depth, command, depth - command, s.pitch_rad, s.heave_mps, s.pitch_rate_radps,
+            s.stern_plane_rad, s.bow_plane_rad, speed, speed / froude_scale,  # Fn = u / sqrt(g z_GB)
+            ucr, ucr / froude_scale, s.disturbance_N, r_depth, r_pitch, r_effort, r_termination, reason * 1.0,
+            r_depth + r_pitch + r_effort + r_termination, select(terminated, 1.0, 0.0), select(truncated, 1.0, 0.0))
 
 
 @inline_kernel
 def _report(report: FloatArray, j: int, s: np.void, e: np.void, r_depth: float, r_pitch: float, r_effort: float,
             r_termination: float, reason: int, terminated: bool, truncated: bool) -> None:
-    """Column ``j`` of a report: the ``info`` of state ``s`` in episode ``e`` and the step's outcome."""
-    depth, command, speed = s.depth_m, e.depth_command_m, s.speed_mps
-    froude_scale, ucr = e.froude_scale_mps, e.critical_speed_mps  # nan when z_GB <= 0 (then no Froude numbers)
-    report[_TIME, j] = s.time_s
-    report[_DEPTH, j] = depth
-    report[_COMMAND, j] = command
-    report[_DEPTH_ERROR, j] = depth - command
-    report[_PITCH, j] = s.pitch_rad
-    report[_HEAVE, j] = s.heave_mps
-    report[_PITCH_RATE, j] = s.pitch_rate_radps
-    report[_STERN, j] = s.stern_plane_rad
-    report[_BOW, j] = s.bow_plane_rad
-    report[_SPEED, j] = speed
-    report[_FROUDE, j] = speed / froude_scale  # Fn = u / sqrt(g z_GB)
-    report[_CRITICAL_SPEED, j] = ucr
-    report[_CRITICAL_FROUDE, j] = ucr / froude_scale
-    report[_DISTURBANCE, j] = s.disturbance_N
-    report[_REWARD_DEPTH, j] = r_depth
-    report[_REWARD_PITCH, j] = r_pitch
-    report[_REWARD_EFFORT, j] = r_effort
-    report[_REWARD_TERMINATION, j] = r_termination
-    report[_REASON, j] = reason
-    report[_REWARD, j] = r_depth + r_pitch + r_effort + r_termination
-    report[_TERMINATED, j] = 1.0 if terminated else 0.0
-    report[_TRUNCATED, j] = 1.0 if truncated else 0.0
+    """Column ``j`` of a report: :func:`report_values`."""
+    values = report_values(s, e, r_depth, r_pitch, r_effort, r_termination, reason, terminated, truncated)
+    for c in range(_N_REPORT):
+        report[c, j] = values[c]
 
 
 # --- the kernels ------------------------------------------------------------------------------
@@ -376,14 +423,10 @@ def _step_block(state: np.ndarray, episode: np.ndarray, seas: FloatArray, action
     for i in range(b * LANES, min((b + 1) * LANES, n_rows)):
         if active[i]:
             s, e = state[i], episode[i]
-            stern, bow, efforts[n] = plane_angles(s.stern_plane_rad, s.bow_plane_rad, actions[i, 0],
-                                                  actions[i, last_action], cfg)
+            stern, bow, efforts[n], u0, speeds_end[n], slope = period_start(s, e, actions[i, 0],
+                                                                            actions[i, last_action], cfg)
             s.stern_plane_rad, s.bow_plane_rad = stern, bow
-            t0 = s.time_s
-            u0 = speed_at(t0, e.n_knots, e.knot_time_s, e.knot_speed_mps)
-            u1 = speed_at(t0 + dt, e.n_knots, e.knot_time_s, e.knot_speed_mps)
-            speeds_end[n] = u1
-            set_lane(block, n, s.pitch_rad, s.heave_mps, s.pitch_rate_radps, s.depth_m, t0, u0, (u1 - u0) / dt,
+            set_lane(block, n, s.pitch_rad, s.heave_mps, s.pitch_rate_radps, s.depth_m, s.time_s, u0, slope,
                      stern, bow, s.disturbance_N, e.params, s.distance_m, e.n_waves)
             if e.n_waves > 0:  # (element by element: a view of seas[i] would count references to seas)
                 for f in range(WAVE_FIELDS):
@@ -398,34 +441,25 @@ def _step_block(state: np.ndarray, episode: np.ndarray, seas: FloatArray, action
         s, e = state[i], episode[i]
         x0, x1 = block[LANE_PITCH * L + j], block[(LANE_PITCH + 1) * L + j]
         x2, x3 = block[(LANE_PITCH + 2) * L + j], block[(LANE_PITCH + 3) * L + j]
-        u0 = block[LANE_SPEED0 * L + j]
-        s.distance_m = s.distance_m + 0.5 * (u0 + speeds_end[j]) * dt  # exact for the linear speed of the period
-        s.time_s = s.time_s + dt
-        s.speed_mps = speeds_end[j]
         reason = episode_end(x0, x1, x2, x3, e.depth_command_m, cfg)
         std = e.disturbance_std_N
         noisy = e.sensor_noise and reason != _DIVERGED  # (a diverged state is not observed again)
-        noise = _NO_NOISE
+        draw, noise = 0.0, _NO_NOISE
         if std > 0.0 or noisy:
             # The generator is taken from the list once per step, and only by an episode that draws:
             # every item taken costs a reference count (two per step took a third off what a second
             # thread adds; one per step where none is needed, a tenth off one thread's rate).
             rng = rngs[i]
-            if std > 0.0:  # a first-order Gauss-Markov process with stationary standard deviation std
-                s.disturbance_N = (cfg.disturbance_decay * s.disturbance_N
-                                   + cfg.disturbance_gain * rng.normal(0.0, std))
+            if std > 0.0:
+                draw = rng.normal(0.0, std)
             if noisy:
                 noise = sensor_noise(rng, cfg)
-        if reason != _DIVERGED:  # (a diverged state keeps the last valid one, and its observation)
-            s.pitch_rad, s.heave_mps, s.pitch_rate_radps, s.depth_m = x0, x1, x2, x3
-        terminated = reason != 0
-        truncated = not terminated and s.time_s >= e.duration_s - 1e-9
-        s.steps += 1
-        if s.steps >= cfg.max_steps:
-            truncated = True  # as gymnasium.wrappers.TimeLimit: truncated even on a terminal step
+        (s.pitch_rad, s.heave_mps, s.pitch_rate_radps, s.depth_m, s.time_s, s.steps, s.distance_m, s.speed_mps,
+         s.disturbance_N, terminated, truncated) = period_end(s, e, x0, x1, x2, x3, block[LANE_SPEED0 * L + j],
+                                                              speeds_end[j], reason, draw, cfg)
         r_depth, r_pitch, r_effort, r_termination = reward_terms(
             s.pitch_rad, s.depth_m - e.depth_command_m, efforts[j], terminated, cfg)
-        if reason != _DIVERGED:
+        if reason != _DIVERGED:  # (a diverged state keeps its last observation)
             observation(s, e, noise, i, cfg, obs)
         _report(block_report, j, s, e, r_depth, r_pitch, r_effort, r_termination, reason, terminated, truncated)
     # Key by key into the step's report (each key's row written in order, not 22 rows per env).

@@ -8,15 +8,20 @@ under ``jax.jit`` and ``jax.vmap``, on a CPU or an accelerator:
 - :func:`~subenv.jax.dynamics.derivatives`: d/dt of the state, batched as
   :func:`subenv.dynamics.derivatives`;
 - :func:`~subenv.jax.dynamics.control_period`: one control period of the environments' integrator
-  (:func:`subenv.dynamics.rk4` over the right-hand side), batched, in a sea if given one.
+  (:func:`subenv.dynamics.rk4` over the right-hand side), batched, in a sea if given one;
+- :func:`make`: a registered id as a functional environment with gymnax's interface
+  (:class:`DivePlaneJaxEnv`: ``reset(key, params)``, ``step(key, state, action, params)`` with the
+  reset of ended episodes by a select), whose transition is :mod:`subenv.envs.transition`'s own
+  functions, traced, and whose episodes are the Gymnasium environment's, drawn ahead into a table
+  (:class:`EnvParams`) by the scenarios' own code.
 
 They agree with the compiled ones to about 1e-14, not bit for bit: XLA contracts multiply-adds and
 rewrites divisions by constants (``tests/jax/test_dynamics.py`` holds them within 1e-12 over 20
 control periods). Importing this package turns on JAX's 64-bit mode (``jax_enable_x64``): the
 physics is written for float64.
 
-Not here yet: the environment itself as a functional JAX environment (its transition, episodes and
-resets).
+On two CPU cores the compiled vector environment steps many times faster (``benchmarks/jax_env.py``):
+this path is for accelerators, with a learner in the same compiled program.
 """
 
 from __future__ import annotations
@@ -31,5 +36,7 @@ jax.config.update("jax_enable_x64", True)
 
 from subenv.jax._trace import traced
 from subenv.jax.dynamics import control_period, derivatives
+from subenv.jax.env import N_NORMALS, DivePlaneJaxEnv, EnvParams, EnvState, Episode, make
 
-__all__ = ["control_period", "derivatives", "traced"]
+__all__ = ["N_NORMALS", "DivePlaneJaxEnv", "EnvParams", "EnvState", "Episode", "control_period", "derivatives",
+           "make", "traced"]

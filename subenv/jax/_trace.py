@@ -16,7 +16,7 @@ from subenv.dynamics._jit import select
 __all__ = ["traced"]
 
 _MATH: Final = types.SimpleNamespace(sin=jnp.sin, cos=jnp.cos, exp=jnp.exp, sqrt=jnp.sqrt, isfinite=jnp.isfinite,
-                                     floor=jnp.floor, nan=math.nan, inf=math.inf, pi=math.pi)
+                                     isnan=jnp.isnan, floor=jnp.floor, nan=math.nan, inf=math.inf, pi=math.pi)
 """What the physics takes from :mod:`math`, on JAX."""
 _NAMES: Final[dict[str, Any]] = {"math": _MATH, "np": jnp, "min": jnp.minimum, "max": jnp.maximum, "abs": jnp.abs}
 """Names re-bound in a twin's globals: the modules and the builtins the physics calls."""
