@@ -29,51 +29,12 @@ from subenv_agents import MODELS_DIR
 from subenv_agents.controller import AgentController
 from subenv_agents.generalisation import HELD_OUT, evaluate_held_out
 from subenv_agents.policy import CONFIG_FILE, MODEL_FILE, VECNORMALIZE_FILE, training_run
-from subenv_agents.selection import SELECTED_DIR, SELECTION_SCENARIOS
+from subenv_agents.records import BASELINE, REVERSAL_SCENARIOS, evaluation_record, table, target_met
+from subenv_agents.selection import SELECTED_DIR
 
 __all__ = ["BASELINE", "REVERSAL_SCENARIOS", "evaluation_record", "lineage", "main", "ship", "total_training_time_s"]
 
-BASELINE: Final = "reversal_aware"
-REVERSAL_SCENARIOS: Final = SELECTION_SCENARIOS
-"""Where the target is measured: at least the baseline's success rate with less plane effort."""
 _MODEL_FILES: Final = (MODEL_FILE, VECNORMALIZE_FILE, CONFIG_FILE)
-
-
-def evaluation_record(results: Sequence[Any]) -> dict[str, dict[str, dict[str, float]]]:
-    """``{controller: {scenario: {success_rate, ci_low, ci_high, plane_rms_rad, episodes}}}``."""
-    from subenv.evaluation.results import summarize
-
-    out: dict[str, dict[str, dict[str, float]]] = {}
-    for row in summarize(results):
-        out.setdefault(row["controller"], {})[row["scenario"]] = {
-            "success_rate": row["success_rate"], "ci_low": row["success_ci_low"], "ci_high": row["success_ci_high"],
-            "plane_rms_rad": row["plane_rms_rad_mean"], "episodes": row["episodes"],
-        }
-    return out
-
-
-def _table(record: dict[str, dict[str, dict[str, float]]], scenarios: Sequence[str]) -> str:
-    lines = ["| scenario | " + " | ".join(f"{c} success | {c} plane RMS [rad]" for c in record) + " |",
-             "|---|" + "---:|---:|" * len(record)]
-    for s in scenarios:
-        cells = []
-        for rows in record.values():
-            r = rows[s]
-            cells.append(f"{100 * r['success_rate']:.0f}% [{100 * r['ci_low']:.0f}, {100 * r['ci_high']:.0f}] | "
-                         f"{r['plane_rms_rad']:.4f}")
-        lines.append(f"| {s} | " + " | ".join(cells) + " |")
-    return "\n".join(lines)
-
-
-def _target(record: dict[str, dict[str, dict[str, float]]], name: str) -> tuple[bool, str]:
-    ok, parts = True, []
-    for s in REVERSAL_SCENARIOS:
-        a, b = record[name][s], record[BASELINE][s]
-        meets = a["success_rate"] >= b["success_rate"] and a["plane_rms_rad"] < b["plane_rms_rad"]
-        ok &= meets
-        parts.append(f"{s}: {100 * a['success_rate']:.0f}% vs {100 * b['success_rate']:.0f}%, plane RMS "
-                     f"{a['plane_rms_rad']:.4f} vs {b['plane_rms_rad']:.4f} rad ({'met' if meets else 'not met'})")
-    return ok, "; ".join(parts)
 
 
 def lineage(run_dir: Path) -> list[dict[str, Any]]:
@@ -125,7 +86,7 @@ def ship(run_dir: Path, name: str, episodes: int = 100, held_out_episodes: int =
         scenarios = ("Nominal", "LowSpeed", "NearCritical", "SpeedTransient", "PeriscopeDepth", "BallastOffset")
         suite = evaluation_record(evaluate([agent, baseline], list(scenarios), episodes=episodes, progress=False))
         held = evaluation_record(evaluate_held_out([agent, baseline], episodes=held_out_episodes))
-        met, detail = _target(suite, name)
+        met, detail = target_met(suite, name)
         record = {"suite": suite, "held_out": held, "episodes": episodes, "held_out_episodes": held_out_episodes,
                   "seed": DEFAULT_SEED, "target_met": met}
         atomic_write_text(tmp / "evaluation.json", json.dumps(record, indent=2) + "\n")
@@ -218,7 +179,7 @@ training: training episodes use seeds 0 + i, its evaluation callback 1,000,000 +
 `{BASELINE}` baseline on the same episodes. Success: not terminated and |depth error| <= 0.5 m over the
 final 60 s (95% Wilson intervals). Plane RMS: sqrt of the time mean of stern^2 + bow^2.
 
-{_table(suite, list(next(iter(suite.values()))))}
+{table(suite, list(next(iter(suite.values()))))}
 
 **Target** (at least the baseline's success with less plane effort on LowSpeed, NearCritical and
 SpeedTransient): **{'met' if met else 'not met'}**. {detail}.
@@ -230,7 +191,7 @@ ranges (`subenv_agents/generalisation.py`), next to the baseline:
 
 {chr(10).join(f'- `{s.name}`: {s.description}' for s in HELD_OUT)}
 
-{_table(held, [s.name for s in HELD_OUT])}
+{table(held, [s.name for s in HELD_OUT])}
 
 Reproduce: `python -m subenv_agents.card <run folder> --name {name} --force` re-evaluates and rewrites this card;
 `python -m subenv_agents.evaluate subenv_agents/models/{name} --suite default` gives the full tables.

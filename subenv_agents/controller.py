@@ -13,12 +13,10 @@ from subenv.evaluation import SingleRowMixin, check_batch
 from subenv.vehicles import Vehicle
 from subenv_agents.features import DepthIntegral
 from subenv_agents.policy import TrainedAgent, load_agent
+from subenv_agents.records import DYNAMICS_KWARGS
 
 __all__ = ["AgentController"]
 
-# Environment arguments that change what the agent sees or commands (the harness makes its
-# environments with control and alpha only, the rest at their defaults); reward weights do not.
-_DYNAMICS_KWARGS = ("vehicle", "dt", "substeps", "plane_rate_limit_radps", "max_pitch_rad", "max_depth_error_m")
 
 
 class AgentController(SingleRowMixin):
@@ -40,7 +38,7 @@ class AgentController(SingleRowMixin):
     def __init__(self, agent: TrainedAgent | str | Path, name: str | None = None) -> None:
         self.agent = agent if isinstance(agent, TrainedAgent) else load_agent(agent)
         env_kwargs = self.agent.config.env_kwargs
-        changed = [k for k in _DYNAMICS_KWARGS if k in env_kwargs]
+        changed = [k for k in DYNAMICS_KWARGS if k in env_kwargs]
         if changed:
             raise ValueError(
                 f"the agent {str(self.agent.path)!r} was trained with env_kwargs {changed} changed from the "

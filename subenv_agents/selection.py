@@ -38,11 +38,12 @@ from subenv_agents.policy import (
     save_model,
     save_statistics,
 )
+from subenv_agents.records import REVERSAL_SCENARIOS
 
 __all__ = ["SELECTED_DIR", "SELECTION_SCENARIOS", "VALIDATION_SEED", "SelectionCallback", "validation_score"]
 
-SELECTION_SCENARIOS: Final = ("LowSpeed", "NearCritical", "SpeedTransient")
-"""Where the shipped agents' target is measured, and so where they are selected."""
+SELECTION_SCENARIOS: Final = REVERSAL_SCENARIOS
+"""Where the shipped agents' target is measured (:mod:`subenv_agents.records`), and so where they are selected."""
 VALIDATION_SEED: Final = 50_000
 """Validation episode i is ``reset(seed=VALIDATION_SEED + i)``: disjoint from the evaluation suites' seeds."""
 SELECTION_FILE: Final = "selection.json"

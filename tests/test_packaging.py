@@ -31,11 +31,13 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_every_controller_is_declared_as_an_entry_point():
-    """pyproject.toml declares each classical controller and each shipped model, by its name."""
+    """pyproject.toml declares each classical controller and each shipped model, by its name (the JAX
+    PPO's folder has its own loader)."""
     declared = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["entry-points"][ENTRY_POINT_GROUP]
     expected = {name: f"{cls.__module__}:{cls.__qualname__}" for name, cls in subenv_baselines.CONTROLLERS.items()}
     expected |= subenv_baselines.OPTIONAL_CONTROLLERS
     expected |= {name: f"subenv_agents.shipped:{name}" for name in shipped_models()}
+    expected["ppo_jax"] = "subenv_agents.jax_ppo:shipped"
     assert declared == expected
 
 
@@ -67,7 +69,8 @@ def test_wheel_installs_into_a_clean_venv_and_evaluates(tmp_path: Path):
     names = archive.namelist()
     for name in ("subenv/vehicles/data/suboff.toml", "subenv/py.typed", "subenv_baselines/thesis.py",
                  "subenv_agents/shipped.py", "subenv_agents/hyperparams/ppo.yml", "subenv_agents/models/ppo/model.zip",
-                 "subenv_agents/models/sac/vecnormalize.pkl", "subenv-0.1.0.dist-info/licenses/LICENSE"):
+                 "subenv_agents/models/sac/vecnormalize.pkl", "subenv_agents/models/ppo_jax/network.npz",
+                 "subenv_agents/jax_ppo.py", "subenv/jax/env.py", "subenv-0.1.0.dist-info/licenses/LICENSE"):
         assert name in names, name
     assert not any(n.startswith(("tests/", "benchmarks/", "baselines/", "agents/")) for n in names)
     metadata = archive.read("subenv-0.1.0.dist-info/METADATA").decode()
@@ -91,11 +94,14 @@ def test_wheel_installs_into_a_clean_venv_and_evaluates(tmp_path: Path):
     controllers = listed.stdout.splitlines()[0].removeprefix("controllers: ").split(", ")
     assert sorted(controllers) == sorted(subenv_baselines.CONTROLLERS)  # without the extras: no agents, no MPC
     skipped = listed.stderr.splitlines()
-    assert len(skipped) == 2
+    assert len(skipped) == 3
     assert skipped[0].startswith("(skipped mpc: the 'mpc' extra is needed for the MPC baseline (subenv_baselines.mpc): "
                                  'pip install "subenv[mpc]" (or pip install "daqp>=0.11"; ')
     assert skipped[1].startswith("(skipped ppo, sac: the 'rl' extra is needed for the shipped agents: "
                                  'pip install "subenv[rl]" (or pip install "stable-baselines3>=2.3" ')
+    assert skipped[2].startswith("(skipped ppo_jax: the 'jax-rl' extra is needed for PPO on the JAX environment "
+                                 '(subenv_agents.jax_ppo): pip install "subenv[jax-rl]" (or pip install "jax>=0.4.30" '
+                                 '"optax>=0.2"; ')
 
     refused = _run(python, "-c", "import subenv.jax", cwd=tmp_path, ok=False)  # jax is not installed
     assert refused.stderr.strip().splitlines()[-1].startswith(
