@@ -46,12 +46,15 @@ from subenv.extras import require
 
 require("jax-rl", "PPO on the JAX environment (subenv_agents.jax_ppo)", "jax", "optax")
 
+import gymnasium as gym
 import jax
 import jax.numpy as jnp
 import optax
 
+import subenv.envs
 import subenv.jax as sj
 from subenv.atomic import atomic_output_dir
+from subenv.envs.config import DivePlaneConfig
 from subenv.evaluation import SingleRowMixin, check_batch
 from subenv.vehicles import Vehicle
 from subenv_agents.records import (
@@ -132,6 +135,11 @@ class PPOConfig:
                       f"at least num_envs * num_steps = {batch} (one update)")
         object.__setattr__(self, "hidden", tuple(self.hidden))
         object.__setattr__(self, "env_kwargs", dict(self.env_kwargs))
+        check.require("env_id", self.env_id, self.env_id in subenv.envs.env_ids(), "a registered subenv id")
+        try:  # (the environment's own checks, before anything is drawn or compiled)
+            DivePlaneConfig(**{**gym.spec(self.env_id).kwargs, **self.env_kwargs})
+        except TypeError as exc:
+            raise ValueError(f"env_kwargs={self.env_kwargs!r} is invalid: {exc}") from None
 
     @property
     def num_updates(self) -> int:

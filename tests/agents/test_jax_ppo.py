@@ -93,6 +93,9 @@ def test_save_never_replaces_what_it_did_not_write(trained, tmp_path):
     ({"total_timesteps": 10}, "total_timesteps"),
     ({"hidden": ()}, "hidden"),
     ({"lr": -1.0}, "lr"),
+    ({"env_id": "CartPole-v1"}, "env_id"),
+    ({"env_kwargs": {"control": "sideways"}}, "control"),
+    ({"env_kwargs": {"colour": "red"}}, "env_kwargs"),
 ])
 def test_bad_settings_are_refused_by_name(change, match):
     with pytest.raises(ValueError, match=match):
