@@ -13,10 +13,9 @@ from subenv.evaluation import SingleRowMixin, check_batch
 from subenv.vehicles import Vehicle
 from subenv_agents.features import DepthIntegral
 from subenv_agents.policy import TrainedAgent, load_agent
-from subenv_agents.records import DYNAMICS_KWARGS
+from subenv_agents.records import check_harness_kwargs
 
 __all__ = ["AgentController"]
-
 
 
 class AgentController(SingleRowMixin):
@@ -38,12 +37,7 @@ class AgentController(SingleRowMixin):
     def __init__(self, agent: TrainedAgent | str | Path, name: str | None = None) -> None:
         self.agent = agent if isinstance(agent, TrainedAgent) else load_agent(agent)
         env_kwargs = self.agent.config.env_kwargs
-        changed = [k for k in DYNAMICS_KWARGS if k in env_kwargs]
-        if changed:
-            raise ValueError(
-                f"the agent {str(self.agent.path)!r} was trained with env_kwargs {changed} changed from the "
-                "defaults the evaluation harness uses; evaluate it on its own environment instead"
-            )
+        check_harness_kwargs(env_kwargs, f"agent {str(self.agent.path)!r}")
         self.name = name or self.agent.path.parent.name
         self.control = env_kwargs.get("control", "dual")
         self.alpha = float(env_kwargs.get("alpha", 0.0))

@@ -31,6 +31,7 @@ import argparse
 import dataclasses
 import json
 import math
+import os
 import platform
 import shlex
 import sys
@@ -53,14 +54,14 @@ import optax
 
 import subenv.envs
 import subenv.jax as sj
-from subenv.atomic import atomic_output_dir
+from subenv.atomic import atomic_output_dir, check_output_dir
 from subenv.envs.config import DivePlaneConfig
 from subenv.evaluation import SingleRowMixin, check_batch
 from subenv.vehicles import Vehicle
 from subenv_agents.records import (
     BASELINE,
-    DYNAMICS_KWARGS,
     REVERSAL_SCENARIOS,
+    check_harness_kwargs,
     evaluation_record,
     table,
     target_met,
@@ -409,10 +410,7 @@ class JaxPPOController(SingleRowMixin):
 
     def _setup(self, config: PPOConfig, network: Any, stats: RunningStats, name: str, source: str) -> None:
         self.config, self._network, self._stats = config, network, stats
-        changed = [k for k in DYNAMICS_KWARGS if k in self.config.env_kwargs]
-        if changed:
-            raise ValueError(f"the model {source} was trained with env_kwargs {changed} changed from the "
-                             "defaults the evaluation harness uses; evaluate it on its own environment instead")
+        check_harness_kwargs(self.config.env_kwargs, f"model {source}")
         self.name = name
         self.control = self.config.env_kwargs.get("control", "dual")
         self.alpha = float(self.config.env_kwargs.get("alpha", 0.0))
@@ -463,8 +461,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     settings = {f.name: getattr(args, f.name) for f in dataclasses.fields(PPOConfig)}
     try:
         config = PPOConfig(**{**settings, "hidden": tuple(args.hidden)})
-        from subenv.atomic import check_output_dir
-
         check_output_dir(args.out, args.force, kind="jax-ppo model")
     except ValueError as exc:
         parser.error(str(exc))
@@ -485,7 +481,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     state, metrics = jax.block_until_ready(jax.jit(train)(jax.random.key(config.seed)))
     wall = time.perf_counter() - start
     record = {"env_steps": total, "wall_time_s": round(wall, 1), "env_steps_per_s": round(total / wall),
-              "device": str(jax.devices()[0]), "machine": f"{platform.machine()}, {_cores()} cores",
+              "device": str(jax.devices()[0]), "machine": f"{platform.machine()}, {os.cpu_count()} cores",
               "versions": {"jax": jax.__version__, "optax": optax.__version__, "python": platform.python_version()},
               "command": shlex.join(["python", "-m", "subenv_agents.jax_ppo",
                                      *(sys.argv[1:] if argv is None else argv)]),
@@ -557,12 +553,6 @@ over the final 60 s (95% Wilson intervals). Plane RMS: sqrt of the time mean of 
 **Target** (at least the baseline's success with less plane effort on {", ".join(REVERSAL_SCENARIOS)}):
 **{"met" if evaluation["target_met"] else "not met"}**. {evaluation["target"]}.
 """
-
-
-def _cores() -> int:
-    import os
-
-    return os.cpu_count() or 1
 
 
 if __name__ == "__main__":

@@ -4,10 +4,11 @@ the harness's results, no training stack needed."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any, Final
 
-__all__ = ["BASELINE", "DYNAMICS_KWARGS", "REVERSAL_SCENARIOS", "evaluation_record", "table", "target_met"]
+__all__ = ["BASELINE", "DYNAMICS_KWARGS", "REVERSAL_SCENARIOS", "check_harness_kwargs", "evaluation_record", "table",
+           "target_met"]
 
 BASELINE: Final = "reversal_aware"
 DYNAMICS_KWARGS: Final = ("vehicle", "dt", "substeps", "plane_rate_limit_radps", "max_pitch_rad", "max_depth_error_m")
@@ -17,6 +18,15 @@ matter to it), so a model trained with any of these changed is refused as a cont
 REVERSAL_SCENARIOS: Final = ("LowSpeed", "NearCritical", "SpeedTransient")
 """Where the target is measured: at least the baseline's success rate with less plane effort (and so
 where the shipped agents are selected, :mod:`subenv_agents.selection`)."""
+
+
+def check_harness_kwargs(env_kwargs: Mapping[str, Any], model: str) -> None:
+    """Raise ``ValueError`` if ``model`` (its name in the message) was trained with any of
+    :data:`DYNAMICS_KWARGS` in its ``env_kwargs``."""
+    changed = [k for k in DYNAMICS_KWARGS if k in env_kwargs]
+    if changed:
+        raise ValueError(f"the {model} was trained with env_kwargs {changed} changed from the defaults the "
+                         "evaluation harness uses; evaluate it on its own environment instead")
 
 
 def evaluation_record(results: Sequence[Any]) -> dict[str, dict[str, dict[str, float]]]:

@@ -24,12 +24,12 @@ What a sub-environment is made of, each a NumPy structured dtype whose fields nu
 
 The physics is pure functions of scalars that return values: the planes (:func:`plane_angles`),
 the speed profile (:func:`speed_at`), a control period's start (:func:`period_start`: planes, effort,
-speed) and end (:func:`episode_end`, :func:`period_end`: the new state and the episode's end), the
-reward (:func:`reward_terms`), the observation (:func:`noise_values`, :func:`observation_values`)
-and the ``info`` (:func:`report_values`), around one control period of the shared right-hand side,
-integrated by :func:`subenv.dynamics.integrate.control_period_lanes` for a block of up to
-:data:`~subenv.dynamics.integrate.LANES` sub-environments (one SIMD-compiled path for any number of
-them). :func:`step` only reads the records, calls them and writes the results. The functions are
+speed) and end (:func:`episode_end`, :func:`period_end`, :func:`episode_outcome`: the new state and
+the episode's end), the reward (:func:`reward_terms`), the observation (:func:`noise_values`,
+:func:`observation_values`) and the ``info`` (:func:`report_values`), around one control period of
+the shared right-hand side, integrated by :func:`subenv.dynamics.integrate.control_period_lanes` for
+a block of up to :data:`~subenv.dynamics.integrate.LANES` sub-environments (one SIMD-compiled path
+for any number of them). :func:`step` only reads the records, calls them and writes the results. The functions are
 branch-free (selects, fixed loops), so that :mod:`subenv.jax` traces these same functions into its
 functional environment (:func:`subenv.jax.make`), the randomness given as standard normal numbers.
 
@@ -71,6 +71,7 @@ __all__ = [
     "STATE_DTYPE",
     "draw_reset_numbers",
     "episode_end",
+    "episode_outcome",
     "noise_values",
     "observation",
     "observation_values",
@@ -275,10 +276,18 @@ def period_end(s: np.void, e: np.void, x0: float, x1: float, x2: float, x3: floa
     pitch, heave = select(kept, s.pitch_rad, x0), select(kept, s.heave_mps, x1)
     rate, depth = select(kept, s.pitch_rate_radps, x2), select(kept, s.depth_m, x3)
     steps = s.steps + 1
+    terminated, truncated = episode_outcome(reason, time, steps, e.duration_s, cfg)
+    return pitch, heave, rate, depth, time, steps, distance, u1, disturbance, terminated, truncated
+
+
+@inline_kernel
+def episode_outcome(reason: int, time_s: float, steps: int, duration_s: float, cfg: np.void) -> tuple[bool, bool]:
+    """(terminated, truncated) of a state reached at ``time_s`` after ``steps`` steps, ended for
+    ``reason`` (:func:`episode_end`) in an episode of ``duration_s``."""
     terminated = reason != 0
     # truncated at the scenario's duration, and as gymnasium.wrappers.TimeLimit (even on a terminal step)
-    truncated = ((reason == 0) & (time >= e.duration_s - 1e-9)) | (steps >= cfg.max_steps)
-    return pitch, heave, rate, depth, time, steps, distance, u1, disturbance, terminated, truncated
+    truncated = ((reason == 0) & (time_s >= duration_s - 1e-9)) | (steps >= cfg.max_steps)
+    return terminated, truncated
 
 
 _NO_NOISE: Final = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)

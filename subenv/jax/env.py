@@ -134,6 +134,7 @@ class DivePlaneJaxEnv:
         self._period_start = traced(tr.period_start)
         self._period_end = traced(tr.period_end)
         self._episode_end = traced(tr.episode_end)
+        self._episode_outcome = traced(tr.episode_outcome)
         self._reward_terms = traced(tr.reward_terms)
         self._noise_values = traced(tr.noise_values)
         self._observation_values = traced(tr.observation_values)
@@ -204,7 +205,8 @@ class DivePlaneJaxEnv:
         cfg, e = self._cfg, state.episode
         reason = self._episode_end(state.pitch_rad, state.heave_mps, state.pitch_rate_radps, state.depth_m,
                                    e.depth_command_m, cfg)
-        return (reason != 0) | (state.time_s >= e.duration_s - 1e-9) | (state.steps >= cfg.max_steps)
+        terminated, truncated = self._episode_outcome(reason, state.time_s, state.steps, e.duration_s, cfg)
+        return terminated | truncated
 
     # --- the episodes and the transition ---------------------------------------------------------
     def params(self, seeds: Sequence[int]) -> EnvParams:
