@@ -1,6 +1,6 @@
 """Timing of the analysis: critical_speed per call, and the full reproduction report.
 
-    .venv/bin/python benchmarks/analysis_timing.py
+.venv/bin/python benchmarks/analysis_timing.py
 """
 
 from __future__ import annotations

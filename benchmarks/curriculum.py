@@ -31,9 +31,28 @@ if str(REPO) not in sys.path:
 
 def _train(args: argparse.Namespace, root: Path, seed: int, curriculum: bool) -> Path:
     run = root / f"{'with' if curriculum else 'without'}_seed{seed}"
-    cmd = [sys.executable, "-m", "subenv_agents.train", "--algo", args.algo, "--env", args.env, "-n", str(args.n_timesteps),
-           "--seed", str(seed), "--run-dir", str(run), "--curriculum" if curriculum else "--no-curriculum",
-           "--save-freq", "0", "--eval-freq", "0", "-q", "--no-progress"]
+    cmd = [
+        sys.executable,
+        "-m",
+        "subenv_agents.train",
+        "--algo",
+        args.algo,
+        "--env",
+        args.env,
+        "-n",
+        str(args.n_timesteps),
+        "--seed",
+        str(seed),
+        "--run-dir",
+        str(run),
+        "--curriculum" if curriculum else "--no-curriculum",
+        "--save-freq",
+        "0",
+        "--eval-freq",
+        "0",
+        "-q",
+        "--no-progress",
+    ]
     with (root / f"{run.name}.log").open("w") as log:
         subprocess.run(cmd, check=True, stdout=log, stderr=subprocess.STDOUT, cwd=REPO)
     return run
@@ -60,12 +79,16 @@ def main() -> None:
     start = time.perf_counter()
     with ThreadPoolExecutor(args.parallel) as pool:
         runs = list(pool.map(lambda job: _train(args, root, *job), jobs))
-    print(f"trained {len(runs)} runs of {args.n_timesteps} steps in {time.perf_counter() - start:.0f} s "
-          f"({args.parallel} at a time)\n")
+    print(
+        f"trained {len(runs)} runs of {args.n_timesteps} steps in {time.perf_counter() - start:.0f} s "
+        f"({args.parallel} at a time)\n"
+    )
 
     scenarios = ("LowSpeed", "NearCritical", "SpeedTransient", "Nominal", "PeriscopeDepth", "BallastOffset")
-    header = (f"| curriculum | seed | {' | '.join(scenarios)} | all | plane RMS (reversal suite) | final stage | "
-              "advances (step: stage) | train s |")
+    header = (
+        f"| curriculum | seed | {' | '.join(scenarios)} | all | plane RMS (reversal suite) | final stage | "
+        "advances (step: stage) | train s |"
+    )
     lines = [header, "|" + "---|" * (header.count("|") - 1)]
     totals: dict[bool, list[float]] = {False: [], True: []}
     for (seed, curriculum), run in zip(jobs, runs):
@@ -77,16 +100,20 @@ def main() -> None:
         record = json.loads((run / "train.json").read_text())
         advances = ", ".join(f"{step}: {stage}" for step, stage in record["curriculum_advances"]) or "-"
         totals[curriculum].append(float(np.mean(rates)))
-        lines.append(f"| {'with' if curriculum else 'without'} | {seed} | "
-                     + " | ".join(f"{100 * r:.0f}%" for r in rates)
-                     + f" | {100 * np.mean(rates):.1f}% | {rms:.3f} | {record['final_stage'] if curriculum else '-'} | "
-                       f"{advances} | {record['wall_time_s']:.0f} |")
+        lines.append(
+            f"| {'with' if curriculum else 'without'} | {seed} | "
+            + " | ".join(f"{100 * r:.0f}%" for r in rates)
+            + f" | {100 * np.mean(rates):.1f}% | {rms:.3f} | {record['final_stage'] if curriculum else '-'} | "
+            f"{advances} | {record['wall_time_s']:.0f} |"
+        )
     table = "\n".join(lines)
-    summary = (f"\nMean success over all scenarios: without {100 * np.mean(totals[False]):.1f}% "
-               f"(seeds: {', '.join(f'{100 * v:.0f}' for v in totals[False])}), with "
-               f"{100 * np.mean(totals[True]):.1f}% (seeds: {', '.join(f'{100 * v:.0f}' for v in totals[True])}); "
-               f"{args.algo}, {args.n_timesteps} steps on {args.env}, {args.episodes} episodes per scenario "
-               f"(seed 10000 + i).")
+    summary = (
+        f"\nMean success over all scenarios: without {100 * np.mean(totals[False]):.1f}% "
+        f"(seeds: {', '.join(f'{100 * v:.0f}' for v in totals[False])}), with "
+        f"{100 * np.mean(totals[True]):.1f}% (seeds: {', '.join(f'{100 * v:.0f}' for v in totals[True])}); "
+        f"{args.algo}, {args.n_timesteps} steps on {args.env}, {args.episodes} episodes per scenario "
+        f"(seed 10000 + i)."
+    )
     print(table + "\n" + summary)
     (root / "table.md").write_text(table + "\n" + summary + "\n")
 

@@ -36,7 +36,9 @@ _MAY_BE_NAN = ("critical_speed_mps", "critical_froude", "froude_number")
 _POLICIES = ("random", "bang-bang", "extreme")
 
 
-def actions_for(policy: str, rng: np.random.Generator, shape: tuple[int, ...], previous: np.ndarray) -> np.ndarray:
+def actions_for(
+    policy: str, rng: np.random.Generator, shape: tuple[int, ...], previous: np.ndarray
+) -> np.ndarray:
     """One step's actions of a policy (float64; the environments take any real array)."""
     if policy == "random":
         return rng.uniform(-1.0, 1.0, size=shape)
@@ -52,8 +54,14 @@ def fuzz_id(env_id: str, num_envs: int, steps: int, seed: int, threads: int) -> 
     space = env.single_observation_space
     rng = np.random.default_rng(seed)
     digest = hashlib.sha256()
-    counts = {"env_steps": 0, "episodes_ended": 0, "non_finite": 0, "outside_space": 0, "nan_info_no_ucr": 0,
-              "speed_resets": 0}
+    counts = {
+        "env_steps": 0,
+        "episodes_ended": 0,
+        "non_finite": 0,
+        "outside_space": 0,
+        "nan_info_no_ucr": 0,
+        "speed_resets": 0,
+    }
     reasons: dict[str, int] = {}
     for p, policy in enumerate(_POLICIES):
         obs, info = env.reset(seed=seed + 1000 * p)
@@ -94,7 +102,9 @@ def fuzz_id(env_id: str, num_envs: int, steps: int, seed: int, threads: int) -> 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--env-steps", type=int, default=2_000_000, help="in all, over every id (default: %(default)s)")
+    parser.add_argument(
+        "--env-steps", type=int, default=2_000_000, help="in all, over every id (default: %(default)s)"
+    )
     parser.add_argument("--num-envs", type=int, default=256, help="sub-environments (default: %(default)s)")
     parser.add_argument("--seed", type=int, default=0, help="(default: %(default)s)")
     parser.add_argument("--child", help=argparse.SUPPRESS)  # run one id in this process and print JSON
@@ -105,20 +115,39 @@ def main(argv: list[str] | None = None) -> int:
         env_id, threads = args.child.rsplit(":", 1)
         print(json.dumps(fuzz_id(env_id, args.num_envs, steps, args.seed, int(threads))))
         return 0
-    print(f"Fuzzing {len(ids)} ids, N = {args.num_envs}, {steps} steps per action kind "
-          f"({len(_POLICIES)} kinds), seed {args.seed}", flush=True)
+    print(
+        f"Fuzzing {len(ids)} ids, N = {args.num_envs}, {steps} steps per action kind "
+        f"({len(_POLICIES)} kinds), seed {args.seed}",
+        flush=True,
+    )
     print()
-    print("| id | env-steps | episodes ended (terminations by reason) | speed resets | non-finite | "
-          "outside the space | same bits on 1 and 2 threads, in another process |")
+    print(
+        "| id | env-steps | episodes ended (terminations by reason) | speed resets | non-finite | "
+        "outside the space | same bits on 1 and 2 threads, in another process |"
+    )
     print("|---|---:|---|---:|---:|---:|---|")
     failed = False
     totals = {"env_steps": 0, "non_finite": 0, "outside_space": 0}
     start = time.perf_counter()
     for env_id in ids:
         here = fuzz_id(env_id, args.num_envs, steps, args.seed, 2)
-        child = subprocess.run([sys.executable, __file__, "--env-steps", str(args.env_steps), "--num-envs",
-                                str(args.num_envs), "--seed", str(args.seed), "--child", f"{env_id}:1"],
-                               capture_output=True, text=True, check=True)
+        child = subprocess.run(
+            [
+                sys.executable,
+                __file__,
+                "--env-steps",
+                str(args.env_steps),
+                "--num-envs",
+                str(args.num_envs),
+                "--seed",
+                str(args.seed),
+                "--child",
+                f"{env_id}:1",
+            ],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
         other = json.loads(child.stdout)
         same = here["digest"] == other["digest"] and here["reasons"] == other["reasons"]
         ok = same and here["non_finite"] == 0 and here["outside_space"] == 0
@@ -126,13 +155,18 @@ def main(argv: list[str] | None = None) -> int:
         for key in totals:
             totals[key] += here[key]
         reasons = ", ".join(f"{r}: {n}" for r, n in sorted(here["reasons"].items()))
-        print(f"| {env_id} | {here['env_steps']:,} | {here['episodes_ended']:,} ({reasons}) | "
-              f"{here['speed_resets']:,} | {here['non_finite']} | {here['outside_space']} | "
-              f"{'yes' if same else 'NO'} |", flush=True)
+        print(
+            f"| {env_id} | {here['env_steps']:,} | {here['episodes_ended']:,} ({reasons}) | "
+            f"{here['speed_resets']:,} | {here['non_finite']} | {here['outside_space']} | "
+            f"{'yes' if same else 'NO'} |",
+            flush=True,
+        )
     print()
-    print(f"{totals['env_steps']:,} env-steps in {time.perf_counter() - start:.0f} s (and as many again in the "
-          f"second processes): {totals['non_finite']} non-finite outputs, {totals['outside_space']} observations "
-          f"outside the space. {'FAILED' if failed else 'All checks held.'}")
+    print(
+        f"{totals['env_steps']:,} env-steps in {time.perf_counter() - start:.0f} s (and as many again in the "
+        f"second processes): {totals['non_finite']} non-finite outputs, {totals['outside_space']} observations "
+        f"outside the space. {'FAILED' if failed else 'All checks held.'}"
+    )
     return 1 if failed else 0
 
 

@@ -32,9 +32,13 @@ sys.path.insert(0, str(REPO))
 from subenv.evaluation import EpisodeResult, controller_names, evaluate, get_suite
 
 
-def timed(controller: str, scenarios: tuple[str, ...], episodes: int, batched: bool) -> tuple[float, list[EpisodeResult]]:
+def timed(
+    controller: str, scenarios: tuple[str, ...], episodes: int, batched: bool
+) -> tuple[float, list[EpisodeResult]]:
     start = time.perf_counter()
-    results = evaluate([controller], list(scenarios), episodes, progress=False, keep_trajectories=0, batched=batched)
+    results = evaluate(
+        [controller], list(scenarios), episodes, progress=False, keep_trajectories=0, batched=batched
+    )
     return time.perf_counter() - start, results
 
 
@@ -49,9 +53,15 @@ def same(a: EpisodeResult, b: EpisodeResult) -> bool:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--episodes", type=int, default=100, help="episodes per scenario, batched (default: 100)")
-    parser.add_argument("--single-episodes", type=int, default=5,
-                        help="the first this-many of them, one at a time (default: 5)")
+    parser.add_argument(
+        "--episodes", type=int, default=100, help="episodes per scenario, batched (default: 100)"
+    )
+    parser.add_argument(
+        "--single-episodes",
+        type=int,
+        default=5,
+        help="the first this-many of them, one at a time (default: 5)",
+    )
     parser.add_argument("--controllers", help="comma-separated names (default: every registered controller)")
     args = parser.parse_args()
     names = args.controllers.split(",") if args.controllers else controller_names()
@@ -62,9 +72,13 @@ def main() -> None:
     evaluate([names[0]], ["Nominal"], 1, progress=False, batched=False)
     print(f"warm-up (loads or compiles the compiled physics): {time.perf_counter() - warm_start:.1f} s\n")
 
-    print(f"default suite, {len(scenarios)} scenarios; batched: {args.episodes} episodes per scenario; one at a "
-          f"time: the first {args.single_episodes}\n")
-    print("| controller | one at a time, episodes/s | batched, episodes/s | ratio | equal results on shared episodes |")
+    print(
+        f"default suite, {len(scenarios)} scenarios; batched: {args.episodes} episodes per scenario; one at a "
+        f"time: the first {args.single_episodes}\n"
+    )
+    print(
+        "| controller | one at a time, episodes/s | batched, episodes/s | ratio | equal results on shared episodes |"
+    )
     print("|---|---:|---:|---:|---|")
     totals = [0.0, 0, 0.0, 0]  # single seconds, episodes; batched seconds, episodes
     for name in names:
@@ -76,14 +90,21 @@ def main() -> None:
             totals[2 * i] += seconds
             totals[2 * i + 1] += len(results)
         single_rate, batched_rate = len(single) / single_s, len(batched) / batched_s
-        print(f"| {name} | {single_rate:.1f} | {batched_rate:.1f} | {batched_rate / single_rate:.1f}x | "
-              f"{equal}/{len(single)} |", flush=True)
+        print(
+            f"| {name} | {single_rate:.1f} | {batched_rate:.1f} | {batched_rate / single_rate:.1f}x | "
+            f"{equal}/{len(single)} |",
+            flush=True,
+        )
     single_rate, batched_rate = totals[1] / totals[0], totals[3] / totals[2]
-    print(f"| all (time-weighted) | {single_rate:.1f} | {batched_rate:.1f} | **{batched_rate / single_rate:.1f}x** | |")
+    print(
+        f"| all (time-weighted) | {single_rate:.1f} | {batched_rate:.1f} | **{batched_rate / single_rate:.1f}x** | |"
+    )
     default_episodes = len(names) * len(scenarios) * get_suite("default").episodes
-    print(f"\nthe default comparison ({default_episodes} episodes): about "
-          f"{math.ceil(default_episodes / single_rate)} s one at a time, "
-          f"{math.ceil(default_episodes / batched_rate)} s batched (rollouts only)")
+    print(
+        f"\nthe default comparison ({default_episodes} episodes): about "
+        f"{math.ceil(default_episodes / single_rate)} s one at a time, "
+        f"{math.ceil(default_episodes / batched_rate)} s batched (rollouts only)"
+    )
 
 
 if __name__ == "__main__":

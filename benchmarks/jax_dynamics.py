@@ -52,31 +52,60 @@ def main() -> None:
     args = parser.parse_args()
     vehicle = subenv.load_vehicle("suboff")
     rng = np.random.default_rng(0)
-    print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores; jax {jax.__version__} on "
-          f"{jax.devices()[0].platform}, numba {numba.__version__} on one thread\n")
+    print(
+        f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores; jax {jax.__version__} on "
+        f"{jax.devices()[0].platform}, numba {numba.__version__} on one thread\n"
+    )
     print("| states | water | numba control periods/s | JAX control periods/s | JAX / numba |")
     print("|---:|---|---:|---:|---:|")
     compile_s = {}
-    for label, surface, depth in (("deep", FreeSurface(suction_factor=0.0), (8.0, 15.0)),
-                                  ("periscope depth", FreeSurface(), (0.8, 1.5))):
+    for label, surface, depth in (
+        ("deep", FreeSurface(suction_factor=0.0), (8.0, 15.0)),
+        ("periscope depth", FreeSurface(), (0.8, 1.5)),
+    ):
         params = model_params(vehicle, surface)
         hull, row = params.hull.packed, pack_params(params)
-        period = jax.jit(lambda x, prm, hull=hull, surface=label != "deep": sj.control_period(
-            x, 0.0, CONTROL_PERIOD_S, 1.0, 0.0, 0.05, 0.0, prm, hull, substeps=SUBSTEPS, free_surface=surface))
+        period = jax.jit(
+            lambda x, prm, hull=hull, surface=label != "deep": sj.control_period(
+                x,
+                0.0,
+                CONTROL_PERIOD_S,
+                1.0,
+                0.0,
+                0.05,
+                0.0,
+                prm,
+                hull,
+                substeps=SUBSTEPS,
+                free_surface=surface,
+            )
+        )
         for n in (64, 1024, 4096):
             prm = np.repeat(row[None], n, axis=0)
-            x = np.column_stack([rng.uniform(-0.05, 0.05, n), rng.uniform(-0.05, 0.05, n),
-                                 rng.uniform(-0.01, 0.01, n), rng.uniform(*depth, n)])
+            x = np.column_stack(
+                [
+                    rng.uniform(-0.05, 0.05, n),
+                    rng.uniform(-0.05, 0.05, n),
+                    rng.uniform(-0.01, 0.01, n),
+                    rng.uniform(*depth, n),
+                ]
+            )
             out = np.empty((n, 4))
             start = time.perf_counter()
             period.lower(x, prm).compile()
             compile_s[(label, n)] = time.perf_counter() - start
             xj, prmj = jax.device_put(x), jax.device_put(prm)
-            numba_rate = best_of_three(functools.partial(control_periods_in_blocks, x, prm, hull, out), n, args.seconds)
-            jax_rate = best_of_three(lambda period=period, xj=xj, prmj=prmj: period(xj, prmj).block_until_ready(), n,
-                                  args.seconds)
+            numba_rate = best_of_three(
+                functools.partial(control_periods_in_blocks, x, prm, hull, out), n, args.seconds
+            )
+            jax_rate = best_of_three(
+                lambda period=period, xj=xj, prmj=prmj: period(xj, prmj).block_until_ready(), n, args.seconds
+            )
             np.testing.assert_allclose(np.asarray(period(xj, prmj)), out, rtol=1e-12, atol=1e-12)
-            print(f"| {n:,} | {label} | {numba_rate:,.0f} | {jax_rate:,.0f} | {jax_rate / numba_rate:.3f} |", flush=True)
+            print(
+                f"| {n:,} | {label} | {numba_rate:,.0f} | {jax_rate:,.0f} | {jax_rate / numba_rate:.3f} |",
+                flush=True,
+            )
     print("\n| JAX trace and compile of the control period | s |\n|---|---:|")
     for (label, n), seconds in compile_s.items():
         print(f"| {label}, {n:,} states | {seconds:.2f} |")

@@ -80,21 +80,30 @@ def main() -> None:
     parser.add_argument("--envs", type=int, default=4096, help="environments (default: 4096)")
     parser.add_argument("--scan", type=int, default=50, help="JAX steps per compiled call (default: 50)")
     parser.add_argument("--seconds", type=float, default=1.0, help="time per run (default: 1.0)")
-    parser.add_argument("--ids", nargs="+", default=["subenv/DivePlane-v0", "subenv/SpeedTransient-v0",
-                                                     "subenv/PeriscopeDepthWaves-v0"])
+    parser.add_argument(
+        "--ids",
+        nargs="+",
+        default=["subenv/DivePlane-v0", "subenv/SpeedTransient-v0", "subenv/PeriscopeDepthWaves-v0"],
+    )
     args = parser.parse_args()
     n = args.envs
-    print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores; jax {jax.__version__} on "
-          f"{jax.devices()[0].platform}, numba {numba.__version__}; {n:,} environments\n")
-    print("| id | vector env, 1 thread: env-steps/s | vector env, default threads | JAX env: env-steps/s "
-          "| JAX / vector env | JAX trace + compile, s |")
+    print(
+        f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores; jax {jax.__version__} on "
+        f"{jax.devices()[0].platform}, numba {numba.__version__}; {n:,} environments\n"
+    )
+    print(
+        "| id | vector env, 1 thread: env-steps/s | vector env, default threads | JAX env: env-steps/s "
+        "| JAX / vector env | JAX trace + compile, s |"
+    )
     print("|---|---:|---:|---:|---:|---:|")
     for env_id in args.ids:
         one = vector_rate(env_id, n, args.seconds, threads=1)
         default = vector_rate(env_id, n, args.seconds, threads=None)
         rate, compile_s = jax_rate(env_id, n, args.scan, args.seconds)
-        print(f"| {env_id} | {one:,.0f} | {default:,.0f} | {rate:,.0f} | {rate / default:.3f} | {compile_s:.1f} |",
-              flush=True)
+        print(
+            f"| {env_id} | {one:,.0f} | {default:,.0f} | {rate:,.0f} | {rate / default:.3f} | {compile_s:.1f} |",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

@@ -44,7 +44,9 @@ def jax_run(config: PPOConfig, episodes: int) -> tuple[float, dict[str, dict[str
     state, _ = jax.block_until_ready(jax.jit(train)(jax.random.key(config.seed)))
     wall = time.perf_counter() - start
     controller = JaxPPOController.of(config, state.network, state.obs_stats, "ppo_jax")
-    record = evaluation_record(evaluate([controller], list(REVERSAL_SCENARIOS), episodes=episodes, progress=False))
+    record = evaluation_record(
+        evaluate([controller], list(REVERSAL_SCENARIOS), episodes=episodes, progress=False)
+    )
     return wall, record["ppo_jax"]
 
 
@@ -52,29 +54,56 @@ def sb3_rate(timesteps: int) -> tuple[float, int]:
     """SB3 PPO's env-steps per second (its train.json: the learning itself) and the steps it made."""
     with tempfile.TemporaryDirectory() as tmp:
         run = Path(tmp) / "run"
-        subprocess.run([sys.executable, "-m", "subenv_agents.train", "--algo", "ppo", "--env",
-                        "subenv/SpeedTransient-v0", "-n", str(timesteps), "--run-dir", str(run), "--eval-freq", "0",
-                        "--save-freq", "0", "-q", "--no-progress", "--threads", "1"], check=True,
-                        stdout=subprocess.DEVNULL)
+        subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "subenv_agents.train",
+                "--algo",
+                "ppo",
+                "--env",
+                "subenv/SpeedTransient-v0",
+                "-n",
+                str(timesteps),
+                "--run-dir",
+                str(run),
+                "--eval-freq",
+                "0",
+                "--save-freq",
+                "0",
+                "-q",
+                "--no-progress",
+                "--threads",
+                "1",
+            ],
+            check=True,
+            stdout=subprocess.DEVNULL,
+        )
         record = json.loads((run / "train.json").read_text())
     return record["timesteps"] / record["wall_time_s"], record["timesteps"]
 
 
 def _cells(record: dict[str, dict[str, float]]) -> str:
-    return " | ".join(f"{100 * record[s]['success_rate']:.0f}% ({record[s]['plane_rms_rad']:.3f})"
-                      for s in REVERSAL_SCENARIOS)
+    return " | ".join(
+        f"{100 * record[s]['success_rate']:.0f}% ({record[s]['plane_rms_rad']:.3f})"
+        for s in REVERSAL_SCENARIOS
+    )
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--timesteps", type=float, nargs="+", default=[2.5e6, 5e6, 1e7])
-    parser.add_argument("--episodes", type=int, default=100, help="evaluation episodes per scenario (default: 100)")
+    parser.add_argument(
+        "--episodes", type=int, default=100, help="evaluation episodes per scenario (default: 100)"
+    )
     parser.add_argument("--sb3-timesteps", type=int, default=100_000, help="SB3's steps (default: 100000)")
     args = parser.parse_args()
     shipped, _, _ = load(shipped_folder())
-    print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores; jax {jax.__version__} on "
-          f"{jax.devices()[0]}; the shipped ppo_jax settings on {shipped.env_id}, "
-          f"{shipped.num_envs} environments\n")
+    print(
+        f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores; jax {jax.__version__} on "
+        f"{jax.devices()[0]}; the shipped ppo_jax settings on {shipped.env_id}, "
+        f"{shipped.num_envs} environments\n"
+    )
     header = " | ".join(f"{s}: success (plane RMS)" for s in REVERSAL_SCENARIOS)
     print(f"| run | env-steps | wall time, s | env-steps/s | {header} |")
     print("|---|---:|---:|---:|" + "---|" * len(REVERSAL_SCENARIOS))
@@ -89,9 +118,13 @@ def main() -> None:
     folder = shipped_models()["ppo"]
     train = json.loads((folder / "train.json").read_text())
     stored = json.loads((folder / "evaluation.json").read_text())["suite"]["ppo"]
-    print(f"| SB3 PPO, this run | {sb3_steps:,} | {sb3_steps / sb3:.0f} | {sb3:,.0f} | (not evaluated: a rate only) |")
-    print(f"| SB3 PPO, shipped `ppo` (its record) | {train['timesteps']:,} (its last run) | "
-          f"{total_training_time_s(train):.0f} (all its runs) | | {_cells(stored)} |")
+    print(
+        f"| SB3 PPO, this run | {sb3_steps:,} | {sb3_steps / sb3:.0f} | {sb3:,.0f} | (not evaluated: a rate only) |"
+    )
+    print(
+        f"| SB3 PPO, shipped `ppo` (its record) | {train['timesteps']:,} (its last run) | "
+        f"{total_training_time_s(train):.0f} (all its runs) | | {_cells(stored)} |"
+    )
     print(f"\nJAX PPO / SB3 PPO, env-steps per second: {min(rates) / sb3:.1f} to {max(rates) / sb3:.1f}")
 
 

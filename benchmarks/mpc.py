@@ -45,11 +45,17 @@ def main() -> None:
         elapsed = time.perf_counter() - start
         steps = sum(r.steps for r in results)
         times = np.array(getattr(controller, "solve_times_s", []))
-        timing = (f", QP solve per step median {np.median(times) * 1e3:.2f} ms, p99 "
-                  f"{np.percentile(times, 99) * 1e3:.2f} ms" if times.size else "")
-        print(f"{name}: {len(results)} episodes, {steps} steps in {elapsed:.1f} s "
-              f"({len(results) / elapsed:.2f} episodes/s, {elapsed / steps * 1e3:.2f} ms per step){timing}",
-              flush=True)
+        timing = (
+            f", QP solve per step median {np.median(times) * 1e3:.2f} ms, p99 "
+            f"{np.percentile(times, 99) * 1e3:.2f} ms"
+            if times.size
+            else ""
+        )
+        print(
+            f"{name}: {len(results)} episodes, {steps} steps in {elapsed:.1f} s "
+            f"({len(results) / elapsed:.2f} episodes/s, {elapsed / steps * 1e3:.2f} ms per step){timing}",
+            flush=True,
+        )
         for row in summarize(results):
             rows[(row["scenario"], name)] = row
         for r in results:
@@ -58,8 +64,13 @@ def main() -> None:
             if can_win[key]:
                 won.setdefault((r.scenario, name), []).append(r.metrics.outcome == "success")
     scenarios = list(dict.fromkeys(s for s, _ in rows))
-    print("\n| scenario | winnable | " + " | ".join(
-        f"{n} success [95%] | {n} on winnable [95%] | {n} plane RMS [rad]" for n in args.controllers) + " |")
+    print(
+        "\n| scenario | winnable | "
+        + " | ".join(
+            f"{n} success [95%] | {n} on winnable [95%] | {n} plane RMS [rad]" for n in args.controllers
+        )
+        + " |"
+    )
     print("|---|---|" + "---|---|---|" * len(args.controllers))
     for scenario in scenarios:
         cells = []
@@ -71,9 +82,11 @@ def main() -> None:
             wins = won.get((scenario, name), [])
             kw, nw = sum(wins), len(wins)
             wlow, whigh = wilson_interval(kw, nw) if nw else (float("nan"), float("nan"))
-            cells += [f"{k}/{n} = {100 * k / n:.0f}% [{100 * low:.0f}, {100 * high:.0f}]",
-                      f"{kw}/{nw} = {100 * kw / max(nw, 1):.0f}% [{100 * wlow:.0f}, {100 * whigh:.0f}]",
-                      f"{row['plane_rms_rad_mean']:.3f}"]
+            cells += [
+                f"{k}/{n} = {100 * k / n:.0f}% [{100 * low:.0f}, {100 * high:.0f}]",
+                f"{kw}/{nw} = {100 * kw / max(nw, 1):.0f}% [{100 * wlow:.0f}, {100 * whigh:.0f}]",
+                f"{row['plane_rms_rad_mean']:.3f}",
+            ]
         winnable_here = sum(v for (s_, _), v in can_win.items() if s_ == scenario)
         total = sum(1 for (s_, _) in can_win if s_ == scenario)
         print(f"| {scenario} | {winnable_here}/{total} | " + " | ".join(cells) + " |")

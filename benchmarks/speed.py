@@ -66,8 +66,21 @@ def control_periods_in_blocks(x: np.ndarray, prm: np.ndarray, hull: np.ndarray, 
     for b in range(0, x.shape[0], L):
         m = min(L, x.shape[0] - b)
         for j in range(m):
-            ig.set_lane(block, j, x[b + j, 0], x[b + j, 1], x[b + j, 2], x[b + j, 3], 0.0, 1.0, 0.0, 0.05, 0.0, 0.0,
-                        prm[b + j])
+            ig.set_lane(
+                block,
+                j,
+                x[b + j, 0],
+                x[b + j, 1],
+                x[b + j, 2],
+                x[b + j, 3],
+                0.0,
+                1.0,
+                0.0,
+                0.05,
+                0.0,
+                0.0,
+                prm[b + j],
+            )
         ig.control_period_lanes(block, m, ig.CONTROL_PERIOD_S, ig.SUBSTEPS, hull, ig.NO_WAVES)
         for j in range(m):
             for r in range(4):
@@ -143,34 +156,45 @@ def single_env_table(seconds: float, repeats: int) -> list[str]:
             cells[f"{env_id} {kind}"] = functools.partial(single_env_rate, env, seconds, 1)
     best = round_robin(cells, repeats)
     ref_raw, ref_made = best["Pendulum-v1 raw"], best["Pendulum-v1 make"]
-    lines = ["| environment | raw steps/s | x Pendulum-v1 raw | gym.make steps/s | x Pendulum-v1 gym.make |",
-             "|---|---:|---:|---:|---:|"]
+    lines = [
+        "| environment | raw steps/s | x Pendulum-v1 raw | gym.make steps/s | x Pendulum-v1 gym.make |",
+        "|---|---:|---:|---:|---:|",
+    ]
     for env_id in ids:
         raw_rate, made_rate = best[f"{env_id} raw"], best[f"{env_id} make"]
-        lines.append(f"| {env_id} | {raw_rate:,.0f} | {raw_rate / ref_raw:.2f} | {made_rate:,.0f} "
-                     f"| {made_rate / ref_made:.2f} |")
+        lines.append(
+            f"| {env_id} | {raw_rate:,.0f} | {raw_rate / ref_raw:.2f} | {made_rate:,.0f} "
+            f"| {made_rate / ref_made:.2f} |"
+        )
     return lines
 
 
 def vector_env_table(seconds: float, repeats: int, sizes: tuple[int, ...]) -> list[str]:
-    lines = [("| environment | N | native env-steps/s | native, 1 thread | SyncVectorEnv | CartPoleVectorEnv "
-              "| native / Sync | native / CartPoleVectorEnv |"),
-             "|---|---:|---:|---:|---:|---:|---:|---:|"]
+    lines = [
+        (
+            "| environment | N | native env-steps/s | native, 1 thread | SyncVectorEnv | CartPoleVectorEnv "
+            "| native / Sync | native / CartPoleVectorEnv |"
+        ),
+        "|---|---:|---:|---:|---:|---:|---:|---:|",
+    ]
     for n in sizes:
         envs: dict[str, gym.vector.VectorEnv] = {"cartpole": CartPoleVectorEnv(num_envs=n)}  # type: ignore[type-arg]
         for env_id in SUBENV_IDS:
             envs[f"{env_id} native"] = gym.make_vec(env_id, num_envs=n)
             envs[f"{env_id} serial"] = gym.make_vec(env_id, num_envs=n, threads=1)
             envs[f"{env_id} sync"] = gym.make_vec(env_id, num_envs=n, vectorization_mode="sync")
-        best = round_robin({key: functools.partial(vector_env_rate, env, seconds, 1) for key, env in envs.items()},
-                           repeats)
+        best = round_robin(
+            {key: functools.partial(vector_env_rate, env, seconds, 1) for key, env in envs.items()}, repeats
+        )
         for env in envs.values():
             env.close()
         cartpole = best["cartpole"]
         for env_id in SUBENV_IDS:
             native, serial, sync = (best[f"{env_id} {kind}"] for kind in ("native", "serial", "sync"))
-            lines.append(f"| {env_id} | {n} | {native:,.0f} | {serial:,.0f} | {sync:,.0f} | {cartpole:,.0f} "
-                         f"| {native / sync:.1f} | {native / cartpole:.2f} |")
+            lines.append(
+                f"| {env_id} | {n} | {native:,.0f} | {serial:,.0f} | {sync:,.0f} | {cartpole:,.0f} "
+                f"| {native / sync:.1f} | {native / cartpole:.2f} |"
+            )
     return lines
 
 
@@ -195,23 +219,38 @@ def integrator_table(seconds: float) -> list[str]:
             ig.set_lane(block, 0, a, b, c, d, k * CONTROL_PERIOD_S, speed, 0.0, plane, 0.0, 0.0, prm)
             ig.control_period_lanes(block, 1, CONTROL_PERIOD_S, SUBSTEPS, hull, ig.NO_WAVES)
             L = ig.LANES
-            a, b, c, d = block[ig.LANE_PITCH * L], block[(ig.LANE_PITCH + 1) * L], block[(ig.LANE_PITCH + 2) * L], \
-                block[(ig.LANE_PITCH + 3) * L]
+            a, b, c, d = (
+                block[ig.LANE_PITCH * L],
+                block[(ig.LANE_PITCH + 1) * L],
+                block[(ig.LANE_PITCH + 2) * L],
+                block[(ig.LANE_PITCH + 3) * L],
+            )
         return np.array([a, b, c, d])
 
     def python_rk4(x: np.ndarray, periods: int) -> np.ndarray:
         for k in range(periods):
-            x = rk4(lambda t, s: derivatives(s, speed, plane, 0.0, params), k * CONTROL_PERIOD_S, x,
-                    CONTROL_PERIOD_S, SUBSTEPS)
+            x = rk4(
+                lambda t, s: derivatives(s, speed, plane, 0.0, params),
+                k * CONTROL_PERIOD_S,
+                x,
+                CONTROL_PERIOD_S,
+                SUBSTEPS,
+            )
         return x
 
     def scipy(rtol: float, atol: float) -> Callable[[np.ndarray, int], np.ndarray]:
         def run(x: np.ndarray, periods: int) -> np.ndarray:
             for k in range(periods):  # the planes are held over a control period: one solve per period
                 t = k * CONTROL_PERIOD_S
-                x = solve_ivp(lambda _, s: derivatives(s, speed, plane, 0.0, params), (t, t + CONTROL_PERIOD_S), x,
-                              rtol=rtol, atol=atol).y[:, -1]
+                x = solve_ivp(
+                    lambda _, s: derivatives(s, speed, plane, 0.0, params),
+                    (t, t + CONTROL_PERIOD_S),
+                    x,
+                    rtol=rtol,
+                    atol=atol,
+                ).y[:, -1]
             return x
+
         return run
 
     rows = []
@@ -231,8 +270,13 @@ def integrator_table(seconds: float) -> list[str]:
             if elapsed >= seconds:
                 break
         rows.append((label, count * horizon_s / elapsed))
-    lines = [("| integrator (600 s at 1 m/s, dt 0.5 s held planes, hull drag on) | simulated s per wall s "
-              "| x compiled RK4 |"), "|---|---:|---:|"]
+    lines = [
+        (
+            "| integrator (600 s at 1 m/s, dt 0.5 s held planes, hull drag on) | simulated s per wall s "
+            "| x compiled RK4 |"
+        ),
+        "|---|---:|---:|",
+    ]
     for label, rate in rows:
         lines.append(f"| {label} | {rate:,.0f} | {rate / rows[0][1]:.2g} |")
     return lines
@@ -245,8 +289,8 @@ def cost_table(seconds: float) -> list[str]:
     import math
 
     from subenv.dynamics import CONTROL_PERIOD_S, SUBSTEPS, model_params
-    from subenv.dynamics.model import pack_params, rhs_point
     from subenv.dynamics.hull import crossflow_point
+    from subenv.dynamics.model import pack_params, rhs_point
     from subenv.dynamics.sincos import sincos_point
     from subenv.envs import transition as tr
 
@@ -255,8 +299,14 @@ def cost_table(seconds: float) -> list[str]:
     hull = params.hull.packed
     prm = np.repeat(pack_params(params)[None], n, axis=0)  # one parameter row per state, as in the envs
     rng = np.random.default_rng(0)
-    states = np.column_stack([rng.uniform(-0.05, 0.05, n), rng.uniform(-0.05, 0.05, n), rng.uniform(-0.01, 0.01, n),
-                              rng.uniform(8.0, 15.0, n)])
+    states = np.column_stack(
+        [
+            rng.uniform(-0.05, 0.05, n),
+            rng.uniform(-0.05, 0.05, n),
+            rng.uniform(-0.01, 0.01, n),
+            rng.uniform(8.0, 15.0, n),
+        ]
+    )
     out = np.zeros((n, 4))
 
     @numba.njit
@@ -275,8 +325,9 @@ def cost_table(seconds: float) -> list[str]:
     @numba.njit
     def rhs(x: np.ndarray, prm: np.ndarray, out: np.ndarray) -> None:
         for i in range(x.shape[0]):
-            out[i, 0], out[i, 1], out[i, 2], out[i, 3] = rhs_point(x[i, 0], x[i, 1], x[i, 2], x[i, 3], 1.0, 0.05, 0.0,
-                                                                   0.0, 0.0, prm[i], hull)
+            out[i, 0], out[i, 1], out[i, 2], out[i, 3] = rhs_point(
+                x[i, 0], x[i, 1], x[i, 2], x[i, 3], 1.0, 0.05, 0.0, 0.0, 0.0, prm[i], hull
+            )
 
     pitch, sin_cos = states[:, 0].copy(), np.empty((2, n))  # contiguous: a loop over them is SIMD
 
@@ -325,7 +376,18 @@ def cost_table(seconds: float) -> list[str]:
         report = np.empty((len(tr.REPORT_KEYS), n))
         active = np.ones(n, dtype=bool)
         state = vec._state.copy()
-        args = (state, vec._episode, vec._seas, a, active, vec._obs, vec._rngs, vec._constants, vec.config.hull, report)
+        args = (
+            state,
+            vec._episode,
+            vec._seas,
+            a,
+            active,
+            vec._obs,
+            vec._rngs,
+            vec._constants,
+            vec.config.hull,
+            report,
+        )
 
         def step() -> None:
             state[:] = vec._state  # the same states every time (no episode ends inside the timing)
@@ -349,41 +411,65 @@ def cost_table(seconds: float) -> list[str]:
         resets[env_id] = (ends / (200 * n), reset_ns)
         env.close()
     for env_id in SUBENV_IDS:
-        lines.append(f"| {env_id}: compiled step of one sub-environment (`transition.step`, no reset) "
-                     f"| {kernel[env_id]:.0f} |")
+        lines.append(
+            f"| {env_id}: compiled step of one sub-environment (`transition.step`, no reset) "
+            f"| {kernel[env_id]:.0f} |"
+        )
     per_state, per_pitch = (states, prm, out), (pitch, prm, sin_cos)
-    parts = (("of which: one control period (2 RK4 steps = 8 right-hand sides) in a block of 64 states "
-              "(`control_period_lanes`, SIMD code), per state", periods_in_blocks, per_state, ".0f"),
-             ("the same control period, one state at a time (a block of one)", periods, per_state, ".0f"),
-             ("one right-hand side, one state (`rhs_point`)", rhs, per_state, ".1f"),
-             ("the sine and cosine of the pitch (`sincos_point`), in a loop over an array of pitches (SIMD)", trig,
-              per_pitch, ".1f"),
-             ("the same loop with the C library's `sin` and `cos` (calls, one value at a time)", libm_trig, per_pitch,
-              ".1f"),
-             ("the exact hull drag integral, one state (`crossflow_point`)", drag, per_state, ".1f"))
+    parts = (
+        (
+            "of which: one control period (2 RK4 steps = 8 right-hand sides) in a block of 64 states "
+            "(`control_period_lanes`, SIMD code), per state",
+            periods_in_blocks,
+            per_state,
+            ".0f",
+        ),
+        ("the same control period, one state at a time (a block of one)", periods, per_state, ".0f"),
+        ("one right-hand side, one state (`rhs_point`)", rhs, per_state, ".1f"),
+        (
+            "the sine and cosine of the pitch (`sincos_point`), in a loop over an array of pitches (SIMD)",
+            trig,
+            per_pitch,
+            ".1f",
+        ),
+        (
+            "the same loop with the C library's `sin` and `cos` (calls, one value at a time)",
+            libm_trig,
+            per_pitch,
+            ".1f",
+        ),
+        ("the exact hull drag integral, one state (`crossflow_point`)", drag, per_state, ".1f"),
+    )
     for label, fn, args, fmt in parts:
         lines.append(f"| {label} | {ns_per_item(lambda: fn(*args), n):{fmt}} |")
     for env_id in SUBENV_IDS:
         rate, reset_ns = resets[env_id]
-        lines.append(f"| {env_id}: one reset of 64 at once (draw, loading, records, observation) "
-                     f"| {reset_ns:,.0f} |")
-        lines.append(f"| {env_id}: resets per env-step with random actions: {rate:.4f}, so per env-step | "
-                     f"{rate * reset_ns:.0f} |")
+        lines.append(
+            f"| {env_id}: one reset of 64 at once (draw, loading, records, observation) | {reset_ns:,.0f} |"
+        )
+        lines.append(
+            f"| {env_id}: resets per env-step with random actions: {rate:.4f}, so per env-step | "
+            f"{rate * reset_ns:.0f} |"
+        )
     cartpole = CartPoleVectorEnv(num_envs=n)
     cartpole_rate = vector_env_rate(cartpole, seconds, 3)
     cartpole.close()
     lines.append("")
     # Two cores share the compiled steps (measured on two of numba's threads); the resets run in Python
     # after them, on the calling thread.
-    lines.append("| ceiling on 2 cores | compiled steps alone, on 2 threads: env-steps/s | x CartPoleVectorEnv "
-                 "| with the resets: env-steps/s | x CartPoleVectorEnv |")
+    lines.append(
+        "| ceiling on 2 cores | compiled steps alone, on 2 threads: env-steps/s | x CartPoleVectorEnv "
+        "| with the resets: env-steps/s | x CartPoleVectorEnv |"
+    )
     lines.append("|---|---:|---:|---:|---:|")
     for env_id in SUBENV_IDS:
         t2_s = two_threads[env_id] * 1e-9
         r_s = resets[env_id][0] * resets[env_id][1] * 1e-9
         alone, with_resets = 1 / t2_s, 1 / (t2_s + r_s)
-        lines.append(f"| {env_id} | {alone:,.0f} | {alone / cartpole_rate:.2f} | {with_resets:,.0f} "
-                     f"| {with_resets / cartpole_rate:.2f} |")
+        lines.append(
+            f"| {env_id} | {alone:,.0f} | {alone / cartpole_rate:.2f} | {with_resets:,.0f} "
+            f"| {with_resets / cartpole_rate:.2f} |"
+        )
     lines.append(f"| CartPoleVectorEnv at N = 4096 (measured) | {cartpole_rate:,.0f} | 1 | | |")
     return lines
 
@@ -417,18 +503,33 @@ print(json.dumps({"traced_peak_bytes": tracemalloc.get_traced_memory()[1] if tra
 
 
 def memory_table(n: int) -> list[str]:
-    lines = [(f"| at N = {n}: make, reset, 50 steps | peak allocations (tracemalloc) | resident memory added "
-              "| peak RSS of the process |"), "|---|---:|---:|---:|"]
-    for kind, label in [("native", "subenv/DivePlane-v0, native"), ("sync", "subenv/DivePlane-v0, SyncVectorEnv"),
-                        ("cartpole", "CartPoleVectorEnv")]:
+    lines = [
+        (
+            f"| at N = {n}: make, reset, 50 steps | peak allocations (tracemalloc) | resident memory added "
+            "| peak RSS of the process |"
+        ),
+        "|---|---:|---:|---:|",
+    ]
+    for kind, label in [
+        ("native", "subenv/DivePlane-v0, native"),
+        ("sync", "subenv/DivePlane-v0, SyncVectorEnv"),
+        ("cartpole", "CartPoleVectorEnv"),
+    ]:
         m = {}
         for mode in ("traced", "resident"):
-            out = subprocess.run([sys.executable, "-c", _MEMORY_PROBE, kind, str(n), mode], capture_output=True,
-                                 text=True, check=True, cwd=ROOT)
+            out = subprocess.run(
+                [sys.executable, "-c", _MEMORY_PROBE, kind, str(n), mode],
+                capture_output=True,
+                text=True,
+                check=True,
+                cwd=ROOT,
+            )
             m[mode] = json.loads(out.stdout.strip().splitlines()[-1])
-        lines.append(f"| {label} | {m['traced']['traced_peak_bytes'] / 2**20:.1f} MiB "
-                     f"| {m['resident']['rss_growth_kib'] / 1024:.1f} MiB "
-                     f"| {m['resident']['peak_rss_kib'] / 1024:.0f} MiB |")
+        lines.append(
+            f"| {label} | {m['traced']['traced_peak_bytes'] / 2**20:.1f} MiB "
+            f"| {m['resident']['rss_growth_kib'] / 1024:.1f} MiB "
+            f"| {m['resident']['peak_rss_kib'] / 1024:.0f} MiB |"
+        )
     return lines
 
 
@@ -453,14 +554,22 @@ def compile_table() -> list[str]:
         env = {**os.environ, "NUMBA_CACHE_DIR": cache}
         runs = []
         for _ in range(2):  # empty cache, then the cache the first process wrote
-            out = subprocess.run([sys.executable, "-c", _COMPILE_PROBE], capture_output=True, text=True, check=True,
-                                 env=env, cwd=ROOT)
+            out = subprocess.run(
+                [sys.executable, "-c", _COMPILE_PROBE],
+                capture_output=True,
+                text=True,
+                check=True,
+                env=env,
+                cwd=ROOT,
+            )
             runs.append(json.loads(out.stdout.strip().splitlines()[-1]))
     lines = ["| first call in a fresh process | empty numba cache (compiles) | cached |", "|---|---:|---:|"]
-    labels = {"import": "`import subenv` (compiles nothing)",
-              "single env": "`gym.make` + `reset` + `step` (single env kernels)",
-              "vector env": "`make_vec` + `reset` + `step` on 2 threads (the vector env's parallel kernel)",
-              "derivatives": "`derivatives` (its generalized ufunc)"}
+    labels = {
+        "import": "`import subenv` (compiles nothing)",
+        "single env": "`gym.make` + `reset` + `step` (single env kernels)",
+        "vector env": "`make_vec` + `reset` + `step` on 2 threads (the vector env's parallel kernel)",
+        "derivatives": "`derivatives` (its generalized ufunc)",
+    }
     for key, label in labels.items():
         lines.append(f"| {label} | {runs[0][key]:.2f} s | {runs[1][key]:.2f} s |")
     total_cold, total_warm = sum(runs[0].values()), sum(runs[1].values())
@@ -507,11 +616,15 @@ def public_api_cells(seconds: float, sizes: tuple[int, ...], repeats: int = 5) -
     machine costs one run of several cells, not every run of one."""
     cells: dict[str, Callable[[], float]] = {}
     for env_id in SUBENV_IDS:
-        cells[f"{env_id} single env"] = functools.partial(single_env_rate, gym.make(env_id).unwrapped, seconds, 1)
+        cells[f"{env_id} single env"] = functools.partial(
+            single_env_rate, gym.make(env_id).unwrapped, seconds, 1
+        )
         for n in sizes:
             for threads in (1, 2) if n >= _TWO_THREADS_FROM else (1,):
                 env = gym.make_vec(env_id, num_envs=n, threads=threads)
-                cells[f"{env_id} N={n} threads={threads}"] = functools.partial(vector_env_rate, env, seconds, 1)
+                cells[f"{env_id} N={n} threads={threads}"] = functools.partial(
+                    vector_env_rate, env, seconds, 1
+                )
     return round_robin(cells, repeats)
 
 
@@ -523,17 +636,34 @@ def baseline_table(baseline: Path, seconds: float, repeats: int, sizes: tuple[in
     for _ in range(repeats):
         for name, tree in trees.items():
             env = {**os.environ, "PYTHONPATH": str(tree)}
-            out = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--cells", "--seconds", str(seconds),
-                                  "--repeats", "3", "--sizes", ",".join(map(str, sizes))],
-                                 capture_output=True, text=True, check=True, env=env, cwd=tree)
+            out = subprocess.run(
+                [
+                    sys.executable,
+                    str(Path(__file__).resolve()),
+                    "--cells",
+                    "--seconds",
+                    str(seconds),
+                    "--repeats",
+                    "3",
+                    "--sizes",
+                    ",".join(map(str, sizes)),
+                ],
+                capture_output=True,
+                text=True,
+                check=True,
+                env=env,
+                cwd=tree,
+            )
             found = json.loads(out.stdout.strip().splitlines()[-1])
             if not found.pop("__file__").startswith(str(tree)):
                 raise RuntimeError(f"the child process did not import subenv from {tree}")
             for key, rate in found.items():
                 best[name][key] = max(best[name].get(key, 0.0), rate)
     now, previous = best["now"], best["previous"]
-    lines = ["| measured through the public API | previous env-steps/s | now env-steps/s | now / previous |",
-             "|---|---:|---:|---:|"]
+    lines = [
+        "| measured through the public API | previous env-steps/s | now env-steps/s | now / previous |",
+        "|---|---:|---:|---:|",
+    ]
     for key in now:
         lines.append(f"| {key} | {previous[key]:,.0f} | {now[key]:,.0f} | {now[key] / previous[key]:.2f} |")
     lines += ["", "| two threads / one thread | previous | now |", "|---|---:|---:|"]
@@ -541,7 +671,9 @@ def baseline_table(baseline: Path, seconds: float, repeats: int, sizes: tuple[in
         for n in sizes:
             if n >= _TWO_THREADS_FROM:
                 one, two = f"{env_id} N={n} threads=1", f"{env_id} N={n} threads=2"
-                lines.append(f"| {env_id} N={n} | {previous[two] / previous[one]:.2f} | {now[two] / now[one]:.2f} |")
+                lines.append(
+                    f"| {env_id} N={n} | {previous[two] / previous[one]:.2f} | {now[two] / now[one]:.2f} |"
+                )
     return lines
 
 
@@ -554,17 +686,25 @@ def machine() -> str:
                 break
     except OSError:
         pass
-    return (f"{cpu}, {os.cpu_count()} cores; "
-            f"Python {platform.python_version()}, NumPy {np.__version__}, numba {numba.__version__}, "
-            f"Gymnasium {gym.__version__}")
+    return (
+        f"{cpu}, {os.cpu_count()} cores; "
+        f"Python {platform.python_version()}, NumPy {np.__version__}, numba {numba.__version__}, "
+        f"Gymnasium {gym.__version__}"
+    )
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seconds", type=float, default=1.0, help="time per run (default: %(default)s)")
-    parser.add_argument("--repeats", type=int, default=3, help="runs per measurement, best kept (default: %(default)s)")
-    parser.add_argument("--quick", action="store_true", help="0.2 s, one run, N up to 1024, no memory/compile probes")
-    parser.add_argument("--baseline", type=Path, help="a checkout of another commit to compare with (section 6)")
+    parser.add_argument(
+        "--repeats", type=int, default=3, help="runs per measurement, best kept (default: %(default)s)"
+    )
+    parser.add_argument(
+        "--quick", action="store_true", help="0.2 s, one run, N up to 1024, no memory/compile probes"
+    )
+    parser.add_argument(
+        "--baseline", type=Path, help="a checkout of another commit to compare with (section 6)"
+    )
     parser.add_argument("--only-baseline", action="store_true", help="with --baseline: that section alone")
     parser.add_argument("--cells", action="store_true", help=argparse.SUPPRESS)  # (a child of --baseline)
     parser.add_argument("--sizes", default=",".join(map(str, _BASELINE_SIZES)), help=argparse.SUPPRESS)
@@ -572,8 +712,9 @@ def main() -> None:
     seconds, repeats = (0.2, 1) if args.quick else (args.seconds, args.repeats)
     sizes = VECTOR_SIZES[:-1] if args.quick else VECTOR_SIZES
     if args.cells:
-        cells: dict[str, Any] = public_api_cells(args.seconds, tuple(int(n) for n in args.sizes.split(",")),
-                                                 args.repeats)
+        cells: dict[str, Any] = public_api_cells(
+            args.seconds, tuple(int(n) for n in args.sizes.split(",")), args.repeats
+        )
         print(json.dumps({**cells, "__file__": subenv.__file__}))
         return
     print(f"Machine: {machine()}")
@@ -581,16 +722,24 @@ def main() -> None:
     sections: list[tuple[str, Callable[[], list[str]]]] = []
     if args.baseline is not None:
         baseline = args.baseline
-        sections.append((f"Against {baseline} (child processes taking turns)",
-                         lambda: baseline_table(baseline, seconds, repeats, sizes)))
+        sections.append(
+            (
+                f"Against {baseline} (child processes taking turns)",
+                lambda: baseline_table(baseline, seconds, repeats, sizes),
+            )
+        )
     if args.only_baseline:
         sections = sections[:1]
     else:
-        sections += [("Single environment", lambda: single_env_table(seconds, repeats)),
-                     ("Vector environment (random actions, autoreset)",
-                      lambda: vector_env_table(seconds, repeats, sizes)),
-                     ("Integrator cost", lambda: integrator_table(max(seconds, 1.0))),
-                     ("Where an env-step's time goes", lambda: cost_table(max(seconds, 1.0)))]
+        sections += [
+            ("Single environment", lambda: single_env_table(seconds, repeats)),
+            (
+                "Vector environment (random actions, autoreset)",
+                lambda: vector_env_table(seconds, repeats, sizes),
+            ),
+            ("Integrator cost", lambda: integrator_table(max(seconds, 1.0))),
+            ("Where an env-step's time goes", lambda: cost_table(max(seconds, 1.0))),
+        ]
         if not args.quick:
             sections += [("Peak memory", lambda: memory_table(4096)), ("numba compile time", compile_table)]
     for title, table in sections:

@@ -30,16 +30,25 @@ from subenv.sweep import SweepSpec, _read_rows, run_chunk, run_sweep
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--controllers", default="lqr,reversal_aware,thesis")
-    parser.add_argument("--points", type=int, default=8, help="speed ratios from 0.4 to 1.6 (default: %(default)s)")
+    parser.add_argument(
+        "--points", type=int, default=8, help="speed ratios from 0.4 to 1.6 (default: %(default)s)"
+    )
     parser.add_argument("--episodes", type=int, default=40, help="episodes per point (default: %(default)s)")
     args = parser.parse_args()
-    spec = SweepSpec(controllers=tuple(args.controllers.split(",")), scenarios=("LowSpeed",),
-                     grid=(("speed_ratio", tuple(np.round(np.linspace(0.4, 1.6, args.points), 6).tolist())),),
-                     episodes=args.episodes, chunk_episodes=max(1, args.episodes // 2))
+    spec = SweepSpec(
+        controllers=tuple(args.controllers.split(",")),
+        scenarios=("LowSpeed",),
+        grid=(("speed_ratio", tuple(np.round(np.linspace(0.4, 1.6, args.points), 6).tolist())),),
+        episodes=args.episodes,
+        chunk_episodes=max(1, args.episodes // 2),
+    )
     chunks = spec.chunks()
     episodes = len(chunks) and sum(c.count for c in chunks)
-    print(f"{len(spec.controllers)} controllers x {args.points} points x {args.episodes} episodes = {episodes} "
-          f"episodes in {len(chunks)} chunks, on {os.cpu_count()} CPUs", flush=True)
+    print(
+        f"{len(spec.controllers)} controllers x {args.points} points x {args.episodes} episodes = {episodes} "
+        f"episodes in {len(chunks)} chunks, on {os.cpu_count()} CPUs",
+        flush=True,
+    )
 
     for chunk in chunks[:: max(1, len(chunks) // len(spec.controllers))]:
         run_chunk(chunk, spec.seed)  # (warm-up: compile, build the controllers' designs)

@@ -13,13 +13,24 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["integer", "interval", "is_finite", "is_number", "non_negative", "number", "positive", "real_array",
-           "require"]
+__all__ = [
+    "integer",
+    "interval",
+    "is_finite",
+    "is_number",
+    "non_negative",
+    "number",
+    "positive",
+    "real_array",
+    "require",
+]
 
 
 def is_number(value: Any) -> bool:
     """A real number (Python or NumPy), not a bool."""
-    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(
+        value, (bool, np.bool_)
+    )
 
 
 def is_finite(value: Any) -> bool:
@@ -59,7 +70,9 @@ def number(name: str, value: Any, low: float = -math.inf, high: float = math.inf
 def positive(name: str, value: Any, upper: float = math.inf) -> float:
     """A finite number in (0, upper]."""
     ok = is_finite(value) and 0 < value <= upper
-    require(name, value, ok, f"a finite number in (0, {upper}]" if math.isfinite(upper) else "a finite number > 0")
+    require(
+        name, value, ok, f"a finite number in (0, {upper}]" if math.isfinite(upper) else "a finite number > 0"
+    )
     return float(value)
 
 
@@ -71,16 +84,24 @@ def non_negative(name: str, value: Any) -> float:
 
 def integer(name: str, value: Any, low: int, high: int | None = None) -> int:
     """An integer (Python or NumPy, not a bool) in [low, high]."""
-    ok = (isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)) and low <= value
-          and (high is None or value <= high))
+    ok = (
+        isinstance(value, (int, np.integer))
+        and not isinstance(value, (bool, np.bool_))
+        and low <= value
+        and (high is None or value <= high)
+    )
     require(name, value, ok, f"an integer in [{low}, {high}]" if high is not None else f"an integer >= {low}")
     return int(value)
 
 
 def interval(name: str, value: Any, low: float = -math.inf, high: float = math.inf) -> tuple[float, float]:
     """A ``(low, high)`` pair of finite numbers within [low, high], its first at most its second."""
-    ok = (isinstance(value, tuple) and len(value) == 2 and all(is_finite(v) for v in value)
-          and low <= value[0] <= value[1] <= high)
+    ok = (
+        isinstance(value, tuple)
+        and len(value) == 2
+        and all(is_finite(v) for v in value)
+        and low <= value[0] <= value[1] <= high
+    )
     require(name, value, ok, f"a (low, high) pair of finite numbers with {low} <= low <= high <= {high}")
     return float(value[0]), float(value[1])
 
@@ -91,7 +112,9 @@ def real_array(name: str, value: Any) -> np.ndarray:
     try:
         array = np.asarray(value)
     except (ValueError, TypeError):  # a ragged sequence
-        raise ValueError(f"{name}={value!r} is invalid: must be an array of real numbers of one shape") from None
+        raise ValueError(
+            f"{name}={value!r} is invalid: must be an array of real numbers of one shape"
+        ) from None
     if array.dtype.kind not in "iuf":
         raise ValueError(f"{name}={value!r} is invalid: must hold real numbers (it holds {array.dtype})")
     return array.astype(np.float64, copy=False)

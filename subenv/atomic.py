@@ -147,7 +147,9 @@ def check_output_dir(path: str | os.PathLike[str], overwrite: bool, kind: str | 
     if not os.path.lexists(out):
         return out
     if out.is_symlink() or not out.is_dir():
-        raise FileExistsError(f"output folder {str(out)!r} exists and is not a folder: choose another output folder")
+        raise FileExistsError(
+            f"output folder {str(out)!r} exists and is not a folder: choose another output folder"
+        )
     if not overwrite:
         raise FileExistsError(
             f"output folder {str(out)!r} exists: choose another output folder or pass overwrite=True (--force)"

@@ -51,8 +51,9 @@ def fly(env_id: str, speed_mps: float, seed: int, label: str) -> Run:
     env = gym.make(env_id)
     gain = thesis_gain(env.unwrapped.base_vehicle)  # type: ignore[attr-defined]
     limit = env.unwrapped.plane_limit_rad  # type: ignore[attr-defined]
-    obs, info = env.reset(seed=seed, options={"speed": speed_mps, "depth_command": 10.0,
-                                              "initial_state": (0.0, 0.0, 0.0, 8.0)})
+    obs, info = env.reset(
+        seed=seed, options={"speed": speed_mps, "depth_command": 10.0, "initial_state": (0.0, 0.0, 0.0, 8.0)}
+    )
     times, errors, pitches, planes = [0.0], [info["depth_error_m"]], [info["pitch_rad"]], [0.0]
     reason = "time limit"
     while True:
@@ -67,7 +68,9 @@ def fly(env_id: str, speed_mps: float, seed: int, label: str) -> Run:
             reason = info["termination_reason"] or "time limit"
             break
     env.close()
-    return Run(label, speed_mps, np.array(times), np.array(errors), np.array(pitches), np.array(planes), reason)
+    return Run(
+        label, speed_mps, np.array(times), np.array(errors), np.array(pitches), np.array(planes), reason
+    )
 
 
 def _write_plot(runs: Sequence[Run], ucr: float, path: Path) -> None:
@@ -106,17 +109,24 @@ def demo(args: argparse.Namespace) -> int:
     if not args.no_plot:
         require("plot", "the plot (or pass --no-plot)", "matplotlib")
     runs = [
-        fly(args.env, THESIS_DESIGN_SPEED_MPS, args.seed, f"{THESIS_DESIGN_SPEED_MPS:.3f} m/s (design speed)"),
+        fly(
+            args.env, THESIS_DESIGN_SPEED_MPS, args.seed, f"{THESIS_DESIGN_SPEED_MPS:.3f} m/s (design speed)"
+        ),
         fly(args.low_env, args.low_speed, args.seed, f"{args.low_speed:.3f} m/s"),
     ]
-    print(f"subenv demo on {args.env} and {args.low_env}: thesis pole placement at 5 fps "
-          f"(poles {THESIS_POLES})")
+    print(
+        f"subenv demo on {args.env} and {args.low_env}: thesis pole placement at 5 fps (poles {THESIS_POLES})"
+    )
     print(f"critical speed u_cr = {ucr:.4f} m/s = {mps_to_fps(ucr):.4f} fps (Riedel 1993 eq. 3.9)")
-    print(f"{'speed [m/s]':>12} {'u/u_cr':>7} {'final depth err [m]':>20} {'final pitch [deg]':>18} "
-          f"{'final plane [deg]':>18}  end")
+    print(
+        f"{'speed [m/s]':>12} {'u/u_cr':>7} {'final depth err [m]':>20} {'final pitch [deg]':>18} "
+        f"{'final plane [deg]':>18}  end"
+    )
     for run in runs:
-        print(f"{run.speed_mps:12.3f} {run.speed_mps / ucr:7.2f} {run.depth_error[-1]:20.3f} "
-              f"{math.degrees(run.pitch[-1]):18.2f} {math.degrees(run.plane[-1]):18.2f}  {run.reason}")
+        print(
+            f"{run.speed_mps:12.3f} {run.speed_mps / ucr:7.2f} {run.depth_error[-1]:20.3f} "
+            f"{math.degrees(run.pitch[-1]):18.2f} {math.degrees(run.plane[-1]):18.2f}  {run.reason}"
+        )
     if not args.no_plot:
         _write_plot(runs, ucr, Path(args.out))
         print(f"plot written to {args.out}")
@@ -156,8 +166,10 @@ def _load_plugins(names: Sequence[str]) -> None:
             module_name = path.stem
             spec = importlib.util.spec_from_file_location(module_name, path)
             if spec is None or spec.loader is None or not module_name.isidentifier():
-                raise SystemExit(f"subenv evaluate: --plugins: {name!r} cannot be imported: its name must be a "
-                                 "Python identifier ending in .py")
+                raise SystemExit(
+                    f"subenv evaluate: --plugins: {name!r} cannot be imported: its name must be a "
+                    "Python identifier ending in .py"
+                )
             module = importlib.util.module_from_spec(spec)
             sys.modules[module_name] = module  # (the importlib recipe: dataclasses and pickling find it)
             try:
@@ -206,12 +218,18 @@ def _note_other_vehicle(vehicle_name: str, controllers: Sequence[str] | None) ->
     if controllers is None and not vehicle.planes.has_bow_planes:
         bow = [c.name for c in resolve_controllers(None) if needs_bow_planes(c)]
         if bow:
-            print(f"(skipped {', '.join(bow)}: they move the bow planes, and {vehicle_name} has none)", file=sys.stderr)
+            print(
+                f"(skipped {', '.join(bow)}: they move the bow planes, and {vehicle_name} has none)",
+                file=sys.stderr,
+            )
     ratio = reference_length_ratio(vehicle)
     if ratio != 1.0:
-        print(f"(--vehicle {vehicle_name}: the scenarios, the success criterion and the classical baselines' "
-              f"designs are Froude-scaled to its {vehicle.length_m:.4g} m (x{ratio:.4g}); the trained agents are "
-              "SUBOFF's and only run there as they were trained)", file=sys.stderr)
+        print(
+            f"(--vehicle {vehicle_name}: the scenarios, the success criterion and the classical baselines' "
+            f"designs are Froude-scaled to its {vehicle.length_m:.4g} m (x{ratio:.4g}); the trained agents are "
+            "SUBOFF's and only run there as they were trained)",
+            file=sys.stderr,
+        )
 
 
 def evaluate(args: argparse.Namespace) -> int:
@@ -232,8 +250,10 @@ def evaluate(args: argparse.Namespace) -> int:
         print("suites:", ", ".join(suite_names()))
         return 0
     if not controller_names():
-        raise SystemExit(f"subenv evaluate: no controllers are registered: install a package that declares some "
-                         f"in the {ENTRY_POINT_GROUP!r} entry-point group, or see --plugins")
+        raise SystemExit(
+            f"subenv evaluate: no controllers are registered: install a package that declares some "
+            f"in the {ENTRY_POINT_GROUP!r} entry-point group, or see --plugins"
+        )
     suite = DEFAULT_SUITE if args.suite is None else args.suite[0] if len(args.suite) == 1 else args.suite
     _note_other_vehicle(args.vehicle, args.controllers)
     if not args.no_plots:
@@ -241,16 +261,24 @@ def evaluate(args: argparse.Namespace) -> int:
     out = args.out or f"results/evaluation/{time.strftime('%Y%m%d-%H%M%S')}"
     try:
         comparison = run_comparison(
-            args.controllers, suite, args.episodes, out, overwrite=args.force,
+            args.controllers,
+            suite,
+            args.episodes,
+            out,
+            overwrite=args.force,
             seed=DEFAULT_SEED if args.seed is None else args.seed,
-            progress=not args.no_progress, plots=not args.no_plots, vehicle=args.vehicle,
+            progress=not args.no_progress,
+            plots=not args.no_plots,
+            vehicle=args.vehicle,
         )
     except (FileExistsError, OutputDirError) as exc:
         raise SystemExit(f"subenv evaluate: --out: {exc}") from None
     except ValueError as exc:
         raise SystemExit(f"subenv evaluate: {exc}") from None
     print(comparison.leaderboard)
-    print(f"\n{len(comparison.results)} episodes in {comparison.elapsed_s:.1f} s; results in {comparison.out_dir}/")
+    print(
+        f"\n{len(comparison.results)} episodes in {comparison.elapsed_s:.1f} s; results in {comparison.out_dir}/"
+    )
     return 0
 
 
@@ -293,7 +321,8 @@ def _grid_axis(text: str) -> tuple[str, tuple[float, ...]]:
             points = tuple(float(v) for v in values.split(","))
     except ValueError:
         raise argparse.ArgumentTypeError(
-            f"invalid value {text!r}: must be name=v1,v2,... or name=start:stop:count") from None
+            f"invalid value {text!r}: must be name=v1,v2,... or name=start:stop:count"
+        ) from None
     return name.strip(), points
 
 
@@ -301,10 +330,14 @@ _PRINTED_POINTS = 60
 """A sweep with more grid points x controllers than this prints one line per controller (the table is in success.md)."""
 
 DEFAULT_MAPS: dict[str, list[tuple[str, tuple[float, ...]]]] = {
-    "x_GB": [("speed_ratio", tuple(np.round(np.linspace(0.3, 2.0, 10), 6).tolist())),
-             ("x_GB_m", tuple(np.round(np.linspace(0.0, 0.003, 7), 6).tolist()))],
-    "excess_buoyancy": [("speed_ratio", tuple(np.round(np.linspace(0.3, 2.0, 10), 6).tolist())),
-                        ("excess_buoyancy_fraction", tuple(np.round(np.linspace(-0.001, 0.001, 9), 6).tolist()))],
+    "x_GB": [
+        ("speed_ratio", tuple(np.round(np.linspace(0.3, 2.0, 10), 6).tolist())),
+        ("x_GB_m", tuple(np.round(np.linspace(0.0, 0.003, 7), 6).tolist())),
+    ],
+    "excess_buoyancy": [
+        ("speed_ratio", tuple(np.round(np.linspace(0.3, 2.0, 10), 6).tolist())),
+        ("excess_buoyancy_fraction", tuple(np.round(np.linspace(-0.001, 0.001, 9), 6).tolist())),
+    ],
 }
 """What ``subenv sweep`` without ``--grid`` runs: the two performance maps, over (u/u_cr, x_GB) and over
 (u/u_cr, (B - W)/W), each into its own subfolder of ``--out``."""
@@ -324,15 +357,27 @@ def sweep(args: argparse.Namespace) -> int:
         raise SystemExit(f"subenv sweep: {exc}") from None
     grids = {"": args.grid} if args.grid is not None else DEFAULT_MAPS
     try:
-        specs = {name: SweepSpec(controllers=tuple(controllers), scenarios=tuple(args.scenarios), grid=tuple(grid),
-                                 episodes=args.episodes, seed=args.seed, vehicle=args.vehicle,
-                                 chunk_episodes=args.chunk_episodes) for name, grid in grids.items()}
+        specs = {
+            name: SweepSpec(
+                controllers=tuple(controllers),
+                scenarios=tuple(args.scenarios),
+                grid=tuple(grid),
+                episodes=args.episodes,
+                seed=args.seed,
+                vehicle=args.vehicle,
+                chunk_episodes=args.chunk_episodes,
+            )
+            for name, grid in grids.items()
+        }
     except ValueError as exc:
         raise SystemExit(f"subenv sweep: {exc}") from None
     out = Path(args.out or f"results/sweep/{time.strftime('%Y%m%d-%H%M%S')}")
     for name, spec in specs.items():
         if len(specs) > 1:
-            print(f"## {name}: " + " x ".join(f"{axis} ({len(values)})" for axis, values in spec.grid), flush=True)
+            print(
+                f"## {name}: " + " x ".join(f"{axis} ({len(values)})" for axis, values in spec.grid),
+                flush=True,
+            )
         _sweep_one(spec, out / name if name else out, args)
     return 0
 
@@ -342,7 +387,9 @@ def _sweep_one(spec: Any, out: Path, args: argparse.Namespace) -> None:
     from subenv.sweep import run_sweep
 
     try:
-        path = run_sweep(spec, out, address=args.address, num_cpus=args.num_cpus, progress=not args.no_progress)
+        path = run_sweep(
+            spec, out, address=args.address, num_cpus=args.num_cpus, progress=not args.no_progress
+        )
     except FileExistsError as exc:
         raise SystemExit(f"subenv sweep: --out: {exc}") from None
     import pyarrow.parquet as pq
@@ -351,9 +398,16 @@ def _sweep_one(spec: Any, out: Path, args: argparse.Namespace) -> None:
     axes = [f"grid_{name}" for name, _ in spec.grid]
     cells: dict[tuple[Any, ...], list[bool]] = {}
     for row in rows:
-        cells.setdefault((row["controller"], row["scenario"], *(row[a] for a in axes)), []).append(row["success"])
-    table = ["| controller | scenario | " + " | ".join(name for name, _ in spec.grid) + (" | " if axes else "")
-             + "success |", "|---" * (3 + len(axes)) + "|"]
+        cells.setdefault((row["controller"], row["scenario"], *(row[a] for a in axes)), []).append(
+            row["success"]
+        )
+    table = [
+        "| controller | scenario | "
+        + " | ".join(name for name, _ in spec.grid)
+        + (" | " if axes else "")
+        + "success |",
+        "|---" * (3 + len(axes)) + "|",
+    ]
     for key, successes in cells.items():
         values = " | ".join(f"{v:.4g}" if isinstance(v, float) else str(v) for v in key)
         table.append(f"| {values} | {sum(successes) / len(successes):.0%} |")
@@ -364,7 +418,9 @@ def _sweep_one(spec: Any, out: Path, args: argparse.Namespace) -> None:
         for controller in spec.controllers:
             mine = [r["success"] for r in rows if r["controller"] == controller]
             print(f"{controller}: {sum(mine) / len(mine):.0%} success over {len(mine)} episodes")
-    print(f"\n{len(rows)} episodes; results in {path}, success per grid point in {path.parent / 'success.md'}")
+    print(
+        f"\n{len(rows)} episodes; results in {path}, success per grid point in {path.parent / 'success.md'}"
+    )
     names = [name for name, _ in spec.grid]
     if not args.no_plots and "speed_ratio" in names and len(names) == 2:
         from subenv.sweep import plot_performance_maps
@@ -382,68 +438,131 @@ def _names(text: str) -> list[str]:
     names = [name.strip() for name in text.split(",")]
     if not all(names):
         raise argparse.ArgumentTypeError(
-            f"invalid value {text!r}: must be comma-separated names, none of them empty")
+            f"invalid value {text!r}: must be comma-separated names, none of them empty"
+        )
     return names
 
 
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        prog="subenv", description="Submarine depth control at low speed: a Gymnasium benchmark.",
-        epilog="'subenv <command> --help' gives a command's options.")
+        prog="subenv",
+        description="Submarine depth control at low speed: a Gymnasium benchmark.",
+        epilog="'subenv <command> --help' gives a command's options.",
+    )
     sub = parser.add_subparsers(dest="command", title="commands", metavar="<command>")
     p_eval = sub.add_parser("evaluate", help="compare the controllers on a suite of scenarios (the main job)")
-    p_eval.add_argument("--controllers", type=_names, help="comma-separated controller names (default: all registered)")
-    p_eval.add_argument("--suite", type=_names, help="suite name or comma-separated scenario names (default: 'default')")
-    p_eval.add_argument("--episodes", type=int, help="episodes per scenario and controller (default: the suite's)")
-    p_eval.add_argument("--seed", type=int, help="base seed; episode i uses seed + i (default: the suite's, 10000)")
-    p_eval.add_argument("--out", type=_path, help="results folder, must not exist unless --force "
-                                      "(default: results/evaluation/<date-time>)")
-    p_eval.add_argument("--force", action="store_true",
-                        help="replace the results folder if it holds earlier results (it has the marker file)")
+    p_eval.add_argument(
+        "--controllers", type=_names, help="comma-separated controller names (default: all registered)"
+    )
+    p_eval.add_argument(
+        "--suite", type=_names, help="suite name or comma-separated scenario names (default: 'default')"
+    )
+    p_eval.add_argument(
+        "--episodes", type=int, help="episodes per scenario and controller (default: the suite's)"
+    )
+    p_eval.add_argument(
+        "--seed", type=int, help="base seed; episode i uses seed + i (default: the suite's, 10000)"
+    )
+    p_eval.add_argument(
+        "--out",
+        type=_path,
+        help="results folder, must not exist unless --force (default: results/evaluation/<date-time>)",
+    )
+    p_eval.add_argument(
+        "--force",
+        action="store_true",
+        help="replace the results folder if it holds earlier results (it has the marker file)",
+    )
     p_eval.add_argument("--no-plots", action="store_true", help="write tables only")
-    p_eval.add_argument("--no-progress", action="store_true",
-                        help="no progress on stderr (a bar on a terminal, otherwise a line every 5%%)")
-    p_eval.add_argument("--plugins", type=_names,
-                        help="comma-separated Python files (depth_p.py) or modules (here or on the path) that "
-                             "register controllers when imported; installed packages declare theirs as entry "
-                             "points and need none")
-    p_eval.add_argument("--vehicle", default="suboff",
-                        help="vehicle name or file (default: %(default)s); the scenarios are Froude-scaled to "
-                             "its length (shipped: " + ", ".join(available_vehicles()) + ")")
+    p_eval.add_argument(
+        "--no-progress",
+        action="store_true",
+        help="no progress on stderr (a bar on a terminal, otherwise a line every 5%%)",
+    )
+    p_eval.add_argument(
+        "--plugins",
+        type=_names,
+        help="comma-separated Python files (depth_p.py) or modules (here or on the path) that "
+        "register controllers when imported; installed packages declare theirs as entry "
+        "points and need none",
+    )
+    p_eval.add_argument(
+        "--vehicle",
+        default="suboff",
+        help="vehicle name or file (default: %(default)s); the scenarios are Froude-scaled to "
+        "its length (shipped: " + ", ".join(available_vehicles()) + ")",
+    )
     p_eval.add_argument("--list", action="store_true", help="list the controllers and suites, and exit")
     p_demo = sub.add_parser("demo", help="fly the thesis controller above and below the critical speed")
     p_demo.add_argument("--env", default="subenv/Nominal-v0", help="environment id (default: %(default)s)")
-    p_demo.add_argument("--low-env", default="subenv/LowSpeed-v0",
-                        help="environment id for the low-speed run (default: %(default)s)")
-    p_demo.add_argument("--low-speed", type=float, default=0.45,
-                        help="the speed below critical to fly, m/s (default: %(default)s)")
+    p_demo.add_argument(
+        "--low-env",
+        default="subenv/LowSpeed-v0",
+        help="environment id for the low-speed run (default: %(default)s)",
+    )
+    p_demo.add_argument(
+        "--low-speed",
+        type=float,
+        default=0.45,
+        help="the speed below critical to fly, m/s (default: %(default)s)",
+    )
     p_demo.add_argument("--seed", type=int, default=0, help="reset seed (default: %(default)s)")
-    p_demo.add_argument("--out", type=_path, default="results/demo.png", help="plot file (default: %(default)s)")
+    p_demo.add_argument(
+        "--out", type=_path, default="results/demo.png", help="plot file (default: %(default)s)"
+    )
     p_demo.add_argument("--no-plot", action="store_true", help="print the summary only")
     p_analyze = sub.add_parser("analyze", help="write the report that reproduces Riedel (1993)")
-    p_analyze.add_argument("--out", type=_path, default="results/analysis", help="report folder (default: %(default)s)")
+    p_analyze.add_argument(
+        "--out", type=_path, default="results/analysis", help="report folder (default: %(default)s)"
+    )
     p_analyze.add_argument("--vehicle", default="suboff", help="vehicle name or file (default: %(default)s)")
-    p_analyze.add_argument("--force", action="store_true",
-                           help="replace the folder if it holds an earlier report (it has the marker file)")
+    p_analyze.add_argument(
+        "--force",
+        action="store_true",
+        help="replace the folder if it holds an earlier report (it has the marker file)",
+    )
     p_sweep = sub.add_parser("sweep", help="run controllers over a grid of physics parameters, on Ray")
-    p_sweep.add_argument("--controllers", type=_names, help="comma-separated controller names (default: all registered)")
-    p_sweep.add_argument("--scenarios", type=_names, default=["LowSpeed"],
-                         help="comma-separated scenario names (default: LowSpeed)")
-    p_sweep.add_argument("--grid", type=_grid_axis, action="append",
-                         help="a grid axis, name=v1,v2,... or name=start:stop:count, repeatable; names: "
-                              + ", ".join(sorted(PARAMETERS)) + " (default: the two performance maps, speed_ratio=0.3:2:10 with "
-                              "x_GB_m=0:0.003:7, and with excess_buoyancy_fraction=-0.001:0.001:9)")
-    p_sweep.add_argument("--episodes", type=int, default=20, help="episodes per grid point (default: %(default)s)")
+    p_sweep.add_argument(
+        "--controllers", type=_names, help="comma-separated controller names (default: all registered)"
+    )
+    p_sweep.add_argument(
+        "--scenarios",
+        type=_names,
+        default=["LowSpeed"],
+        help="comma-separated scenario names (default: LowSpeed)",
+    )
+    p_sweep.add_argument(
+        "--grid",
+        type=_grid_axis,
+        action="append",
+        help="a grid axis, name=v1,v2,... or name=start:stop:count, repeatable; names: "
+        + ", ".join(sorted(PARAMETERS))
+        + " (default: the two performance maps, speed_ratio=0.3:2:10 with "
+        "x_GB_m=0:0.003:7, and with excess_buoyancy_fraction=-0.001:0.001:9)",
+    )
+    p_sweep.add_argument(
+        "--episodes", type=int, default=20, help="episodes per grid point (default: %(default)s)"
+    )
     p_sweep.add_argument("--seed", type=int, default=10000, help="base seed (default: %(default)s)")
     p_sweep.add_argument("--vehicle", default="suboff", help="vehicle name or file (default: %(default)s)")
-    p_sweep.add_argument("--chunk-episodes", type=int, default=50, help="episodes per Ray task (default: %(default)s)")
-    p_sweep.add_argument("--out", type=_path, help="results folder; the same arguments again resume it "
-                                                   "(default: results/sweep/<date-time>)")
-    p_sweep.add_argument("--address", help="a Ray cluster's address (e.g. auto); default: a local Ray instance")
+    p_sweep.add_argument(
+        "--chunk-episodes", type=int, default=50, help="episodes per Ray task (default: %(default)s)"
+    )
+    p_sweep.add_argument(
+        "--out",
+        type=_path,
+        help="results folder; the same arguments again resume it (default: results/sweep/<date-time>)",
+    )
+    p_sweep.add_argument(
+        "--address", help="a Ray cluster's address (e.g. auto); default: a local Ray instance"
+    )
     p_sweep.add_argument("--num-cpus", type=int, help="CPUs of the local Ray instance (default: all)")
     p_sweep.add_argument("--no-progress", action="store_true", help="no progress on stderr")
-    p_sweep.add_argument("--no-plots", action="store_true",
-                         help="no performance maps (drawn when the grid is speed_ratio and one other axis)")
+    p_sweep.add_argument(
+        "--no-plots",
+        action="store_true",
+        help="no performance maps (drawn when the grid is speed_ratio and one other axis)",
+    )
     sub.add_parser("list", help="list the environment ids and their scenarios")
     sub.add_parser("train", add_help=False, help="train a Stable-Baselines3 agent (needs the 'rl' extra)")
     return parser
@@ -460,7 +579,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command is None:
             parser.print_help(sys.stderr)
             return 2
-        commands = {"evaluate": evaluate, "demo": demo, "analyze": analyze, "list": list_environments, "sweep": sweep}
+        commands = {
+            "evaluate": evaluate,
+            "demo": demo,
+            "analyze": analyze,
+            "list": list_environments,
+            "sweep": sweep,
+        }
         return commands[args.command](args)
     except MissingExtra as exc:
         raise SystemExit(f"subenv {argv[0]}: {exc}") from None

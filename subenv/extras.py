@@ -26,7 +26,9 @@ def extra_requirements(extra: str) -> list[str]:
     except PackageNotFoundError:
         return []
     marker = re.compile(r"""extra\s*==\s*["']""" + re.escape(extra) + r"""["']""")
-    return [req.strip() for req, _, condition in (r.partition(";") for r in declared) if marker.search(condition)]
+    return [
+        req.strip() for req, _, condition in (r.partition(";") for r in declared) if marker.search(condition)
+    ]
 
 
 def missing_extra_message(extra: str, purpose: str) -> str:
@@ -35,8 +37,10 @@ def missing_extra_message(extra: str, purpose: str) -> str:
     clone."""
     packages = " ".join(f'"{req}"' for req in extra_requirements(extra))
     alternative = f"or pip install {packages}; " if packages else ""
-    return (f'the {extra!r} extra is needed for {purpose}: pip install "subenv[{extra}]" '
-            f"({alternative}in a clone of the repository, ./dev installs every extra)")
+    return (
+        f'the {extra!r} extra is needed for {purpose}: pip install "subenv[{extra}]" '
+        f"({alternative}in a clone of the repository, ./dev installs every extra)"
+    )
 
 
 def require(extra: str, purpose: str, *modules: str) -> None:

@@ -54,7 +54,12 @@ CHUNK_EPISODES: Final = 50
 overhead of a task (milliseconds) is negligible, and a lost worker costs little."""
 TASK_RETRIES: Final = 3
 """Times Ray runs a chunk again whose worker died (Ray's ``max_retries``)."""
-_SPEC_FILE, _MANIFEST_FILE, _RESULTS_FILE, _CHUNKS_DIR = "sweep.json", "manifest.json", "results.parquet", "chunks"
+_SPEC_FILE, _MANIFEST_FILE, _RESULTS_FILE, _CHUNKS_DIR = (
+    "sweep.json",
+    "manifest.json",
+    "results.parquet",
+    "chunks",
+)
 
 
 @dataclass(frozen=True)
@@ -79,9 +84,14 @@ class SweepSpec:
             if name not in PARAMETERS:
                 raise ValueError(f"grid parameter {name!r} is unknown: must be one of {sorted(PARAMETERS)}")
             if not values or not all(isinstance(v, (int, float)) and math.isfinite(v) for v in values):
-                raise ValueError(f"grid[{name!r}]={list(values)!r} is invalid: must be one or more finite numbers")
-        for name, value, low in (("episodes", self.episodes, 1), ("seed", self.seed, 0),
-                                 ("chunk_episodes", self.chunk_episodes, 1)):
+                raise ValueError(
+                    f"grid[{name!r}]={list(values)!r} is invalid: must be one or more finite numbers"
+                )
+        for name, value, low in (
+            ("episodes", self.episodes, 1),
+            ("seed", self.seed, 0),
+            ("chunk_episodes", self.chunk_episodes, 1),
+        ):
             if not (isinstance(value, int) and not isinstance(value, bool) and value >= low):
                 raise ValueError(f"{name}={value!r} is invalid: must be an integer >= {low}")
 
@@ -93,9 +103,19 @@ class SweepSpec:
 
     def chunks(self) -> list[Chunk]:
         """Every chunk of the sweep, in the order of the results table."""
-        return [Chunk(controller, scenario, tuple(point.items()), first, min(self.chunk_episodes, self.episodes - first))
-                for controller in self.controllers for scenario in self.scenarios for point in self.points
-                for first in range(0, self.episodes, self.chunk_episodes)]
+        return [
+            Chunk(
+                controller,
+                scenario,
+                tuple(point.items()),
+                first,
+                min(self.chunk_episodes, self.episodes - first),
+            )
+            for controller in self.controllers
+            for scenario in self.scenarios
+            for point in self.points
+            for first in range(0, self.episodes, self.chunk_episodes)
+        ]
 
     def as_dict(self) -> dict[str, Any]:
         return {**dataclasses.asdict(self), "grid": {name: list(values) for name, values in self.grid}}
@@ -138,9 +158,13 @@ def run_chunk(chunk: Chunk, seed: int, vehicle: str = "suboff") -> list[dict[str
 
     discover_controllers()  # (a fresh worker process registers the installed controllers)
     controller = make_controller(chunk.controller)
-    results = run_episodes(controller, chunk.scenario_at_point(), range(seed + chunk.first, seed + chunk.first
-                                                                         + chunk.count),
-                           first_episode=chunk.first, vehicle=vehicle)
+    results = run_episodes(
+        controller,
+        chunk.scenario_at_point(),
+        range(seed + chunk.first, seed + chunk.first + chunk.count),
+        first_episode=chunk.first,
+        vehicle=vehicle,
+    )
     point = {f"grid_{name}": value for name, value in chunk.point}
     return [{**r.row(), **point, "chunk": chunk.id} for r in results]
 
@@ -192,7 +216,9 @@ def run_sweep(
     stored = out / _SPEC_FILE
     wanted = json.dumps(spec.as_dict(), indent=2, sort_keys=True) + "\n"
     if stored.exists() and stored.read_text() != wanted:
-        raise FileExistsError(f"{str(out)!r} holds another sweep (its {_SPEC_FILE} differs): choose another folder")
+        raise FileExistsError(
+            f"{str(out)!r} holds another sweep (its {_SPEC_FILE} differs): choose another folder"
+        )
     (out / _CHUNKS_DIR).mkdir(parents=True, exist_ok=True)
     if not stored.exists():
         atomic_write_text(stored, wanted)
@@ -201,14 +227,21 @@ def run_sweep(
     todo = [c for c in chunks if c.id not in finished]
 
     def record() -> None:
-        atomic_write_text(out / _MANIFEST_FILE, json.dumps(
-            {"chunks": len(chunks), "finished": sorted(finished)}, indent=2) + "\n")
+        atomic_write_text(
+            out / _MANIFEST_FILE,
+            json.dumps({"chunks": len(chunks), "finished": sorted(finished)}, indent=2) + "\n",
+        )
 
     if todo:
         started_here = not ray.is_initialized()
         if started_here:
-            ray.init(address=address, num_cpus=num_cpus, include_dashboard=False, log_to_driver=False,
-                     configure_logging=False)
+            ray.init(
+                address=address,
+                num_cpus=num_cpus,
+                include_dashboard=False,
+                log_to_driver=False,
+                configure_logging=False,
+            )
         bar = Progress(len(todo), enabled=progress, label="sweep", unit="chunk")
         try:
             task = ray.remote(max_retries=TASK_RETRIES)(run_chunk)
@@ -231,8 +264,9 @@ def run_sweep(
     return out / _RESULTS_FILE
 
 
-def plot_performance_maps(results: str | os.PathLike[str], out: str | os.PathLike[str],
-                          vehicle: str = "suboff") -> Path:
+def plot_performance_maps(
+    results: str | os.PathLike[str], out: str | os.PathLike[str], vehicle: str = "suboff"
+) -> Path:
     """Success rate and plane effort over a sweep's two grid axes, one column per controller, with the
     physics overlaid.
 
@@ -268,7 +302,9 @@ def plot_performance_maps(results: str | os.PathLike[str], out: str | os.PathLik
     rows = _read_rows(Path(results))
     axes_names = [k for k in rows[0] if k.startswith("grid_")]
     if "grid_speed_ratio" not in axes_names or len(axes_names) != 2:
-        raise ValueError(f"a performance map needs grid_speed_ratio and one other grid axis; the sweep has {axes_names}")
+        raise ValueError(
+            f"a performance map needs grid_speed_ratio and one other grid axis; the sweep has {axes_names}"
+        )
     other = next(a for a in axes_names if a != "grid_speed_ratio")
     boat = load_vehicle(vehicle)
     scale = 1.0 / boat.length_m if other == "grid_x_GB_m" else 1.0
@@ -277,7 +313,10 @@ def plot_performance_maps(results: str | os.PathLike[str], out: str | os.PathLik
     ys = sorted({r[other] for r in rows})
     controllers = list(dict.fromkeys(r["controller"] for r in rows))
     shape = (len(ys), len(xs))
-    success, effort = {c: np.full(shape, np.nan) for c in controllers}, {c: np.full(shape, np.nan) for c in controllers}
+    success, effort = (
+        {c: np.full(shape, np.nan) for c in controllers},
+        {c: np.full(shape, np.nan) for c in controllers},
+    )
     blocked = np.zeros(shape, dtype=bool)
     for (c, x, y), cell in _cells(rows, other).items():
         j, i = ys.index(y), xs.index(x)
@@ -295,17 +334,36 @@ def plot_performance_maps(results: str | os.PathLike[str], out: str | os.PathLik
         curves += [(c, "white", ":") for c in buoyancy_bifurcation_set(boat, ratios * ucr)]
     x_edges, y_edges = _edges(xs), _edges([y * scale for y in ys])
     effort_max = max(float(np.nanmax(e)) for e in effort.values())
-    fig, panels = plt.subplots(2, len(controllers), figsize=(3.4 * len(controllers) + 1.4, 6.6), sharex=True,
-                               sharey=True, layout="constrained", squeeze=False)
+    fig, panels = plt.subplots(
+        2,
+        len(controllers),
+        figsize=(3.4 * len(controllers) + 1.4, 6.6),
+        sharex=True,
+        sharey=True,
+        layout="constrained",
+        squeeze=False,
+    )
     images = []
     for k, controller in enumerate(controllers):
-        for row, (values, cmap, vmax) in enumerate(((success[controller], "viridis", 1.0),
-                                                    (effort[controller], "magma", effort_max))):
+        for row, (values, cmap, vmax) in enumerate(
+            ((success[controller], "viridis", 1.0), (effort[controller], "magma", effort_max))
+        ):
             ax = panels[row][k]
-            images.append(ax.pcolormesh(x_edges, y_edges, values, vmin=0.0, vmax=vmax, cmap=cmap, shading="flat"))
+            images.append(
+                ax.pcolormesh(x_edges, y_edges, values, vmin=0.0, vmax=vmax, cmap=cmap, shading="flat")
+            )
             for j, i in zip(*np.nonzero(blocked)):  # whole cells, hatched
-                ax.add_patch(Rectangle((x_edges[i], y_edges[j]), x_edges[i + 1] - x_edges[i], y_edges[j + 1] - y_edges[j],
-                                       fill=False, hatch="xx", edgecolor="0.8" if row == 0 else "0.2", lw=0.0))
+                ax.add_patch(
+                    Rectangle(
+                        (x_edges[i], y_edges[j]),
+                        x_edges[i + 1] - x_edges[i],
+                        y_edges[j + 1] - y_edges[j],
+                        fill=False,
+                        hatch="xx",
+                        edgecolor="0.8" if row == 0 else "0.2",
+                        lw=0.0,
+                    )
+                )
             ax.axvline(1.0, color="w", ls="--", lw=1.2)
             for curve, color, style in curves:
                 ax.plot(ratios, curve, color=color, ls=style, lw=1.4)
@@ -320,9 +378,11 @@ def plot_performance_maps(results: str | os.PathLike[str], out: str | os.PathLik
     fig.colorbar(images[0], ax=panels[0].tolist(), label="success rate")
     fig.colorbar(images[1], ax=panels[1].tolist(), label="plane RMS [rad]")
     cusp = "; red: the saturation cusp" if other == "grid_x_GB_m" else ""
-    fig.suptitle("Dashed: the critical speed; dotted: the fold (hysteresis) set of one plane command (alpha = 0)"
-                 f"{cusp};\nhatched: no depth-holding trim within the limits for any allocation (no controller can win)",
-                 fontsize="medium")
+    fig.suptitle(
+        "Dashed: the critical speed; dotted: the fold (hysteresis) set of one plane command (alpha = 0)"
+        f"{cusp};\nhatched: no depth-holding trim within the limits for any allocation (no controller can win)",
+        fontsize="medium",
+    )
     path = save_figure(fig, out)
     plt.close(fig)
     return path

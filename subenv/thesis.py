@@ -24,7 +24,7 @@ SUBOFF's; on a vehicle of another length they are Froude-scaled (:func:`froude_s
 
 
 def reference_length_ratio(vehicle: Vehicle) -> float:
-    """lambda = L / L_SUBOFF: lengths chosen for SUBOFF scale by it on ``vehicle`` (exactly 1.0 on SUBOFF)."""
+    """Lambda = L / L_SUBOFF: lengths chosen for SUBOFF scale by it on ``vehicle`` (exactly 1.0 on SUBOFF)."""
     return vehicle.length_m / REFERENCE_LENGTH_M
 
 

@@ -58,8 +58,9 @@ DEFAULT_KEY: Final = "default"
 
 _ACTIVATIONS: Final = ("tanh", "relu", "elu", "leaky_relu")
 # Constructor arguments the training command sets itself (from its own options), never a config.
-_RESERVED: Final = frozenset({"self", "policy", "env", "seed", "verbose", "tensorboard_log", "device",
-                              "_init_setup_model"})
+_RESERVED: Final = frozenset(
+    {"self", "policy", "env", "seed", "verbose", "tensorboard_log", "device", "_init_setup_model"}
+)
 
 
 def algorithm_class(algo: str) -> type[Any]:
@@ -121,9 +122,12 @@ class CurriculumConfig:
             if not self.stages:
                 raise ValueError("curriculum stages=() is invalid: give at least one (name, low, high) stage")
             for stage in self.stages:
-                if not (len(stage) == 3 and isinstance(stage[0], str)
-                        and all(isinstance(v, (int, float)) and math.isfinite(v) for v in stage[1:])
-                        and 0 < stage[1] <= stage[2]):
+                if not (
+                    len(stage) == 3
+                    and isinstance(stage[0], str)
+                    and all(isinstance(v, (int, float)) and math.isfinite(v) for v in stage[1:])
+                    and 0 < stage[1] <= stage[2]
+                ):
                     raise ValueError(
                         f"curriculum stage {stage!r} is invalid: must be [name, low, high] with 0 < low <= high "
                         "(multiples of the critical speed)"
@@ -155,8 +159,12 @@ class DepthBandBonusConfig:
     def __post_init__(self) -> None:
         for name in ("half_width_m", "bonus"):
             value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-                    and value > 0):
+            if not (
+                isinstance(value, (int, float))
+                and not isinstance(value, bool)
+                and math.isfinite(value)
+                and value > 0
+            ):
                 raise ValueError(f"depth_band_bonus {name}={value!r} is invalid: must be a finite number > 0")
 
 
@@ -189,9 +197,13 @@ class AgentConfig:
 
     def to_yaml_dict(self) -> dict[str, Any]:
         """The config as one entry of a hyperparameter file (``load_config`` reads it back)."""
-        out: dict[str, Any] = {"n_timesteps": self.n_timesteps, "policy": self.policy, "n_envs": self.n_envs,
-                               "normalize": asdict(self.normalize) if self.normalize else False,
-                               "env_kwargs": dict(self.env_kwargs)}
+        out: dict[str, Any] = {
+            "n_timesteps": self.n_timesteps,
+            "policy": self.policy,
+            "n_envs": self.n_envs,
+            "normalize": asdict(self.normalize) if self.normalize else False,
+            "env_kwargs": dict(self.env_kwargs),
+        }
         out["depth_integral"] = asdict(self.depth_integral) if self.depth_integral else False
         out["plane_effort_l1"] = self.plane_effort_l1
         out["plane_effort_reference_speed_mps"] = self.plane_effort_reference_speed_mps
@@ -269,7 +281,9 @@ def load_config(
         raise ValueError(f"{path}: must be a mapping of environment ids to hyperparameters")
     key = entry_key or (env_id if env_id in document else DEFAULT_KEY)
     if key not in document:
-        raise ValueError(f"{path}: has no entry for {env_id!r} and no {DEFAULT_KEY!r} entry (has {sorted(document)})")
+        raise ValueError(
+            f"{path}: has no entry for {env_id!r} and no {DEFAULT_KEY!r} entry (has {sorted(document)})"
+        )
     entry = document[key]
     if not isinstance(entry, dict):
         raise ValueError(f"{path}: entry {key!r} must be a mapping, not {entry!r}")
@@ -280,7 +294,9 @@ def load_config(
 def _from_entry(algo: str, env_id: str, entry: dict[str, Any], where: str) -> AgentConfig:
     entry = dict(entry)
     top = {f.name for f in fields(AgentConfig)} - {"algo", "env_id", "algo_kwargs"}
-    algo_params = set(inspect.signature(algorithm_class(algo).__init__).parameters) - _RESERVED - {"policy_kwargs"}
+    algo_params = (
+        set(inspect.signature(algorithm_class(algo).__init__).parameters) - _RESERVED - {"policy_kwargs"}
+    )
     unknown = set(entry) - top - algo_params
     if unknown:
         raise ValueError(
@@ -293,7 +309,9 @@ def _from_entry(algo: str, env_id: str, entry: dict[str, Any], where: str) -> Ag
     n_envs = _integer(where, "n_envs", entry.pop("n_envs", 8))
     policy = entry.pop("policy", "MlpPolicy")
     if policy != "MlpPolicy":
-        raise ValueError(f"{where}: policy={policy!r} is invalid: must be 'MlpPolicy' (observations are a vector)")
+        raise ValueError(
+            f"{where}: policy={policy!r} is invalid: must be 'MlpPolicy' (observations are a vector)"
+        )
     normalize = _normalize(where, entry.pop("normalize", True))
     env_kwargs = _env_kwargs(where, entry.pop("env_kwargs", {}) or {})
     curriculum = _curriculum(where, entry.pop("curriculum", False))
@@ -302,28 +320,45 @@ def _from_entry(algo: str, env_id: str, entry: dict[str, Any], where: str) -> Ag
     if not (isinstance(l1, (int, float)) and not isinstance(l1, bool) and math.isfinite(l1) and l1 >= 0):
         raise ValueError(f"{where}: plane_effort_l1={l1!r} is invalid: must be a finite number >= 0")
     l1_speed = entry.pop("plane_effort_reference_speed_mps", None)
-    if l1_speed is not None and not (isinstance(l1_speed, (int, float)) and not isinstance(l1_speed, bool)
-                                     and math.isfinite(l1_speed) and l1_speed > 0):
-        raise ValueError(f"{where}: plane_effort_reference_speed_mps={l1_speed!r} is invalid: must be null or a "
-                         "finite number > 0")
+    if l1_speed is not None and not (
+        isinstance(l1_speed, (int, float))
+        and not isinstance(l1_speed, bool)
+        and math.isfinite(l1_speed)
+        and l1_speed > 0
+    ):
+        raise ValueError(
+            f"{where}: plane_effort_reference_speed_mps={l1_speed!r} is invalid: must be null or a "
+            "finite number > 0"
+        )
     band = _section(where, "depth_band_bonus", entry.pop("depth_band_bonus", False), DepthBandBonusConfig)
     policy_kwargs = entry.pop("policy_kwargs", {}) or {}
     if not isinstance(policy_kwargs, dict):
         raise ValueError(f"{where}: policy_kwargs={policy_kwargs!r} is invalid: must be a mapping")
     activation = policy_kwargs.get("activation_fn")
     if activation is not None and activation not in _ACTIVATIONS:
-        raise ValueError(f"{where}: policy_kwargs.activation_fn={activation!r} is invalid: must be one of "
-                         f"{list(_ACTIVATIONS)}")
+        raise ValueError(
+            f"{where}: policy_kwargs.activation_fn={activation!r} is invalid: must be one of "
+            f"{list(_ACTIVATIONS)}"
+        )
     lr = entry.get("learning_rate")
     if isinstance(lr, str):
         _linear_start(where, lr)
-    return AgentConfig(algo=algo, env_id=env_id, n_timesteps=n_timesteps, policy=policy, n_envs=n_envs,
-                       normalize=normalize, env_kwargs=env_kwargs, curriculum=curriculum,
-                       depth_integral=None if integral is None else DepthIntegralConfig(**integral),
-                       plane_effort_l1=float(l1),
-                       plane_effort_reference_speed_mps=None if l1_speed is None else float(l1_speed),
-                       depth_band_bonus=None if band is None else DepthBandBonusConfig(**band),
-                       policy_kwargs=policy_kwargs, algo_kwargs=entry)
+    return AgentConfig(
+        algo=algo,
+        env_id=env_id,
+        n_timesteps=n_timesteps,
+        policy=policy,
+        n_envs=n_envs,
+        normalize=normalize,
+        env_kwargs=env_kwargs,
+        curriculum=curriculum,
+        depth_integral=None if integral is None else DepthIntegralConfig(**integral),
+        plane_effort_l1=float(l1),
+        plane_effort_reference_speed_mps=None if l1_speed is None else float(l1_speed),
+        depth_band_bonus=None if band is None else DepthBandBonusConfig(**band),
+        policy_kwargs=policy_kwargs,
+        algo_kwargs=entry,
+    )
 
 
 def _integer(where: str, name: str, value: Any) -> int:
@@ -363,7 +398,9 @@ def _env_kwargs(where: str, value: Any) -> dict[str, Any]:
     known = set(inspect.signature(DivePlaneEnv.__init__).parameters) - {"self", "render_mode"}
     unknown = set(value) - known
     if unknown:
-        raise ValueError(f"{where}: unknown env_kwargs {sorted(unknown)}: DivePlaneEnv's arguments are {sorted(known)}")
+        raise ValueError(
+            f"{where}: unknown env_kwargs {sorted(unknown)}: DivePlaneEnv's arguments are {sorted(known)}"
+        )
     return dict(value)
 
 
@@ -381,11 +418,13 @@ def _linear_start(where: str, value: str) -> float:
     try:
         if not value.startswith(prefix):
             raise ValueError
-        start = float(value[len(prefix):])
+        start = float(value[len(prefix) :])
         if not (math.isfinite(start) and start > 0):
             raise ValueError
     except ValueError:
-        raise ValueError(f"{where}: learning_rate={value!r} is invalid: must be a number or 'lin_<number > 0>'") from None
+        raise ValueError(
+            f"{where}: learning_rate={value!r} is invalid: must be a number or 'lin_<number > 0>'"
+        ) from None
     return start
 
 
@@ -403,7 +442,9 @@ def parse_overrides(items: list[str]) -> dict[str, Any]:
             out[key.strip()] = yaml.safe_load(text)
         except yaml.YAMLError as exc:
             problem = _yaml_problem(exc)
-            raise ValueError(f"--hyperparams {item!r} is invalid: the value must be YAML ({problem})") from None
+            raise ValueError(
+                f"--hyperparams {item!r} is invalid: the value must be YAML ({problem})"
+            ) from None
     return out
 
 
@@ -417,8 +458,10 @@ def read_yaml_file(path: Path) -> Any:
     try:
         return yaml.safe_load(path.read_text(encoding="utf-8"))
     except UnicodeDecodeError as exc:
-        raise ValueError(f"{str(path)!r} is not UTF-8 text (byte {exc.object[exc.start]:#04x} at position "
-                         f"{exc.start}): must be a YAML file") from None
+        raise ValueError(
+            f"{str(path)!r} is not UTF-8 text (byte {exc.object[exc.start]:#04x} at position "
+            f"{exc.start}): must be a YAML file"
+        ) from None
     except yaml.YAMLError as exc:
         raise ValueError(f"{str(path)!r} is not valid YAML: {_yaml_problem(exc)}") from None
 
@@ -444,8 +487,12 @@ def model_kwargs(config: AgentConfig) -> dict[str, Any]:
     if "activation_fn" in policy_kwargs:
         from torch import nn
 
-        policy_kwargs["activation_fn"] = {"tanh": nn.Tanh, "relu": nn.ReLU, "elu": nn.ELU,
-                                          "leaky_relu": nn.LeakyReLU}[policy_kwargs["activation_fn"]]
+        policy_kwargs["activation_fn"] = {
+            "tanh": nn.Tanh,
+            "relu": nn.ReLU,
+            "elu": nn.ELU,
+            "leaky_relu": nn.LeakyReLU,
+        }[policy_kwargs["activation_fn"]]
     if policy_kwargs:
         kwargs["policy_kwargs"] = policy_kwargs
     return kwargs

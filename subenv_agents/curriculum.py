@@ -42,7 +42,9 @@ STATE_FILE = "curriculum.json"
 """Written into the run folder at every advance, so a resumed run continues at its stage."""
 
 
-def stage_scenarios(base: Scenario, config: CurriculumConfig, vehicle: Vehicle, alpha: float = 0.0) -> list[Scenario]:
+def stage_scenarios(
+    base: Scenario, config: CurriculumConfig, vehicle: Vehicle, alpha: float = 0.0
+) -> list[Scenario]:
     """The scenarios of the stages, then ``base`` (the environment's own scenario) as the last one.
 
     Stage k draws u / u_cr uniformly from [low_k, high_0] (its own band and every easier one, so
@@ -57,23 +59,25 @@ def stage_scenarios(base: Scenario, config: CurriculumConfig, vehicle: Vehicle, 
     out = []
     for k, stage in enumerate(stages):
         fraction = k / (len(stages) - 1) if len(stages) > 1 else 1.0
-        out.append(Scenario(
-            name="Curriculum" + "".join(part.capitalize() for part in stage.name.split("_")),
-            description=f"Curriculum stage {k + 1}/{len(stages)} ({stage.name}): u/u_cr in "
-                        f"[{stage.ratio_low:g}, {top:g}]",
-            speed_ratio=(stage.ratio_low, top),
-            depth_command_m=(8.0, 15.0),
-            initial_depth_offset_m=(-2.0, 2.0),
-            initial_pitch_rad=(-0.05, 0.05),
-            z_GB_scale=base.z_GB_scale,
-            x_GB_m=(0.0, fraction * config.max_x_GB_m),
-            x_GB_sign_random=True,
-            excess_buoyancy_fraction=(0.0, fraction * config.max_excess_buoyancy_fraction),
-            crossflow_drag=base.crossflow_drag,
-            sensor_noise=base.sensor_noise,
-            disturbance_std_N=base.disturbance_std_N,
-            duration_s=600.0,
-        ))
+        out.append(
+            Scenario(
+                name="Curriculum" + "".join(part.capitalize() for part in stage.name.split("_")),
+                description=f"Curriculum stage {k + 1}/{len(stages)} ({stage.name}): u/u_cr in "
+                f"[{stage.ratio_low:g}, {top:g}]",
+                speed_ratio=(stage.ratio_low, top),
+                depth_command_m=(8.0, 15.0),
+                initial_depth_offset_m=(-2.0, 2.0),
+                initial_pitch_rad=(-0.05, 0.05),
+                z_GB_scale=base.z_GB_scale,
+                x_GB_m=(0.0, fraction * config.max_x_GB_m),
+                x_GB_sign_random=True,
+                excess_buoyancy_fraction=(0.0, fraction * config.max_excess_buoyancy_fraction),
+                crossflow_drag=base.crossflow_drag,
+                sensor_noise=base.sensor_noise,
+                disturbance_std_N=base.disturbance_std_N,
+                duration_s=600.0,
+            )
+        )
     out.append(base)
     return out
 
@@ -133,8 +137,14 @@ class CurriculumCallback(BaseCallback):
     ``curriculum/success_rate``; writes :data:`STATE_FILE` into ``state_dir`` at every advance.
     """
 
-    def __init__(self, scenarios: list[Scenario], config: CurriculumConfig, state_dir: str | Path | None = None,
-                 stage: int = 0, verbose: int = 0) -> None:
+    def __init__(
+        self,
+        scenarios: list[Scenario],
+        config: CurriculumConfig,
+        state_dir: str | Path | None = None,
+        stage: int = 0,
+        verbose: int = 0,
+    ) -> None:
         super().__init__(verbose)
         self.scenarios = scenarios
         self.schedule = CurriculumSchedule(len(scenarios), config.threshold, config.window, stage)
@@ -167,9 +177,15 @@ class CurriculumCallback(BaseCallback):
             if self._episode_stage[i] == self.schedule.stage:
                 # Episodes start at time 0. Their reset sample, not seen here, lies in the hold
                 # window only for an episode no longer than the window (the stages last 600 s).
-                terminated = not info.get("TimeLimit.truncated", False) or bool(info.get("termination_reason"))
-                success = episode_success(terminated=terminated, start_s=0.0, end_s=float(times[i]),
-                                          last_outside_s=float(self._last_violation_s[i]))
+                terminated = not info.get("TimeLimit.truncated", False) or bool(
+                    info.get("termination_reason")
+                )
+                success = episode_success(
+                    terminated=terminated,
+                    start_s=0.0,
+                    end_s=float(times[i]),
+                    last_outside_s=float(self._last_violation_s[i]),
+                )
                 if self.schedule.record(success):
                     self._advance()
             self._episode_stage[i] = drawn_stage
@@ -185,7 +201,9 @@ class CurriculumCallback(BaseCallback):
         self.training_env.env_method("set_scenario", self.scenarios[stage])
         self.advances.append((self.num_timesteps, stage))
         if self.verbose:
-            tqdm.write(f"curriculum: stage {stage} ({self.scenarios[stage].name}) at {self.num_timesteps} steps")
+            tqdm.write(
+                f"curriculum: stage {stage} ({self.scenarios[stage].name}) at {self.num_timesteps} steps"
+            )
         if self.state_dir is not None:
             write_state(self.state_dir, stage, self.advances, self.start_stage)
 
@@ -194,8 +212,10 @@ def write_state(state_dir: Path, stage: int, advances: list[tuple[int, int]], st
     """Write :data:`STATE_FILE` completely or not at all: the stage now, the stage the run started at
     and the (timestep, new stage) of every advance since."""
     state_dir.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(state_dir / STATE_FILE, json.dumps({"stage": stage, "start_stage": start_stage,
-                                                          "advances": advances}) + "\n")
+    atomic_write_text(
+        state_dir / STATE_FILE,
+        json.dumps({"stage": stage, "start_stage": start_stage, "advances": advances}) + "\n",
+    )
 
 
 def read_stage(state_dir: Path, timestep: int | None = None) -> int:

@@ -40,11 +40,20 @@ def agent_controllers(specs: Sequence[str]) -> list[AgentController]:
 def main(argv: Sequence[str] | None = None) -> int:
     from subenv.evaluation import DEFAULT_SEED, run_comparison
 
-    parser = argparse.ArgumentParser(prog="python -m subenv_agents.evaluate", description=__doc__.split("\n\n")[0])
-    parser.add_argument("agents", nargs="+", metavar="[NAME=]PATH", help="run folders, model folders or model files")
-    parser.add_argument("--against", default="reversal_aware",
-                        help="comma-separated registered controllers to compare with ('' for none; default: %(default)s)")
-    parser.add_argument("--suite", default="default", help="suite name or comma-separated scenarios (default: %(default)s)")
+    parser = argparse.ArgumentParser(
+        prog="python -m subenv_agents.evaluate", description=__doc__.split("\n\n")[0]
+    )
+    parser.add_argument(
+        "agents", nargs="+", metavar="[NAME=]PATH", help="run folders, model folders or model files"
+    )
+    parser.add_argument(
+        "--against",
+        default="reversal_aware",
+        help="comma-separated registered controllers to compare with ('' for none; default: %(default)s)",
+    )
+    parser.add_argument(
+        "--suite", default="default", help="suite name or comma-separated scenarios (default: %(default)s)"
+    )
     parser.add_argument("--episodes", type=int, help="episodes per scenario (default: the suite's)")
     parser.add_argument("--seed", type=int, default=DEFAULT_SEED, help="base seed (default: %(default)s)")
     parser.add_argument("--out", help="results folder (default: results/evaluation/agents-<date-time>)")
@@ -56,12 +65,22 @@ def main(argv: Sequence[str] | None = None) -> int:
         controllers += [name for name in args.against.split(",") if name]
         suite = args.suite.split(",") if "," in args.suite else args.suite
         out = args.out or f"results/evaluation/agents-{time.strftime('%Y%m%d-%H%M%S')}"
-        comparison = run_comparison(controllers, suite, args.episodes, out, overwrite=args.force, seed=args.seed,
-                                    progress=sys.stderr.isatty(), plots=not args.no_plots)
+        comparison = run_comparison(
+            controllers,
+            suite,
+            args.episodes,
+            out,
+            overwrite=args.force,
+            seed=args.seed,
+            progress=sys.stderr.isatty(),
+            plots=not args.no_plots,
+        )
     except (ValueError, FileExistsError, FileNotFoundError) as exc:
         raise SystemExit(f"subenv_agents.evaluate: {exc}") from None
     print(comparison.leaderboard)
-    print(f"\n{len(comparison.results)} episodes in {comparison.elapsed_s:.1f} s; results in {comparison.out_dir}/")
+    print(
+        f"\n{len(comparison.results)} episodes in {comparison.elapsed_s:.1f} s; results in {comparison.out_dir}/"
+    )
     return 0
 
 

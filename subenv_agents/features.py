@@ -91,7 +91,9 @@ class DepthIntegralVecEnv(VecEnvWrapper):  # type: ignore[misc]
             terminal = infos[i].get("terminal_observation")
             if terminal is not None:
                 value = self.integral.peek(i, terminal)
-                infos[i]["terminal_observation"] = np.append(terminal, np.asarray(value, dtype=terminal.dtype))
+                infos[i]["terminal_observation"] = np.append(
+                    terminal, np.asarray(value, dtype=terminal.dtype)
+                )
         self.integral.update(obs)
         self.integral.reset(dones)  # those observations start new episodes: I_0 = 0
         return self.integral.append(obs, self.integral.value), rewards, dones, infos

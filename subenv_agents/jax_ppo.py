@@ -115,25 +115,50 @@ class PPOConfig:
     """Seeds the table's episodes (``seed``, ``seed + 1``, ...) and the training's key."""
 
     def __post_init__(self) -> None:
-        for name in ("total_timesteps", "num_envs", "num_steps", "update_epochs", "num_minibatches", "episodes"):
+        for name in (
+            "total_timesteps",
+            "num_envs",
+            "num_steps",
+            "update_epochs",
+            "num_minibatches",
+            "episodes",
+        ):
             check.integer(name, getattr(self, name), 1)
         check.integer("seed", self.seed, 0)
         for name in ("lr", "max_grad_norm"):
             check.positive(name, getattr(self, name))
         for name in ("gamma", "gae_lambda"):
             value = getattr(self, name)
-            check.require(name, value, isinstance(value, (int, float)) and 0.0 <= value <= 1.0, "a number in [0, 1]")
+            check.require(
+                name, value, isinstance(value, (int, float)) and 0.0 <= value <= 1.0, "a number in [0, 1]"
+            )
         for name in ("clip_eps", "ent_coef", "vf_coef"):
             value = getattr(self, name)
-            check.require(name, value, isinstance(value, (int, float)) and math.isfinite(value) and value >= 0.0,
-                          "a finite number >= 0")
-        check.require("hidden", self.hidden, len(self.hidden) > 0 and all(
-            isinstance(w, int) and w > 0 for w in self.hidden), "a non-empty tuple of positive widths")
+            check.require(
+                name,
+                value,
+                isinstance(value, (int, float)) and math.isfinite(value) and value >= 0.0,
+                "a finite number >= 0",
+            )
+        check.require(
+            "hidden",
+            self.hidden,
+            len(self.hidden) > 0 and all(isinstance(w, int) and w > 0 for w in self.hidden),
+            "a non-empty tuple of positive widths",
+        )
         batch = self.num_envs * self.num_steps
-        check.require("num_minibatches", self.num_minibatches, batch % self.num_minibatches == 0,
-                      f"a divisor of num_envs * num_steps = {batch}")
-        check.require("total_timesteps", self.total_timesteps, self.total_timesteps >= batch,
-                      f"at least num_envs * num_steps = {batch} (one update)")
+        check.require(
+            "num_minibatches",
+            self.num_minibatches,
+            batch % self.num_minibatches == 0,
+            f"a divisor of num_envs * num_steps = {batch}",
+        )
+        check.require(
+            "total_timesteps",
+            self.total_timesteps,
+            self.total_timesteps >= batch,
+            f"at least num_envs * num_steps = {batch} (one update)",
+        )
         object.__setattr__(self, "hidden", tuple(self.hidden))
         object.__setattr__(self, "env_kwargs", dict(self.env_kwargs))
         check.require("env_id", self.env_id, self.env_id in subenv.envs.env_ids(), "a registered subenv id")
@@ -154,16 +179,24 @@ def init_network(key: jax.Array, obs_dim: int, act_dim: int, hidden: Sequence[in
 
     def mlp(key: jax.Array, sizes: Sequence[int], last_scale: float) -> list[dict[str, jax.Array]]:
         layers = []
-        for i, (k, n_in, n_out) in enumerate(zip(jax.random.split(key, len(sizes) - 1), sizes[:-1], sizes[1:])):
+        for i, (k, n_in, n_out) in enumerate(
+            zip(jax.random.split(key, len(sizes) - 1), sizes[:-1], sizes[1:])
+        ):
             scale = last_scale if i == len(sizes) - 2 else math.sqrt(2.0)
-            layers.append({"w": jax.nn.initializers.orthogonal(scale)(k, (n_in, n_out), jnp.float32),
-                           "b": jnp.zeros(n_out, jnp.float32)})
+            layers.append(
+                {
+                    "w": jax.nn.initializers.orthogonal(scale)(k, (n_in, n_out), jnp.float32),
+                    "b": jnp.zeros(n_out, jnp.float32),
+                }
+            )
         return layers
 
     key_actor, key_critic = jax.random.split(key)
-    return {"actor": mlp(key_actor, (obs_dim, *hidden, act_dim), 0.01),
-            "critic": mlp(key_critic, (obs_dim, *hidden, 1), 1.0),
-            "log_std": jnp.zeros(act_dim, jnp.float32)}
+    return {
+        "actor": mlp(key_actor, (obs_dim, *hidden, act_dim), 0.01),
+        "critic": mlp(key_critic, (obs_dim, *hidden, 1), 1.0),
+        "log_std": jnp.zeros(act_dim, jnp.float32),
+    }
 
 
 def _mlp(layers: Sequence[Mapping[str, jax.Array]], x: jax.Array) -> jax.Array:
@@ -182,7 +215,7 @@ def _value(network: Mapping[str, Any], obs_normalized: jax.Array) -> jax.Array:
 
 
 def _log_prob(mean: jax.Array, log_std: jax.Array, action: jax.Array) -> jax.Array:
-    """log N(action; mean, exp(log_std)^2), summed over the action's components."""
+    """Log N(action; mean, exp(log_std)^2), summed over the action's components."""
     z = (action - mean) * jnp.exp(-log_std)
     return jnp.sum(-0.5 * z * z - log_std - 0.5 * _LOG_2PI, axis=-1)
 
@@ -247,8 +280,9 @@ class TrainState(NamedTuple):
     key: jax.Array
 
 
-def make_train(config: PPOConfig, progress: Callable[[int, Metrics], None] | None = None
-               ) -> tuple[Callable[[jax.Array], tuple[TrainState, Metrics]], sj.DivePlaneJaxEnv]:
+def make_train(
+    config: PPOConfig, progress: Callable[[int, Metrics], None] | None = None
+) -> tuple[Callable[[jax.Array], tuple[TrainState, Metrics]], sj.DivePlaneJaxEnv]:
     """``train(key) -> (final state, metrics per update)``, to be ``jax.jit``-ed whole, and the
     environment it trains on. ``progress(update, metrics)`` is called from inside the program after
     every update (``jax.debug.callback``), if given."""
@@ -256,8 +290,11 @@ def make_train(config: PPOConfig, progress: Callable[[int, Metrics], None] | Non
     n, steps = config.num_envs, config.num_steps
     obs_dim, act_dim = env.observation_space().shape[0], env.num_actions
     updates = config.num_updates
-    lr: Any = (optax.linear_schedule(config.lr, 0.0, updates * config.update_epochs * config.num_minibatches)
-               if config.anneal_lr else config.lr)
+    lr: Any = (
+        optax.linear_schedule(config.lr, 0.0, updates * config.update_epochs * config.num_minibatches)
+        if config.anneal_lr
+        else config.lr
+    )
     optimizer = optax.chain(optax.clip_by_global_norm(config.max_grad_norm), optax.adam(lr, eps=1e-5))
     step_envs = jax.vmap(env.step, in_axes=(0, 0, 0, None))
     gamma, lam = config.gamma, config.gae_lambda
@@ -268,20 +305,37 @@ def make_train(config: PPOConfig, progress: Callable[[int, Metrics], None] | Non
         mean, value = _mlp(state.network["actor"], obs), _value(state.network, obs)
         log_std = state.network["log_std"]
         action = mean + jnp.exp(log_std) * jax.random.normal(key_action, mean.shape)
-        next_obs, env_state, reward, done, info = step_envs(jax.random.split(key_env, n), state.env_state, action,
-                                                            params)
+        next_obs, env_state, reward, done, info = step_envs(
+            jax.random.split(key_env, n), state.env_state, action, params
+        )
         returns = state.returns * gamma + reward
-        return_stats = state.return_stats.update(returns[:, None]) if config.normalize_reward else state.return_stats
+        return_stats = (
+            state.return_stats.update(returns[:, None]) if config.normalize_reward else state.return_stats
+        )
         scaled = reward / jnp.sqrt(return_stats.var[0] + 1e-8) if config.normalize_reward else reward
-        rollout = Rollout(obs, action, _log_prob(mean, log_std, action), value, scaled.astype(jnp.float32),
-                          info["terminated"] > 0.0, done)
-        state = state._replace(env_state=env_state, obs=next_obs, key=key, return_stats=return_stats,
-                               returns=jnp.where(done, 0.0, returns),
-                               obs_stats=state.obs_stats.update(next_obs))
+        rollout = Rollout(
+            obs,
+            action,
+            _log_prob(mean, log_std, action),
+            value,
+            scaled.astype(jnp.float32),
+            info["terminated"] > 0.0,
+            done,
+        )
+        state = state._replace(
+            env_state=env_state,
+            obs=next_obs,
+            key=key,
+            return_stats=return_stats,
+            returns=jnp.where(done, 0.0, returns),
+            obs_stats=state.obs_stats.update(next_obs),
+        )
         return state, (rollout, reward)
 
     def advantages(rollout: Rollout, last_value: jax.Array) -> tuple[jax.Array, jax.Array]:
-        def back(carry: tuple[jax.Array, jax.Array], t: Rollout) -> tuple[tuple[jax.Array, jax.Array], jax.Array]:
+        def back(
+            carry: tuple[jax.Array, jax.Array], t: Rollout
+        ) -> tuple[tuple[jax.Array, jax.Array], jax.Array]:
             gae, next_value = carry
             # The next state's value; a truncated episode's last state stands in for its final one.
             bootstrap = jnp.where(t.terminated, 0.0, jnp.where(t.done, t.value, next_value))
@@ -297,7 +351,9 @@ def make_train(config: PPOConfig, progress: Callable[[int, Metrics], None] | Non
         log_std = network["log_std"]
         ratio = jnp.exp(_log_prob(mean, log_std, batch.action) - batch.log_prob)
         adv = (adv - adv.mean()) / (adv.std() + 1e-8)
-        actor = -jnp.minimum(ratio * adv, jnp.clip(ratio, 1 - config.clip_eps, 1 + config.clip_eps) * adv).mean()
+        actor = -jnp.minimum(
+            ratio * adv, jnp.clip(ratio, 1 - config.clip_eps, 1 + config.clip_eps) * adv
+        ).mean()
         clipped = batch.value + jnp.clip(value - batch.value, -config.clip_eps, config.clip_eps)
         critic = 0.5 * jnp.maximum((value - target) ** 2, (clipped - target) ** 2).mean()
         entropy = jnp.sum(log_std + 0.5 * (_LOG_2PI + 1.0))
@@ -314,9 +370,12 @@ def make_train(config: PPOConfig, progress: Callable[[int, Metrics], None] | Non
             key, key_perm = jax.random.split(key)
             order = jax.random.permutation(key_perm, n * steps)
             minibatches = jax.tree_util.tree_map(
-                lambda x: x[order].reshape((config.num_minibatches, -1, *x.shape[1:])), batch)
+                lambda x: x[order].reshape((config.num_minibatches, -1, *x.shape[1:])), batch
+            )
 
-            def minibatch(carry: tuple[Any, Any], mb: tuple[Rollout, jax.Array, jax.Array]) -> tuple[Any, None]:
+            def minibatch(
+                carry: tuple[Any, Any], mb: tuple[Rollout, jax.Array, jax.Array]
+            ) -> tuple[Any, None]:
                 network, opt_state = carry
                 grads = jax.grad(loss)(network, *mb)
                 changes, opt_state = optimizer.update(grads, opt_state, network)
@@ -326,8 +385,9 @@ def make_train(config: PPOConfig, progress: Callable[[int, Metrics], None] | Non
             return (network, opt_state, key), None
 
         key, key_epochs = jax.random.split(state.key)
-        (network, opt_state, _), _ = jax.lax.scan(epoch, (state.network, state.opt_state, key_epochs), None,
-                                                  config.update_epochs)
+        (network, opt_state, _), _ = jax.lax.scan(
+            epoch, (state.network, state.opt_state, key_epochs), None, config.update_epochs
+        )
         state = state._replace(network=network, opt_state=opt_state, key=key)
         metrics = Metrics(rewards.mean(), rollout.done.sum(), rollout.terminated.sum())
         if progress is not None:
@@ -338,8 +398,16 @@ def make_train(config: PPOConfig, progress: Callable[[int, Metrics], None] | Non
         key, key_network, key_reset = jax.random.split(key, 3)
         network = init_network(key_network, obs_dim, act_dim, config.hidden)
         obs, env_state = jax.vmap(env.reset, in_axes=(0, None))(jax.random.split(key_reset, n), params)
-        state = TrainState(network, optimizer.init(network), RunningStats.empty((obs_dim,)).update(obs),
-                           RunningStats.empty((1,)), jnp.zeros(n), env_state, obs, key)
+        state = TrainState(
+            network,
+            optimizer.init(network),
+            RunningStats.empty((obs_dim,)).update(obs),
+            RunningStats.empty((1,)),
+            jnp.zeros(n),
+            env_state,
+            obs,
+            key,
+        )
         return jax.lax.scan(update, state, jnp.arange(updates))
 
     return train, env
@@ -349,8 +417,15 @@ def make_train(config: PPOConfig, progress: Callable[[int, Metrics], None] | Non
 _FILES = ("network.npz", "config.json", "train.json")
 
 
-def save(path: str | Path, config: PPOConfig, network: Any, obs_stats: RunningStats, record: Mapping[str, Any],
-         overwrite: bool = False, texts: Mapping[str, str] | None = None) -> Path:
+def save(
+    path: str | Path,
+    config: PPOConfig,
+    network: Any,
+    obs_stats: RunningStats,
+    record: Mapping[str, Any],
+    overwrite: bool = False,
+    texts: Mapping[str, str] | None = None,
+) -> Path:
     """Write a model folder: the network and the observation statistics (``network.npz``, arrays by
     their path in the network, ``obs_mean``/``obs_var``), the settings (``config.json``), the
     training's record (``train.json``) and ``texts`` (file name: text). The folder is complete or
@@ -379,8 +454,13 @@ def load(path: str | Path) -> tuple[PPOConfig, dict[str, Any], RunningStats]:
     with np.load(folder / "network.npz") as data:
         arrays = {name: data[name] for name in data.files}
     depth = len(config.hidden) + 1
-    network = {part: [{"w": jnp.asarray(arrays[f"{part}/{i}/w"]), "b": jnp.asarray(arrays[f"{part}/{i}/b"])}
-                      for i in range(depth)] for part in ("actor", "critic")}
+    network = {
+        part: [
+            {"w": jnp.asarray(arrays[f"{part}/{i}/w"]), "b": jnp.asarray(arrays[f"{part}/{i}/b"])}
+            for i in range(depth)
+        ]
+        for part in ("actor", "critic")
+    }
     network["log_std"] = jnp.asarray(arrays["log_std"])
     stats = RunningStats(jnp.asarray(arrays["obs_mean"]), jnp.asarray(arrays["obs_var"]), jnp.asarray(0.0))
     return config, network, stats
@@ -439,7 +519,9 @@ def shipped() -> JaxPPOController:
 
 # --- the command line ----------------------------------------------------------------------------------
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m subenv_agents.jax_ppo", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m subenv_agents.jax_ppo", description=__doc__.split("\n\n")[0]
+    )
     parser.add_argument("--out", required=True, help="the model folder to write (complete or absent)")
     parser.add_argument("--force", action="store_true", help="replace a model folder this command wrote")
     defaults = PPOConfig()
@@ -448,15 +530,29 @@ def main(argv: Sequence[str] | None = None) -> int:
             continue
         value = getattr(defaults, field.name)
         kind = (lambda s: s.lower() in ("1", "true", "yes")) if isinstance(value, bool) else type(value)
-        parser.add_argument(f"--{field.name.replace('_', '-')}", type=kind, default=value,
-                            help=f"(default: {value})")
-    parser.add_argument("--hidden", type=int, nargs="+", default=list(defaults.hidden),
-                        help=f"hidden layer widths (default: {' '.join(map(str, defaults.hidden))})")
-    parser.add_argument("--env-kwargs", type=json.loads, default={},
-                        help='the environment\'s arguments as JSON, e.g. \'{"control": "independent"}\'')
-    parser.add_argument("--eval-episodes", type=int, default=100,
-                        help="episodes per scenario of the evaluation written with the model (evaluation.json, "
-                             "MODEL_CARD.md), next to the reversal_aware baseline; 0: none (default: 100)")
+        parser.add_argument(
+            f"--{field.name.replace('_', '-')}", type=kind, default=value, help=f"(default: {value})"
+        )
+    parser.add_argument(
+        "--hidden",
+        type=int,
+        nargs="+",
+        default=list(defaults.hidden),
+        help=f"hidden layer widths (default: {' '.join(map(str, defaults.hidden))})",
+    )
+    parser.add_argument(
+        "--env-kwargs",
+        type=json.loads,
+        default={},
+        help='the environment\'s arguments as JSON, e.g. \'{"control": "independent"}\'',
+    )
+    parser.add_argument(
+        "--eval-episodes",
+        type=int,
+        default=100,
+        help="episodes per scenario of the evaluation written with the model (evaluation.json, "
+        "MODEL_CARD.md), next to the reversal_aware baseline; 0: none (default: 100)",
+    )
     args = parser.parse_args(argv)
     settings = {f.name: getattr(args, f.name) for f in dataclasses.fields(PPOConfig)}
     try:
@@ -465,35 +561,52 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ValueError as exc:
         parser.error(str(exc))
     total = config.num_updates * config.num_envs * config.num_steps
-    print(f"PPO on {config.env_id} ({jax.devices()[0].platform}): {config.num_updates} updates of "
-          f"{config.num_envs} envs x {config.num_steps} steps = {total:,} env-steps", flush=True)
+    print(
+        f"PPO on {config.env_id} ({jax.devices()[0].platform}): {config.num_updates} updates of "
+        f"{config.num_envs} envs x {config.num_steps} steps = {total:,} env-steps",
+        flush=True,
+    )
     start = time.perf_counter()
     every = max(1, config.num_updates // 20)
 
     def progress(index: Any, metrics: Metrics) -> None:
         k = int(index) + 1
         if k % every == 0 or k == config.num_updates:
-            print(f"  update {k}/{config.num_updates}: {k * config.num_envs * config.num_steps:,} env-steps, "
-                  f"{time.perf_counter() - start:.0f} s; reward/step {float(metrics.reward):.3f}, "
-                  f"episodes ended {int(metrics.episodes)} ({int(metrics.terminated)} terminated)", flush=True)
+            print(
+                f"  update {k}/{config.num_updates}: {k * config.num_envs * config.num_steps:,} env-steps, "
+                f"{time.perf_counter() - start:.0f} s; reward/step {float(metrics.reward):.3f}, "
+                f"episodes ended {int(metrics.episodes)} ({int(metrics.terminated)} terminated)",
+                flush=True,
+            )
 
     train, _ = make_train(config, progress)
     state, metrics = jax.block_until_ready(jax.jit(train)(jax.random.key(config.seed)))
     wall = time.perf_counter() - start
-    record = {"env_steps": total, "wall_time_s": round(wall, 1), "env_steps_per_s": round(total / wall),
-              "device": str(jax.devices()[0]), "machine": f"{platform.machine()}, {os.cpu_count()} cores",
-              "versions": {"jax": jax.__version__, "optax": optax.__version__, "python": platform.python_version()},
-              "command": shlex.join(["python", "-m", "subenv_agents.jax_ppo",
-                                     *(sys.argv[1:] if argv is None else argv)]),
-              "final_reward_per_step": float(metrics.reward[-1])}
-    print(f"trained: {total:,} env-steps in {wall:.0f} s ({total / wall:,.0f}/s, compile included)", flush=True)
+    record = {
+        "env_steps": total,
+        "wall_time_s": round(wall, 1),
+        "env_steps_per_s": round(total / wall),
+        "device": str(jax.devices()[0]),
+        "machine": f"{platform.machine()}, {os.cpu_count()} cores",
+        "versions": {"jax": jax.__version__, "optax": optax.__version__, "python": platform.python_version()},
+        "command": shlex.join(
+            ["python", "-m", "subenv_agents.jax_ppo", *(sys.argv[1:] if argv is None else argv)]
+        ),
+        "final_reward_per_step": float(metrics.reward[-1]),
+    }
+    print(
+        f"trained: {total:,} env-steps in {wall:.0f} s ({total / wall:,.0f}/s, compile included)", flush=True
+    )
     texts = {}
     if args.eval_episodes > 0:
         name = Path(args.out).name
-        evaluation = evaluation_of(JaxPPOController.of(config, state.network, state.obs_stats, name),
-                                   args.eval_episodes)
-        texts = {"evaluation.json": json.dumps(evaluation, indent=2) + "\n",
-                 "MODEL_CARD.md": model_card(name, config, record, evaluation)}
+        evaluation = evaluation_of(
+            JaxPPOController.of(config, state.network, state.obs_stats, name), args.eval_episodes
+        )
+        texts = {
+            "evaluation.json": json.dumps(evaluation, indent=2) + "\n",
+            "MODEL_CARD.md": model_card(name, config, record, evaluation),
+        }
         print(table(evaluation["suite"], REVERSAL_SCENARIOS))
     save(args.out, config, state.network, state.obs_stats, record, overwrite=args.force, texts=texts)
     print(f"wrote {args.out}")
@@ -505,8 +618,9 @@ def evaluation_of(controller: JaxPPOController, episodes: int) -> dict[str, Any]
     (the harness of ``subenv evaluate``, seeds 10000 + i): ``{"episodes", "suite", "target_met", "target"}``."""
     from subenv.evaluation import evaluate, make_controller
 
-    results = evaluate([controller, make_controller(BASELINE)], list(REVERSAL_SCENARIOS), episodes=episodes,
-                       progress=False)
+    results = evaluate(
+        [controller, make_controller(BASELINE)], list(REVERSAL_SCENARIOS), episodes=episodes, progress=False
+    )
     suite = evaluation_record(results)
     met, sentence = target_met(suite, controller.name)
     return {"episodes": episodes, "suite": suite, "target_met": met, "target": sentence}
@@ -517,8 +631,11 @@ def model_card(name: str, config: PPOConfig, record: Mapping[str, Any], evaluati
     from subenv.evaluation import DEFAULT_SEED
 
     kwargs = config.env_kwargs
-    rewards = ("rewards scaled by the running deviation of the discounted return" if config.normalize_reward
-               else "rewards as the environment gives them")
+    rewards = (
+        "rewards scaled by the running deviation of the discounted return"
+        if config.normalize_reward
+        else "rewards as the environment gives them"
+    )
     return f"""# Model card: `{name}` (PPO in one JAX program on `{config.env_id}`)
 
 A PPO agent trained by `subenv_agents.jax_ppo` (PureJaxRL's recipe: the environments, the rollouts and

@@ -28,9 +28,23 @@ from gymnasium import spaces
 from subenv.evaluation.results import atomic_write_bytes
 from subenv_agents.config import AgentConfig, load_config, read_yaml_file
 
-__all__ = ["CHECKPOINT_DIR", "CONFIG_FILE", "MODEL_FILE", "RUN_ID_ATTRIBUTE", "SELECTED_DIR", "VECNORMALIZE_FILE",
-           "NumpyActor", "TrainedAgent", "load_agent", "mark_run", "model_folder", "save_model", "save_statistics",
-           "statistics_file", "training_run"]
+__all__ = [
+    "CHECKPOINT_DIR",
+    "CONFIG_FILE",
+    "MODEL_FILE",
+    "RUN_ID_ATTRIBUTE",
+    "SELECTED_DIR",
+    "VECNORMALIZE_FILE",
+    "NumpyActor",
+    "TrainedAgent",
+    "load_agent",
+    "mark_run",
+    "model_folder",
+    "save_model",
+    "save_statistics",
+    "statistics_file",
+    "training_run",
+]
 
 MODEL_FILE: Final = "model.zip"
 VECNORMALIZE_FILE: Final = "vecnormalize.pkl"
@@ -63,7 +77,9 @@ class NumpyActor:
             extractors.append(policy.actor.features_extractor)
         for extractor in extractors:
             if extractor is not None and type(extractor).__name__ != "FlattenExtractor":
-                raise NotImplementedError(f"NumpyActor supports MLP policies only, not {type(extractor).__name__}")
+                raise NotImplementedError(
+                    f"NumpyActor supports MLP policies only, not {type(extractor).__name__}"
+                )
         if hasattr(policy, "mlp_extractor"):  # PPO (ActorCriticPolicy)
             modules = [*policy.mlp_extractor.policy_net, policy.action_net]
             self.squashed = False
@@ -76,11 +92,18 @@ class NumpyActor:
         self.layers: list[tuple[str, np.ndarray | None, np.ndarray | None]] = []
         for module in modules:
             if isinstance(module, nn.Linear):
-                self.layers.append(("linear", module.weight.detach().cpu().numpy().T.astype(np.float64),
-                                    module.bias.detach().cpu().numpy().astype(np.float64)))
+                self.layers.append(
+                    (
+                        "linear",
+                        module.weight.detach().cpu().numpy().T.astype(np.float64),
+                        module.bias.detach().cpu().numpy().astype(np.float64),
+                    )
+                )
             elif isinstance(module, (nn.Tanh, nn.ReLU, nn.ELU, nn.LeakyReLU)):
                 slope = getattr(module, "negative_slope", getattr(module, "alpha", None))
-                self.layers.append((type(module).__name__.lower(), None if slope is None else np.float64(slope), None))
+                self.layers.append(
+                    (type(module).__name__.lower(), None if slope is None else np.float64(slope), None)
+                )
             elif not isinstance(module, (nn.Identity, nn.Flatten)):
                 raise NotImplementedError(f"NumpyActor does not know the layer {module!r}")
         space = model.action_space
@@ -139,8 +162,15 @@ class TrainedAgent:
         trained without observation normalisation)."""
         if stats is None:
             return cls(path, model, config, None, None, 10.0, 1e-8)
-        return cls(path, model, config, np.asarray(stats.obs_rms.mean, dtype=float),
-                   np.asarray(stats.obs_rms.var, dtype=float), float(stats.clip_obs), float(stats.epsilon))
+        return cls(
+            path,
+            model,
+            config,
+            np.asarray(stats.obs_rms.mean, dtype=float),
+            np.asarray(stats.obs_rms.var, dtype=float),
+            float(stats.clip_obs),
+            float(stats.epsilon),
+        )
 
     @property
     def observation_space(self) -> spaces.Box:
@@ -155,7 +185,9 @@ class TrainedAgent:
         obs = np.asarray(obs, dtype=np.float64)
         if self.obs_mean is None or self.obs_var is None:
             return obs
-        return np.clip((obs - self.obs_mean) / np.sqrt(self.obs_var + self.epsilon), -self.clip_obs, self.clip_obs)
+        return np.clip(
+            (obs - self.obs_mean) / np.sqrt(self.obs_var + self.epsilon), -self.clip_obs, self.clip_obs
+        )
 
     def predict(self, obs: np.ndarray) -> np.ndarray:
         """The deterministic action for an observation (shape (obs_dim,)) or a batch (n, obs_dim), as the
@@ -203,10 +235,16 @@ class TrainedAgent:
         features (the depth-error integral) itself, as the training environments do.
         """
         expected = self.observation_space if with_features else self.env_observation_space
-        for what, ours, theirs in (("observation", expected, env.observation_space),
-                                   ("action", self.action_space, env.action_space)):
-            same = (isinstance(theirs, spaces.Box) and theirs.shape == ours.shape
-                    and np.allclose(theirs.low, ours.low) and np.allclose(theirs.high, ours.high))
+        for what, ours, theirs in (
+            ("observation", expected, env.observation_space),
+            ("action", self.action_space, env.action_space),
+        ):
+            same = (
+                isinstance(theirs, spaces.Box)
+                and theirs.shape == ours.shape
+                and np.allclose(theirs.low, ours.low)
+                and np.allclose(theirs.high, ours.high)
+            )
             if not same:
                 raise ValueError(
                     f"the agent {str(self.path)!r} was trained on the {what} space {ours} "
@@ -248,12 +286,16 @@ def load_agent(path: str | Path, env: Any = None, device: str = "cpu") -> Traine
     path = Path(path)
     model_file = path / MODEL_FILE if path.is_dir() else path
     if not model_file.is_file():
-        raise FileNotFoundError(f"no trained model at {str(path)!r} (expected a folder with {MODEL_FILE} or a .zip file)")
+        raise FileNotFoundError(
+            f"no trained model at {str(path)!r} (expected a folder with {MODEL_FILE} or a .zip file)"
+        )
     run_dir = model_folder(model_file)
     config = read_config(run_dir / CONFIG_FILE)
     try:
         model = algorithm_class(config.algo).load(model_file, device=device)
-    except Exception as exc:  # SB3 fails in its own ways: AssertionError, TypeError, ValueError, zipfile errors
+    except (
+        Exception
+    ) as exc:  # SB3 fails in its own ways: AssertionError, TypeError, ValueError, zipfile errors
         raise ValueError(
             f"{str(model_file)!r} cannot be loaded ({type(exc).__name__}: {_one_line(exc)}): must be a complete "
             f"{config.algo.upper()} model saved by Stable-Baselines3, the algorithm {str(run_dir / CONFIG_FILE)!r} names"
@@ -262,13 +304,17 @@ def load_agent(path: str | Path, env: Any = None, device: str = "cpu") -> Traine
     stats = None
     if config.normalize is not None and config.normalize.norm_obs:
         if not stats_file.is_file():
-            raise FileNotFoundError(f"{str(model_file)!r} was trained with normalised observations, but its "
-                                    f"statistics {str(stats_file)!r} are missing")
+            raise FileNotFoundError(
+                f"{str(model_file)!r} was trained with normalised observations, but its "
+                f"statistics {str(stats_file)!r} are missing"
+            )
         stats = _read_statistics(stats_file)
         shape = np.shape(stats.obs_rms.mean)
         if shape != model.observation_space.shape:
-            raise ValueError(f"{str(stats_file)!r} has statistics of shape {shape}; the model observes "
-                             f"{model.observation_space.shape}")
+            raise ValueError(
+                f"{str(stats_file)!r} has statistics of shape {shape}; the model observes "
+                f"{model.observation_space.shape}"
+            )
         _check_same_run(model, model_file, stats, stats_file)
     agent = TrainedAgent.from_model(model_file, model, config, stats)
     if env is not None:
@@ -284,8 +330,10 @@ def _read_statistics(path: Path) -> Any:
         with path.open("rb") as f:
             stats = pickle.load(f)  # noqa: S301 - our own VecNormalize file, as SB3's VecNormalize.load does
     except Exception as exc:  # a truncated or foreign pickle fails with any of a dozen exception types
-        raise ValueError(f"{str(path)!r} cannot be read ({type(exc).__name__}: {_one_line(exc)}): must be "
-                         "VecNormalize statistics saved with the model") from exc
+        raise ValueError(
+            f"{str(path)!r} cannot be read ({type(exc).__name__}: {_one_line(exc)}): must be "
+            "VecNormalize statistics saved with the model"
+        ) from exc
     if not isinstance(stats, VecNormalize):
         raise ValueError(f"{str(path)!r} holds a {type(stats).__name__}: must be VecNormalize statistics")
     return stats
@@ -308,11 +356,17 @@ def _check_same_run(model: Any, model_file: Path, stats: Any, stats_file: Path) 
     # vars(): an unpickled VecNormalize has no wrapped env, and its __getattr__ would look there.
     ours, theirs = vars(model).get(RUN_ID_ATTRIBUTE), vars(stats).get(RUN_ID_ATTRIBUTE)
     if ours is None or theirs is None:
-        warnings.warn(f"{str(model_file)!r} or its statistics {str(stats_file)!r} were saved without a run id "
-                      "(by an older version): that they belong together cannot be checked", UserWarning, stacklevel=3)
+        warnings.warn(
+            f"{str(model_file)!r} or its statistics {str(stats_file)!r} were saved without a run id "
+            "(by an older version): that they belong together cannot be checked",
+            UserWarning,
+            stacklevel=3,
+        )
     elif ours != theirs:
-        raise ValueError(f"{str(stats_file)!r} holds the statistics of run {theirs}: must be those of the run of "
-                         f"{str(model_file)!r} ({ours}); a model needs the statistics it was trained with")
+        raise ValueError(
+            f"{str(stats_file)!r} holds the statistics of run {theirs}: must be those of the run of "
+            f"{str(model_file)!r} ({ours}); a model needs the statistics it was trained with"
+        )
 
 
 def _one_line(exc: BaseException) -> str:
@@ -361,7 +415,9 @@ def save_statistics(venv: Any, path: Path) -> None:
 def read_config(path: Path) -> AgentConfig:
     """The :class:`AgentConfig` a run wrote (``config.yml``: ``algo``, ``env_id`` and one entry)."""
     if not path.is_file():
-        raise FileNotFoundError(f"{str(path)!r} is missing: it says which algorithm and settings the model was trained with")
+        raise FileNotFoundError(
+            f"{str(path)!r} is missing: it says which algorithm and settings the model was trained with"
+        )
     document = read_yaml_file(path)
     try:
         algo, env_id = document["algo"], document["env_id"]

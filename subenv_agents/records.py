@@ -7,11 +7,25 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any, Final
 
-__all__ = ["BASELINE", "DYNAMICS_KWARGS", "REVERSAL_SCENARIOS", "check_harness_kwargs", "evaluation_record", "table",
-           "target_met"]
+__all__ = [
+    "BASELINE",
+    "DYNAMICS_KWARGS",
+    "REVERSAL_SCENARIOS",
+    "check_harness_kwargs",
+    "evaluation_record",
+    "table",
+    "target_met",
+]
 
 BASELINE: Final = "reversal_aware"
-DYNAMICS_KWARGS: Final = ("vehicle", "dt", "substeps", "plane_rate_limit_radps", "max_pitch_rad", "max_depth_error_m")
+DYNAMICS_KWARGS: Final = (
+    "vehicle",
+    "dt",
+    "substeps",
+    "plane_rate_limit_radps",
+    "max_pitch_rad",
+    "max_depth_error_m",
+)
 """Environment arguments that change what an agent sees or commands. The evaluation harness makes its
 environments with ``control`` and ``alpha`` only, the rest at their defaults (reward weights do not
 matter to it), so a model trained with any of these changed is refused as a controller."""
@@ -25,8 +39,10 @@ def check_harness_kwargs(env_kwargs: Mapping[str, Any], model: str) -> None:
     :data:`DYNAMICS_KWARGS` in its ``env_kwargs``."""
     changed = [k for k in DYNAMICS_KWARGS if k in env_kwargs]
     if changed:
-        raise ValueError(f"the {model} was trained with env_kwargs {changed} changed from the defaults the "
-                         "evaluation harness uses; evaluate it on its own environment instead")
+        raise ValueError(
+            f"the {model} was trained with env_kwargs {changed} changed from the defaults the "
+            "evaluation harness uses; evaluate it on its own environment instead"
+        )
 
 
 def evaluation_record(results: Sequence[Any]) -> dict[str, dict[str, dict[str, float]]]:
@@ -36,22 +52,29 @@ def evaluation_record(results: Sequence[Any]) -> dict[str, dict[str, dict[str, f
     out: dict[str, dict[str, dict[str, float]]] = {}
     for row in summarize(results):
         out.setdefault(row["controller"], {})[row["scenario"]] = {
-            "success_rate": row["success_rate"], "ci_low": row["success_ci_low"], "ci_high": row["success_ci_high"],
-            "plane_rms_rad": row["plane_rms_rad_mean"], "episodes": row["episodes"],
+            "success_rate": row["success_rate"],
+            "ci_low": row["success_ci_low"],
+            "ci_high": row["success_ci_high"],
+            "plane_rms_rad": row["plane_rms_rad_mean"],
+            "episodes": row["episodes"],
         }
     return out
 
 
 def table(record: dict[str, dict[str, dict[str, float]]], scenarios: Sequence[str]) -> str:
     """A Markdown table of ``record``'s success (95% Wilson interval) and plane RMS per scenario and controller."""
-    lines = ["| scenario | " + " | ".join(f"{c} success | {c} plane RMS [rad]" for c in record) + " |",
-             "|---|" + "---:|---:|" * len(record)]
+    lines = [
+        "| scenario | " + " | ".join(f"{c} success | {c} plane RMS [rad]" for c in record) + " |",
+        "|---|" + "---:|---:|" * len(record),
+    ]
     for s in scenarios:
         cells = []
         for rows in record.values():
             r = rows[s]
-            cells.append(f"{100 * r['success_rate']:.0f}% [{100 * r['ci_low']:.0f}, {100 * r['ci_high']:.0f}] | "
-                         f"{r['plane_rms_rad']:.4f}")
+            cells.append(
+                f"{100 * r['success_rate']:.0f}% [{100 * r['ci_low']:.0f}, {100 * r['ci_high']:.0f}] | "
+                f"{r['plane_rms_rad']:.4f}"
+            )
         lines.append(f"| {s} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
@@ -63,6 +86,8 @@ def target_met(record: dict[str, dict[str, dict[str, float]]], name: str) -> tup
         a, b = record[name][s], record[BASELINE][s]
         meets = a["success_rate"] >= b["success_rate"] and a["plane_rms_rad"] < b["plane_rms_rad"]
         ok &= meets
-        parts.append(f"{s}: {100 * a['success_rate']:.0f}% vs {100 * b['success_rate']:.0f}%, plane RMS "
-                     f"{a['plane_rms_rad']:.4f} vs {b['plane_rms_rad']:.4f} rad ({'met' if meets else 'not met'})")
+        parts.append(
+            f"{s}: {100 * a['success_rate']:.0f}% vs {100 * b['success_rate']:.0f}%, plane RMS "
+            f"{a['plane_rms_rad']:.4f} vs {b['plane_rms_rad']:.4f} rad ({'met' if meets else 'not met'})"
+        )
     return ok, "; ".join(parts)

@@ -101,16 +101,27 @@ class Plan:
             raise ValueError("timesteps={} is invalid: name at least one algorithm, e.g. {'ppo': 100000}")
         for algo, steps in self.timesteps.items():
             if algo not in ("ppo", "sac", "td3"):
-                raise ValueError(f"timesteps[{algo!r}] is invalid: the algorithm must be one of ['ppo', 'sac', 'td3']")
+                raise ValueError(
+                    f"timesteps[{algo!r}] is invalid: the algorithm must be one of ['ppo', 'sac', 'td3']"
+                )
             _require_int(f"timesteps[{algo!r}]", steps, 1)
-        for name, low in (("seeds", 1), ("episodes", 1), ("curve_points", 1), ("curve_episodes", 1), ("reps", 100)):
+        for name, low in (
+            ("seeds", 1),
+            ("episodes", 1),
+            ("curve_points", 1),
+            ("curve_episodes", 1),
+            ("reps", 100),
+        ):
             _require_int(name, getattr(self, name), low)
 
     def trials(self) -> list[dict[str, Any]]:
         """One entry per (algorithm, seed): its name (the run folder's) and settings; seed by seed, so that an
         interrupted run has as many seeds of each algorithm as it could."""
-        return [{"name": f"{algo}-seed{seed}", "algo": algo, "seed": seed, "timesteps": steps}
-                for seed in range(self.seeds) for algo, steps in self.timesteps.items()]
+        return [
+            {"name": f"{algo}-seed{seed}", "algo": algo, "seed": seed, "timesteps": steps}
+            for seed in range(self.seeds)
+            for algo, steps in self.timesteps.items()
+        ]
 
 
 def _as_dict(plan: Plan) -> dict[str, Any]:
@@ -132,10 +143,21 @@ def _trial(config: dict[str, Any], *, plan: dict[str, Any], trials_dir: str) -> 
     trial = config["trial"]
     run_dir = Path(trials_dir) / trial["name"]
     shutil.rmtree(run_dir, ignore_errors=True)  # an unfinished earlier attempt: trained again from its start
-    agent_config = load_config(trial["algo"], plan["env_id"], overrides={**plan["overrides"], "n_timesteps": trial["timesteps"]})
+    agent_config = load_config(
+        trial["algo"], plan["env_id"], overrides={**plan["overrides"], "n_timesteps": trial["timesteps"]}
+    )
     select_freq = max(trial["timesteps"] // plan["curve_points"], 1)
-    result = train(agent_config, seed=trial["seed"], run_dir=run_dir, eval_freq=0, save_freq=0, verbose=0,
-                   progress=False, select_freq=select_freq, select_episodes=plan["curve_episodes"])
+    result = train(
+        agent_config,
+        seed=trial["seed"],
+        run_dir=run_dir,
+        eval_freq=0,
+        save_freq=0,
+        verbose=0,
+        progress=False,
+        select_freq=select_freq,
+        select_episodes=plan["curve_episodes"],
+    )
     record = {**trial, "timesteps_trained": result.timesteps, "train_time_s": round(result.wall_time_s, 1)}
     record = _evaluated(record, run_dir, plan["episodes"])
     tune.report({"mean_score": float(np.mean([s["score"] for s in record["scenarios"].values()]))})
@@ -151,8 +173,11 @@ def _evaluated(record: dict[str, Any], run_dir: Path, episodes: int) -> dict[str
     start = time.perf_counter()
     agent = AgentController(load_agent(run_dir), name=record["name"])  # the final policy
     results = evaluate([agent], DEFAULT_SUITE, episodes, progress=False, keep_trajectories=0)
-    record = {**record, "evaluation_time_s": round(time.perf_counter() - start, 1),
-              "scenarios": _scenario_scores(results)}
+    record = {
+        **record,
+        "evaluation_time_s": round(time.perf_counter() - start, 1),
+        "scenarios": _scenario_scores(results),
+    }
     atomic_write_text(run_dir / TRIAL_RESULT, json.dumps(record, indent=2) + "\n")
     return record
 
@@ -165,15 +190,27 @@ def _scenario_scores(results: Sequence[Any]) -> dict[str, dict[str, Any]]:
         rows = [r for r in results if r.scenario == scenario]
         winnable = [r for r in rows if r.winnable is not False]
         wins = sum(r.metrics.success for r in winnable)
-        out[scenario] = {"episodes": len(rows), "winnable": len(winnable), "successes": sum(r.metrics.success for r in rows),
-                         "winnable_successes": wins, "score": wins / len(winnable) if winnable else float("nan"),
-                         "plane_rms_rad": float(np.mean([r.metrics.plane_rms_rad for r in rows]))}
+        out[scenario] = {
+            "episodes": len(rows),
+            "winnable": len(winnable),
+            "successes": sum(r.metrics.success for r in rows),
+            "winnable_successes": wins,
+            "score": wins / len(winnable) if winnable else float("nan"),
+            "plane_rms_rad": float(np.mean([r.metrics.plane_rms_rad for r in rows])),
+        }
     return out
 
 
 # --- the run -----------------------------------------------------------------------------------
-def run_reference(out_dir: str | Path, plan: Plan = Plan(), *, max_concurrent: int = 2, address: str | None = None,
-                  progress: bool = True, baselines: Sequence[str] | None = None) -> dict[str, Any]:
+def run_reference(
+    out_dir: str | Path,
+    plan: Plan = Plan(),
+    *,
+    max_concurrent: int = 2,
+    address: str | None = None,
+    progress: bool = True,
+    baselines: Sequence[str] | None = None,
+) -> dict[str, Any]:
     """Train and evaluate every trial of ``plan`` not yet finished in ``out_dir`` (``max_concurrent`` at
     once, on a local Ray instance or the cluster at ``address``), then write the summary
     (:func:`summarize_reference`, with ``baselines``) and return it."""
@@ -187,7 +224,9 @@ def run_reference(out_dir: str | Path, plan: Plan = Plan(), *, max_concurrent: i
 
     _require_int("max_concurrent", max_concurrent, 1)
     for algo, steps in plan.timesteps.items():
-        load_config(algo, plan.env_id, overrides={**plan.overrides, "n_timesteps": steps})  # (unknown id or bad config: now)
+        load_config(
+            algo, plan.env_id, overrides={**plan.overrides, "n_timesteps": steps}
+        )  # (unknown id or bad config: now)
     out = Path(out_dir).resolve()
     trials_dir = out / "trials"
     trials_dir.mkdir(parents=True, exist_ok=True)
@@ -195,19 +234,31 @@ def run_reference(out_dir: str | Path, plan: Plan = Plan(), *, max_concurrent: i
     started = time.perf_counter()
     if pending:
         say = print if progress else (lambda *a, **k: None)
-        say(f"reference: {len(pending)} of {len(plan.trials())} trials to run "
+        say(
+            f"reference: {len(pending)} of {len(plan.trials())} trials to run "
             f"({', '.join(f'{a} {n:,} steps' for a, n in plan.timesteps.items())}; {max_concurrent} at once)",
-            file=sys.stderr)
+            file=sys.stderr,
+        )
         trainable = tune.with_parameters(_trial, plan=_as_dict(plan), trials_dir=str(trials_dir))
-        fit(lambda: tune.Tuner(
-            trainable, param_space={"trial": tune.grid_search(pending)},
-            tune_config=tune.TuneConfig(max_concurrent_trials=max_concurrent),
-            # A trial whose worker dies is started once more (from its start: _trial clears its folder).
-            run_config=tune.RunConfig(name="reference", storage_path=str(out / "tune"), verbose=0,
-                                      failure_config=tune.FailureConfig(max_failures=1),
-                                      callbacks=[_progress_lines(len(pending), say)]),
-        ), address)
-    run_time_s = time.perf_counter() - started if pending else None  # (None: a summary of earlier runs' trials)
+        fit(
+            lambda: tune.Tuner(
+                trainable,
+                param_space={"trial": tune.grid_search(pending)},
+                tune_config=tune.TuneConfig(max_concurrent_trials=max_concurrent),
+                # A trial whose worker dies is started once more (from its start: _trial clears its folder).
+                run_config=tune.RunConfig(
+                    name="reference",
+                    storage_path=str(out / "tune"),
+                    verbose=0,
+                    failure_config=tune.FailureConfig(max_failures=1),
+                    callbacks=[_progress_lines(len(pending), say)],
+                ),
+            ),
+            address,
+        )
+    run_time_s = (
+        time.perf_counter() - started if pending else None
+    )  # (None: a summary of earlier runs' trials)
     return summarize_reference(out, plan, run_time_s=run_time_s, baselines=baselines)
 
 
@@ -224,16 +275,24 @@ def _progress_lines(total: int, say: Any) -> Any:
             self.done += 1
             elapsed = time.perf_counter() - self.start
             eta = elapsed / self.done * (total - self.done)
-            say(f"reference: {trial.config['trial']['name']} done ({self.done}/{total}, {elapsed / 60:.1f} min, "
-                f"about {eta / 60:.0f} min left)", file=sys.stderr)
+            say(
+                f"reference: {trial.config['trial']['name']} done ({self.done}/{total}, {elapsed / 60:.1f} min, "
+                f"about {eta / 60:.0f} min left)",
+                file=sys.stderr,
+            )
 
     return ProgressLines()
 
 
 # --- the statistics ------------------------------------------------------------------------------
-def summarize_reference(out_dir: str | Path, plan: Plan = Plan(), *, run_time_s: float | None = None,
-                        baselines: Sequence[str] | None = None) -> dict[str, Any]:
-    """rliable's estimates from the finished trials in ``out_dir``, next to the default comparison's
+def summarize_reference(
+    out_dir: str | Path,
+    plan: Plan = Plan(),
+    *,
+    run_time_s: float | None = None,
+    baselines: Sequence[str] | None = None,
+) -> dict[str, Any]:
+    """Rliable's estimates from the finished trials in ``out_dir``, next to the default comparison's
     controllers on the same episodes (``baselines``: registered names; default: every controller of the
     default comparison). Writes ``scores.csv``, ``reference.json``, ``reference.md`` and the figures."""
     require("stats", "the multi-seed reference results", "rliable")
@@ -248,12 +307,17 @@ def summarize_reference(out_dir: str | Path, plan: Plan = Plan(), *, run_time_s:
     for trial in plan.trials():
         path = out / "trials" / trial["name"] / TRIAL_RESULT
         if not path.exists():
-            raise FileNotFoundError(f"{str(path)!r} is missing: trial {trial['name']} has not finished "
-                                    "(run the reference again to finish it)")
+            raise FileNotFoundError(
+                f"{str(path)!r} is missing: trial {trial['name']} has not finished "
+                "(run the reference again to finish it)"
+            )
         records.append(json.loads(path.read_text()))
     scenarios = list(get_suite(DEFAULT_SUITE).scenarios)
     for k, record in enumerate(records):
-        if list(record["scenarios"]) != scenarios or record["scenarios"][scenarios[0]]["episodes"] != plan.episodes:
+        if (
+            list(record["scenarios"]) != scenarios
+            or record["scenarios"][scenarios[0]]["episodes"] != plan.episodes
+        ):
             # The default suite changed since the trial was evaluated (or the plan's episodes): its final
             # policy is evaluated again on the suite as it is, the training kept.
             records[k] = _evaluated(record, out / "trials" / record["name"], plan.episodes)
@@ -264,8 +328,16 @@ def summarize_reference(out_dir: str | Path, plan: Plan = Plan(), *, run_time_s:
 
     rows: list[dict[str, Any]] = []
     for rec in records:
-        rows += [{"name": rec["algo"].upper(), "kind": "multi-seed", "seed": rec["seed"], "scenario": s, **rec["scenarios"][s]}
-                 for s in scenarios]
+        rows += [
+            {
+                "name": rec["algo"].upper(),
+                "kind": "multi-seed",
+                "seed": rec["seed"],
+                "scenario": s,
+                **rec["scenarios"][s],
+            }
+            for s in scenarios
+        ]
     for name, per in fixed.items():
         kind = "shipped agent (selected)" if name in shipped else "baseline"
         rows += [{"name": name, "kind": kind, "seed": "", "scenario": s, **per[s]} for s in scenarios]
@@ -276,11 +348,16 @@ def summarize_reference(out_dir: str | Path, plan: Plan = Plan(), *, run_time_s:
     for name in names:
         mine = [r for r in rows if r["name"] == name]
         runs = list(dict.fromkeys(r["seed"] for r in mine))
-        score[name] = np.array([[next(r["score"] for r in mine if r["seed"] == run and r["scenario"] == s)
-                                 for s in scenarios] for run in runs])
+        score[name] = np.array(
+            [
+                [next(r["score"] for r in mine if r["seed"] == run and r["scenario"] == s) for s in scenarios]
+                for run in runs
+            ]
+        )
     rng = np.random.RandomState(0)
     aggregate, aggregate_ci = _estimates(
-        score, lambda x: np.array([metrics.aggregate_iqm(x), metrics.aggregate_mean(x)]), plan.reps, rng)
+        score, lambda x: np.array([metrics.aggregate_iqm(x), metrics.aggregate_mean(x)]), plan.reps, rng
+    )
     per_scenario: dict[str, dict[str, list[float]]] = {}
     for j, s in enumerate(scenarios):
         point, ci = _estimates({n: score[n][:, [j]] for n in names}, metrics.aggregate_mean, plan.reps, rng)
@@ -296,15 +373,24 @@ def summarize_reference(out_dir: str | Path, plan: Plan = Plan(), *, run_time_s:
         "confidence": CONFIDENCE,
         "runs": {n: int(score[n].shape[0]) for n in names},
         "kinds": kinds,
-        "aggregate": {n: {"iqm": float(aggregate[n][0]), "iqm_ci": [float(v) for v in aggregate_ci[n][:, 0]],
-                          "mean": float(aggregate[n][1]), "mean_ci": [float(v) for v in aggregate_ci[n][:, 1]]}
-                      for n in names},
+        "aggregate": {
+            n: {
+                "iqm": float(aggregate[n][0]),
+                "iqm_ci": [float(v) for v in aggregate_ci[n][:, 0]],
+                "mean": float(aggregate[n][1]),
+                "mean_ci": [float(v) for v in aggregate_ci[n][:, 1]],
+            }
+            for n in names
+        },
         "per_scenario": per_scenario,
         "learning_curves": curves,
-        "time": {"trials_run_s": None if run_time_s is None else round(run_time_s, 1),
-                 "train_s": {a: [r["train_time_s"] for r in records if r["algo"] == a] for a in plan.timesteps},
-                 "timesteps_trained": {a: sorted({r["timesteps_trained"] for r in records if r["algo"] == a})
-                                       for a in plan.timesteps}},
+        "time": {
+            "trials_run_s": None if run_time_s is None else round(run_time_s, 1),
+            "train_s": {a: [r["train_time_s"] for r in records if r["algo"] == a] for a in plan.timesteps},
+            "timesteps_trained": {
+                a: sorted({r["timesteps_trained"] for r in records if r["algo"] == a}) for a in plan.timesteps
+            },
+        },
     }
     _write_scores(out / "scores.csv", rows)
     atomic_write_text(out / "reference.json", json.dumps(summary, indent=2) + "\n")
@@ -313,16 +399,18 @@ def summarize_reference(out_dir: str | Path, plan: Plan = Plan(), *, run_time_s:
     return summary
 
 
-def _estimates(scores: Mapping[str, np.ndarray], statistic: Any, reps: int,
-               rng: np.random.RandomState) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
-    """rliable's point estimates and stratified bootstrap intervals (runs resampled within each scenario),
+def _estimates(
+    scores: Mapping[str, np.ndarray], statistic: Any, reps: int, rng: np.random.RandomState
+) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """Rliable's point estimates and stratified bootstrap intervals (runs resampled within each scenario),
     reproducible through ``rng`` (rliable hands arch a RandomState, which arch now warns about)."""
     from rliable import library as rly
 
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message="random_state is deprecated", category=FutureWarning)
-        return rly.get_interval_estimates(scores, statistic, reps=reps, confidence_interval_size=CONFIDENCE,
-                                          random_state=rng)
+        return rly.get_interval_estimates(
+            scores, statistic, reps=reps, confidence_interval_size=CONFIDENCE, random_state=rng
+        )
 
 
 def _shipped_names() -> set[str]:
@@ -333,19 +421,29 @@ def _shipped_names() -> set[str]:
     return set(shipped_models())
 
 
-def _learning_curves(out: Path, plan: Plan, records: Sequence[Mapping[str, Any]],
-                     rng: np.random.RandomState) -> dict[str, dict[str, list[float]]]:
+def _learning_curves(
+    out: Path, plan: Plan, records: Sequence[Mapping[str, Any]], rng: np.random.RandomState
+) -> dict[str, dict[str, list[float]]]:
     """Per algorithm: the validation success at each point (mean over seeds) with a bootstrap band."""
     curves = {}
     for algo in plan.timesteps:
-        histories = [json.loads((out / "trials" / r["name"] / "selection.json").read_text())["history"]
-                     for r in records if r["algo"] == algo]
+        histories = [
+            json.loads((out / "trials" / r["name"] / "selection.json").read_text())["history"]
+            for r in records
+            if r["algo"] == algo
+        ]
         points = min(len(h) for h in histories)
         steps = [h["timestep"] for h in histories[0][:points]]
-        scores = np.array([[h["success_rate"] for h in history[:points]] for history in histories])[:, None, :]
+        scores = np.array([[h["success_rate"] for h in history[:points]] for history in histories])[
+            :, None, :
+        ]
         point, ci = _estimates({algo: scores}, lambda x: np.mean(x, axis=(0, 1)), plan.reps, rng)
-        curves[algo.upper()] = {"timesteps": steps, "mean": point[algo].tolist(), "ci_low": ci[algo][0].tolist(),
-                        "ci_high": ci[algo][1].tolist()}
+        curves[algo.upper()] = {
+            "timesteps": steps,
+            "mean": point[algo].tolist(),
+            "ci_low": ci[algo][0].tolist(),
+            "ci_high": ci[algo][1].tolist(),
+        }
     return curves
 
 
@@ -372,23 +470,43 @@ def reference_markdown(summary: Mapping[str, Any]) -> str:
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for n in order:
         agg = summary["aggregate"][n]
-        label = n if kinds[n] == "baseline" else (f"{n} (shipped, selected)" if kinds[n].startswith("shipped")
-                                                   else f"**{n}**")
-        cells = [label, str(runs[n]), _interval(agg["iqm"], *agg["iqm_ci"], runs[n]),
-                 _interval(agg["mean"], *agg["mean_ci"], runs[n])]
+        label = (
+            n
+            if kinds[n] == "baseline"
+            else (f"{n} (shipped, selected)" if kinds[n].startswith("shipped") else f"**{n}**")
+        )
+        cells = [
+            label,
+            str(runs[n]),
+            _interval(agg["iqm"], *agg["iqm_ci"], runs[n]),
+            _interval(agg["mean"], *agg["mean_ci"], runs[n]),
+        ]
         cells += [_interval(*summary["per_scenario"][s][n], runs[n]) for s in scenarios]
         lines.append("| " + " | ".join(cells) + " |")
     plan = summary["plan"]
     steps = ", ".join(f"{a.upper()} {n:,}" for a, n in plan["timesteps"].items())
-    return "\n".join([
-        (f"Success over the winnable episodes [%], {plan['episodes']} episodes per scenario of the default suite; "
-        f"multi-seed rows: final policies after {steps} steps on {plan['env_id']}, IQM and mean over runs x "
-        f"scenarios and each scenario's mean over seeds with 95% stratified bootstrap intervals (rliable, "
-        f"{plan['reps']:,} resamples)."), "", *lines, ""])
+    return "\n".join(
+        [
+            (
+                f"Success over the winnable episodes [%], {plan['episodes']} episodes per scenario of the default suite; "
+                f"multi-seed rows: final policies after {steps} steps on {plan['env_id']}, IQM and mean over runs x "
+                f"scenarios and each scenario's mean over seeds with 95% stratified bootstrap intervals (rliable, "
+                f"{plan['reps']:,} resamples)."
+            ),
+            "",
+            *lines,
+            "",
+        ]
+    )
 
 
-def _plot(out: Path, summary: Mapping[str, Any], profiles: Mapping[str, np.ndarray],
-          profile_ci: Mapping[str, np.ndarray], taus: np.ndarray) -> None:
+def _plot(
+    out: Path,
+    summary: Mapping[str, Any],
+    profiles: Mapping[str, np.ndarray],
+    profile_ci: Mapping[str, np.ndarray],
+    taus: np.ndarray,
+) -> None:
     require("plot", "the reference figures", "matplotlib")
     import matplotlib
 
@@ -400,16 +518,29 @@ def _plot(out: Path, summary: Mapping[str, Any], profiles: Mapping[str, np.ndarr
     fig, ax = plt.subplots(figsize=(7, 4.2))
     for algo, curve in summary["learning_curves"].items():
         x = np.array(curve["timesteps"]) / 1e6
-        (line,) = ax.plot(x, 100 * np.array(curve["mean"]), marker="o", ms=3,
-                          label=f"{algo.upper()} ({summary['runs'][algo]} seeds)")
-        ax.fill_between(x, 100 * np.array(curve["ci_low"]), 100 * np.array(curve["ci_high"]), color=line.get_color(),
-                        alpha=0.2)
+        (line,) = ax.plot(
+            x,
+            100 * np.array(curve["mean"]),
+            marker="o",
+            ms=3,
+            label=f"{algo.upper()} ({summary['runs'][algo]} seeds)",
+        )
+        ax.fill_between(
+            x,
+            100 * np.array(curve["ci_low"]),
+            100 * np.array(curve["ci_high"]),
+            color=line.get_color(),
+            alpha=0.2,
+        )
     ax.set_xscale("log")
     ax.set_xlabel("environment steps [millions] (log scale)")
     ax.set_ylabel("validation success [%]")
     ax.set_ylim(-2, 102)
-    ax.set_title("Learning curves on Mixed: validation success on LowSpeed, NearCritical, SpeedTransient\n"
-                 "(mean over seeds, 95% bootstrap band)", fontsize=9)
+    ax.set_title(
+        "Learning curves on Mixed: validation success on LowSpeed, NearCritical, SpeedTransient\n"
+        "(mean over seeds, 95% bootstrap band)",
+        fontsize=9,
+    )
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
@@ -420,11 +551,21 @@ def _plot(out: Path, summary: Mapping[str, Any], profiles: Mapping[str, np.ndarr
     for name, profile in profiles.items():
         multi = summary["runs"][name] > 1
         shipped = summary["kinds"][name].startswith("shipped")
-        (line,) = ax.plot(100 * taus, profile, lw=2.0 if multi else 1.2, ls="-" if multi else "--",
-                          label=f"{name} ({summary['runs'][name]} seeds)" if multi else
-                          f"{name} (shipped)" if shipped else name)
+        (line,) = ax.plot(
+            100 * taus,
+            profile,
+            lw=2.0 if multi else 1.2,
+            ls="-" if multi else "--",
+            label=f"{name} ({summary['runs'][name]} seeds)"
+            if multi
+            else f"{name} (shipped)"
+            if shipped
+            else name,
+        )
         if multi:
-            ax.fill_between(100 * taus, profile_ci[name][0], profile_ci[name][1], color=line.get_color(), alpha=0.15)
+            ax.fill_between(
+                100 * taus, profile_ci[name][0], profile_ci[name][1], color=line.get_color(), alpha=0.15
+            )
     ax.set_xlabel(r"success over winnable episodes $\tau$ [%]")
     ax.set_ylabel(r"fraction of runs x scenarios with success > $\tau$")
     ax.set_title("Performance profiles on the default suite (dashed: one deterministic run)", fontsize=9)
@@ -440,17 +581,26 @@ def _timesteps(text: str) -> dict[str, int]:
     for part in text.split(","):
         algo, sep, steps = part.partition("=")
         if not sep or not steps.strip().isdigit():
-            raise ValueError(f"--timesteps {text!r} is invalid: must be algo=steps[,algo=steps...], e.g. ppo=100000,sac=50000")
+            raise ValueError(
+                f"--timesteps {text!r} is invalid: must be algo=steps[,algo=steps...], e.g. ppo=100000,sac=50000"
+            )
         out[algo.strip()] = int(steps)
     return out
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m subenv_agents.reference", description=__doc__.split("\n\n")[0])
-    parser.add_argument("--timesteps", default=",".join(f"{a}={n}" for a, n in DEFAULT_TIMESTEPS.items()),
-                        help="algorithms and steps per trial (default: %(default)s)")
+    parser = argparse.ArgumentParser(
+        prog="python -m subenv_agents.reference", description=__doc__.split("\n\n")[0]
+    )
+    parser.add_argument(
+        "--timesteps",
+        default=",".join(f"{a}={n}" for a, n in DEFAULT_TIMESTEPS.items()),
+        help="algorithms and steps per trial (default: %(default)s)",
+    )
     parser.add_argument("--seeds", type=int, default=5, help="seeds per algorithm (default: %(default)s)")
-    parser.add_argument("--episodes", type=int, default=100, help="evaluation episodes per scenario (default: %(default)s)")
+    parser.add_argument(
+        "--episodes", type=int, default=100, help="evaluation episodes per scenario (default: %(default)s)"
+    )
     parser.add_argument("--max-concurrent", type=int, default=2, help="trials at once (default: %(default)s)")
     parser.add_argument("--out", default="results/reference", help="results folder (default: %(default)s)")
     parser.add_argument("--address", help="a Ray cluster's address; default: a local Ray instance")
@@ -461,8 +611,10 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, FileNotFoundError, RuntimeError, MissingExtra) as exc:
         raise SystemExit(f"subenv_agents.reference: {exc}") from None
     print(reference_markdown(summary))
-    print(f"written to {args.out}/: reference.md, reference.json, scores.csv, learning_curves.png, "
-          "performance_profiles.png")
+    print(
+        f"written to {args.out}/: reference.md, reference.json, scores.csv, learning_curves.png, "
+        "performance_profiles.png"
+    )
     return 0
 
 

@@ -49,17 +49,26 @@ VALIDATION_SEED: Final = 50_000
 SELECTION_FILE: Final = "selection.json"
 
 
-def validation_score(agent: TrainedAgent, scenarios: Sequence[str], episodes: int,
-                     seed: int = VALIDATION_SEED) -> dict[str, float]:
+def validation_score(
+    agent: TrainedAgent, scenarios: Sequence[str], episodes: int, seed: int = VALIDATION_SEED
+) -> dict[str, float]:
     """Success rate (mean over ``scenarios``) and mean plane RMS [rad] of ``agent``'s deterministic
     policy on ``episodes`` validation episodes per scenario."""
     from subenv.evaluation import evaluate
     from subenv_agents.controller import AgentController
 
-    results = evaluate([AgentController(agent, name="candidate")], list(scenarios), episodes=episodes, seed=seed,
-                       progress=False, keep_trajectories=0)
-    return {"success_rate": float(np.mean([r.metrics.success for r in results])),
-            "plane_rms_rad": float(np.mean([r.metrics.plane_rms_rad for r in results]))}
+    results = evaluate(
+        [AgentController(agent, name="candidate")],
+        list(scenarios),
+        episodes=episodes,
+        seed=seed,
+        progress=False,
+        keep_trajectories=0,
+    )
+    return {
+        "success_rate": float(np.mean([r.metrics.success for r in results])),
+        "plane_rms_rad": float(np.mean([r.metrics.plane_rms_rad for r in results])),
+    }
 
 
 class SelectionCallback(BaseCallback):
@@ -79,8 +88,15 @@ class SelectionCallback(BaseCallback):
         Registered scenarios to validate on (default :data:`SELECTION_SCENARIOS`).
     """
 
-    def __init__(self, config: AgentConfig, run_dir: str | Path, freq: int, episodes: int = 30,
-                 scenarios: Sequence[str] = SELECTION_SCENARIOS, verbose: int = 0) -> None:
+    def __init__(
+        self,
+        config: AgentConfig,
+        run_dir: str | Path,
+        freq: int,
+        episodes: int = 30,
+        scenarios: Sequence[str] = SELECTION_SCENARIOS,
+        verbose: int = 0,
+    ) -> None:
         super().__init__(verbose)
         for name, value in (("freq", freq), ("episodes", episodes)):
             if not (isinstance(value, int) and not isinstance(value, bool) and value > 0):
@@ -116,20 +132,28 @@ class SelectionCallback(BaseCallback):
 
     def _evaluate(self) -> None:
         venv = self.model.get_vec_normalize_env()
-        agent = TrainedAgent.from_model(self.run_dir / SELECTED_DIR / MODEL_FILE, self.model, self.config,
-                                        venv if venv is not None and venv.norm_obs else None)
+        agent = TrainedAgent.from_model(
+            self.run_dir / SELECTED_DIR / MODEL_FILE,
+            self.model,
+            self.config,
+            venv if venv is not None and venv.norm_obs else None,
+        )
         score = {"timestep": self.num_timesteps, **validation_score(agent, self.scenarios, self.episodes)}
         self.history.append(score)
         self.logger.record("selection/success_rate", score["success_rate"])
         self.logger.record("selection/plane_rms_rad", score["plane_rms_rad"])
         best = self.best
-        if best is None or (score["success_rate"], -score["plane_rms_rad"]) > (best["success_rate"],
-                                                                               -best["plane_rms_rad"]):
+        if best is None or (score["success_rate"], -score["plane_rms_rad"]) > (
+            best["success_rate"],
+            -best["plane_rms_rad"],
+        ):
             self.best = score
             self._save(venv)
         if self.verbose:
-            tqdm.write(f"selection at {self.num_timesteps} steps: success {100 * score['success_rate']:.1f}%, plane RMS "
-                  f"{score['plane_rms_rad']:.4f} rad (best: {self.best['timestep']})")
+            tqdm.write(
+                f"selection at {self.num_timesteps} steps: success {100 * score['success_rate']:.1f}%, plane RMS "
+                f"{score['plane_rms_rad']:.4f} rad (best: {self.best['timestep']})"
+            )
         self._write_record()
 
     def _save(self, venv: Any) -> None:
@@ -140,11 +164,28 @@ class SelectionCallback(BaseCallback):
             atomic_write_bytes(tmp / CONFIG_FILE, (self.run_dir / CONFIG_FILE).read_bytes())
 
     def _write_record(self) -> None:
-        atomic_write_text(self.run_dir / SELECTION_FILE, json.dumps({
-            "scenarios": list(self.scenarios), "episodes": self.episodes, "seed": VALIDATION_SEED,
-            "best": self.best, "history": self.history}, indent=2) + "\n")
+        atomic_write_text(
+            self.run_dir / SELECTION_FILE,
+            json.dumps(
+                {
+                    "scenarios": list(self.scenarios),
+                    "episodes": self.episodes,
+                    "seed": VALIDATION_SEED,
+                    "best": self.best,
+                    "history": self.history,
+                },
+                indent=2,
+            )
+            + "\n",
+        )
 
     def record(self) -> dict[str, Any]:
         """What ``train.json`` keeps of the selection."""
-        return {"scenarios": list(self.scenarios), "episodes": self.episodes, "validation_seed": VALIDATION_SEED,
-                "freq": self.freq, "best": self.best, "evaluations": len(self.history)}
+        return {
+            "scenarios": list(self.scenarios),
+            "episodes": self.episodes,
+            "validation_seed": VALIDATION_SEED,
+            "freq": self.freq,
+            "best": self.best,
+            "evaluations": len(self.history),
+        }

@@ -49,10 +49,15 @@ class PlaneEffortL1VecEnv(VecEnvWrapper):  # type: ignore[misc]
     def __init__(self, venv: Any, weight: float, reference_speed_mps: float | None = None) -> None:
         if not (isinstance(weight, (int, float)) and np.isfinite(weight) and weight >= 0):
             raise ValueError(f"plane_effort_l1={weight!r} is invalid: must be a finite number >= 0")
-        if reference_speed_mps is not None and not (isinstance(reference_speed_mps, (int, float))
-                                                    and np.isfinite(reference_speed_mps) and reference_speed_mps > 0):
-            raise ValueError(f"plane_effort_reference_speed_mps={reference_speed_mps!r} is invalid: must be None or "
-                             "a finite number > 0")
+        if reference_speed_mps is not None and not (
+            isinstance(reference_speed_mps, (int, float))
+            and np.isfinite(reference_speed_mps)
+            and reference_speed_mps > 0
+        ):
+            raise ValueError(
+                f"plane_effort_reference_speed_mps={reference_speed_mps!r} is invalid: must be None or "
+                "a finite number > 0"
+            )
         super().__init__(venv)
         self.weight = float(weight)
         self.reference_speed_mps = reference_speed_mps

@@ -22,7 +22,9 @@ def __getattr__(name: str) -> Callable[[], object]:
     """The factory of the shipped model ``name`` (AttributeError if there is no such folder)."""
     models = shipped_models()
     if name not in models:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}: the shipped models are {sorted(models)}")
+        raise AttributeError(
+            f"module {__name__!r} has no attribute {name!r}: the shipped models are {sorted(models)}"
+        )
     path = models[name]
 
     def make() -> object:

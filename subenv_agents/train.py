@@ -110,8 +110,14 @@ def make_vec_env(config: AgentConfig, n_envs: int, seed: int, curriculum: bool =
     venv = VecMonitor(venv)
     if config.normalize is not None:
         norm = config.normalize
-        venv = VecNormalize(venv, norm_obs=norm.norm_obs, norm_reward=norm.norm_reward, clip_obs=norm.clip_obs,
-                            clip_reward=norm.clip_reward, gamma=norm.gamma if norm.gamma is not None else config.gamma())
+        venv = VecNormalize(
+            venv,
+            norm_obs=norm.norm_obs,
+            norm_reward=norm.norm_reward,
+            clip_obs=norm.clip_obs,
+            clip_reward=norm.clip_reward,
+            gamma=norm.gamma if norm.gamma is not None else config.gamma(),
+        )
     return venv
 
 
@@ -195,8 +201,14 @@ def train(
     from subenv_agents.curriculum import CurriculumCallback, read_stage, stage_scenarios, write_state
     from subenv_agents.progress import TrainingProgress
 
-    for name, value in (("seed", seed), ("eval_freq", eval_freq), ("eval_episodes", eval_episodes),
-                        ("save_freq", save_freq), ("select_freq", select_freq), ("select_episodes", select_episodes)):
+    for name, value in (
+        ("seed", seed),
+        ("eval_freq", eval_freq),
+        ("eval_episodes", eval_episodes),
+        ("save_freq", save_freq),
+        ("select_freq", select_freq),
+        ("select_episodes", select_episodes),
+    ):
         if not (isinstance(value, int) and not isinstance(value, bool) and value >= 0):
             raise ValueError(f"{name}={value!r} is invalid: must be an integer >= 0")
     if threads is not None:
@@ -208,8 +220,13 @@ def train(
     created = next(p for p in reversed((run_dir, *run_dir.parents)) if not p.exists())
     run_dir.mkdir(parents=True)
     try:
-        atomic_write_text(run_dir / CONFIG_FILE, yaml.safe_dump(
-            {"algo": config.algo, "env_id": config.env_id, "hyperparams": config.to_yaml_dict()}, sort_keys=False))
+        atomic_write_text(
+            run_dir / CONFIG_FILE,
+            yaml.safe_dump(
+                {"algo": config.algo, "env_id": config.env_id, "hyperparams": config.to_yaml_dict()},
+                sort_keys=False,
+            ),
+        )
 
         curriculum = config.curriculum
         venv = make_vec_env(config, config.n_envs, seed, curriculum=curriculum is not None)
@@ -231,8 +248,10 @@ def train(
                 model = algo_class.load(previous.path, env=venv, device="cpu", seed=seed, **kwargs)
             changed = {k: v for k, v in policy_kwargs.items() if model.policy_kwargs.get(k) != v}
             if changed:
-                raise ValueError(f"policy_kwargs {changed} differ from the trained agent's {model.policy_kwargs}: "
-                                 "a run cannot change the network it continues")
+                raise ValueError(
+                    f"policy_kwargs {changed} differ from the trained agent's {model.policy_kwargs}: "
+                    "a run cannot change the network it continues"
+                )
             if isinstance(venv, VecNormalize) and previous.obs_mean is not None:
                 stats = statistics_file(previous.path, model_folder(previous.path))
                 venv = VecNormalize.load(str(stats), venv.venv)
@@ -240,18 +259,25 @@ def train(
             stage = read_stage(training_run(previous.path), model.num_timesteps)
         else:
             with _hyperparameters_checked(config):
-                model = algo_class(config.policy, venv, seed=seed, verbose=0, device="cpu", **model_kwargs(config))
+                model = algo_class(
+                    config.policy, venv, seed=seed, verbose=0, device="cpu", **model_kwargs(config)
+                )
         if isinstance(venv, VecNormalize):
             mark_run(model, venv)  # every model and statistics file of this run carries its id
-        formats = ["csv"] + (["stdout"] if verbose else []) + (["tensorboard"] if find_spec("tensorboard") else [])
+        formats = (
+            ["csv"] + (["stdout"] if verbose else []) + (["tensorboard"] if find_spec("tensorboard") else [])
+        )
         model.set_logger(configure(str(run_dir), formats))
 
         n_envs = venv.num_envs
         chunk = steps_per_iteration(model)
         planned = trained_steps(config.n_timesteps, chunk)
         if planned != config.n_timesteps and verbose:
-            print(f"training {planned} steps: {config.n_timesteps} rounded up to whole iterations of {chunk} steps "
-                  f"({_iteration(model)})", file=sys.stderr)
+            print(
+                f"training {planned} steps: {config.n_timesteps} rounded up to whole iterations of {chunk} steps "
+                f"({_iteration(model)})",
+                file=sys.stderr,
+            )
         callbacks: list[Any] = [TrainingProgress(planned, enabled=progress)]
         curriculum_callback = None
         if curriculum is not None:
@@ -259,13 +285,23 @@ def train(
             alpha = float(config.env_kwargs.get("alpha", 0.0))
             scenarios = stage_scenarios(venv.get_attr("scenario")[0], curriculum, vehicle, alpha)
             stage = min(stage, len(scenarios) - 1)
-            curriculum_callback = CurriculumCallback(scenarios, curriculum, run_dir, stage=stage, verbose=verbose)
+            curriculum_callback = CurriculumCallback(
+                scenarios, curriculum, run_dir, stage=stage, verbose=verbose
+            )
             write_state(run_dir, stage, [], start_stage=stage)
             callbacks.append(curriculum_callback)
         if eval_freq:
-            callbacks.append(EvalCallback(eval_env, n_eval_episodes=eval_episodes, eval_freq=max(eval_freq // n_envs, 1),
-                                          log_path=str(run_dir), best_model_save_path=str(run_dir), deterministic=True,
-                                          verbose=0))
+            callbacks.append(
+                EvalCallback(
+                    eval_env,
+                    n_eval_episodes=eval_episodes,
+                    eval_freq=max(eval_freq // n_envs, 1),
+                    log_path=str(run_dir),
+                    best_model_save_path=str(run_dir),
+                    deterministic=True,
+                    verbose=0,
+                )
+            )
         selection = None
         if select_freq:
             from subenv_agents.selection import SelectionCallback
@@ -273,8 +309,11 @@ def train(
             selection = SelectionCallback(config, run_dir, select_freq, select_episodes, verbose=verbose)
             callbacks.append(selection)
         if save_freq:
-            callbacks.append(CheckpointCallback(max(save_freq // n_envs, 1), str(run_dir / CHECKPOINT_DIR),
-                                                save_vecnormalize=True))
+            callbacks.append(
+                CheckpointCallback(
+                    max(save_freq // n_envs, 1), str(run_dir / CHECKPOINT_DIR), save_vecnormalize=True
+                )
+            )
     except BaseException:
         # Nothing trained yet: leave no half-made run folder behind (it would block the same --run-dir),
         # nor the folders made for it (<log-folder>/<algo>/) while they are empty (another run may use one).
@@ -286,7 +325,9 @@ def train(
                 folder.rmdir()
         raise
     start = time.perf_counter()
-    model.learn(config.n_timesteps, callback=CallbackList(callbacks), reset_num_timesteps=trained_agent is None)
+    model.learn(
+        config.n_timesteps, callback=CallbackList(callbacks), reset_num_timesteps=trained_agent is None
+    )
     wall = time.perf_counter() - start
 
     save_model(model, run_dir / MODEL_FILE)
@@ -294,15 +335,31 @@ def train(
         save_statistics(venv, run_dir / VECNORMALIZE_FILE)
     advances = tuple(curriculum_callback.advances) if curriculum_callback else ()
     final_stage = curriculum_callback.schedule.stage if curriculum_callback else None
-    atomic_write_text(run_dir / "train.json", json.dumps({
-        "algo": config.algo, "env_id": config.env_id, "seed": seed, "timesteps": int(model.num_timesteps),
-        "wall_time_s": round(wall, 1), "torch_threads": torch.get_num_threads(), "n_envs": n_envs,
-        "trained_agent": str(trained_agent) if trained_agent else None,
-        "curriculum_advances": [list(a) for a in advances], "final_stage": final_stage,
-        "selection": selection.record() if selection else None,
-        "command": command, "machine": f"{platform.machine()}, {os.cpu_count()} cores",
-        "versions": {p: metadata.version(p) for p in ("stable_baselines3", "torch", "gymnasium", "numpy")},
-    }, indent=2) + "\n")
+    atomic_write_text(
+        run_dir / "train.json",
+        json.dumps(
+            {
+                "algo": config.algo,
+                "env_id": config.env_id,
+                "seed": seed,
+                "timesteps": int(model.num_timesteps),
+                "wall_time_s": round(wall, 1),
+                "torch_threads": torch.get_num_threads(),
+                "n_envs": n_envs,
+                "trained_agent": str(trained_agent) if trained_agent else None,
+                "curriculum_advances": [list(a) for a in advances],
+                "final_stage": final_stage,
+                "selection": selection.record() if selection else None,
+                "command": command,
+                "machine": f"{platform.machine()}, {os.cpu_count()} cores",
+                "versions": {
+                    p: metadata.version(p) for p in ("stable_baselines3", "torch", "gymnasium", "numpy")
+                },
+            },
+            indent=2,
+        )
+        + "\n",
+    )
     venv.close()
     eval_env.close()
     return TrainResult(run_dir, int(model.num_timesteps), wall, advances, final_stage)
@@ -314,8 +371,10 @@ def _hyperparameters_checked(config: AgentConfig) -> Iterator[None]:
     try:
         yield
     except (AssertionError, ValueError, TypeError) as exc:
-        raise ValueError(f"{config.algo.upper()} refused the hyperparameters {config.algo_kwargs}: "
-                         f"{' '.join(str(exc).split())}") from exc
+        raise ValueError(
+            f"{config.algo.upper()} refused the hyperparameters {config.algo_kwargs}: "
+            f"{' '.join(str(exc).split())}"
+        ) from exc
 
 
 def _next_run_dir(log_folder: Path, config: AgentConfig) -> Path:
@@ -336,30 +395,57 @@ def _quote(arg: str) -> str:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m subenv_agents.train",
-        description="Train a Stable-Baselines3 agent (PPO, SAC, TD3) on a subenv environment.")
+        description="Train a Stable-Baselines3 agent (PPO, SAC, TD3) on a subenv environment.",
+    )
     parser.add_argument("--algo", required=True, choices=ALGORITHMS, help="the algorithm")
     parser.add_argument("--env", default=DEFAULT_ENV_ID, help="environment id (default: %(default)s)")
-    parser.add_argument("-n", "--n-timesteps", type=int,
-                        help="environment steps, rounded up to whole iterations (PPO: rollouts of n_envs x n_steps; "
-                             "SAC, TD3: n_envs x train_freq) (default: the config's)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the model and the environments (default: 0)")
+    parser.add_argument(
+        "-n",
+        "--n-timesteps",
+        type=int,
+        help="environment steps, rounded up to whole iterations (PPO: rollouts of n_envs x n_steps; "
+        "SAC, TD3: n_envs x train_freq) (default: the config's)",
+    )
+    parser.add_argument(
+        "--seed", type=int, default=0, help="seed of the model and the environments (default: 0)"
+    )
     parser.add_argument("-f", "--log-folder", default=DEFAULT_LOG_FOLDER, help="default: %(default)s")
     parser.add_argument("--run-dir", help="the run folder itself (default: <log-folder>/<algo>/<env>_<k>)")
-    parser.add_argument("-conf", "--conf-file", help="hyperparameter YAML (default: subenv_agents/hyperparams/<algo>.yml)")
-    parser.add_argument("-params", "--hyperparams", nargs="+", default=[], metavar="KEY:VALUE",
-                        help="override hyperparameters, e.g. learning_rate:1e-4 'policy_kwargs:{net_arch: [32, 32]}'")
-    parser.add_argument("--curriculum", action=argparse.BooleanOptionalAction, default=None,
-                        help="use (or not) the speed curriculum (default: the config's)")
+    parser.add_argument(
+        "-conf", "--conf-file", help="hyperparameter YAML (default: subenv_agents/hyperparams/<algo>.yml)"
+    )
+    parser.add_argument(
+        "-params",
+        "--hyperparams",
+        nargs="+",
+        default=[],
+        metavar="KEY:VALUE",
+        help="override hyperparameters, e.g. learning_rate:1e-4 'policy_kwargs:{net_arch: [32, 32]}'",
+    )
+    parser.add_argument(
+        "--curriculum",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="use (or not) the speed curriculum (default: the config's)",
+    )
     parser.add_argument("-i", "--trained-agent", help="continue from this run folder, model or checkpoint")
     parser.add_argument("--eval-freq", type=int, default=100_000, help="steps between evaluations, 0: none")
     parser.add_argument("--eval-episodes", type=int, default=10, help="episodes per evaluation")
     parser.add_argument("--save-freq", type=int, default=500_000, help="steps between checkpoints, 0: none")
-    parser.add_argument("--select-freq", type=int, default=0,
-                        help="steps between validations that keep the best policy in <run>/selected/ (0: none)")
+    parser.add_argument(
+        "--select-freq",
+        type=int,
+        default=0,
+        help="steps between validations that keep the best policy in <run>/selected/ (0: none)",
+    )
     parser.add_argument("--select-episodes", type=int, default=30, help="validation episodes per scenario")
     parser.add_argument("--threads", type=int, default=1, help="torch threads (default: 1)")
-    parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=True,
-                        help="progress on stderr: a bar on a terminal, otherwise a line every 5%% (default: on)")
+    parser.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="progress on stderr: a bar on a terminal, otherwise a line every 5%% (default: on)",
+    )
     parser.add_argument("-q", "--quiet", action="store_true", help="no training log on stdout")
     argv_list = list(sys.argv[1:] if argv is None else argv)
     args = parser.parse_args(argv_list)
@@ -370,17 +456,32 @@ def main(argv: list[str] | None = None) -> int:
         if args.curriculum is not None:
             overrides["curriculum"] = args.curriculum
         config = load_config(args.algo, args.env, args.conf_file, overrides)
-        result = train(config, seed=args.seed, log_folder=args.log_folder, run_dir=args.run_dir,
-                       trained_agent=args.trained_agent, eval_freq=args.eval_freq, eval_episodes=args.eval_episodes,
-                       save_freq=args.save_freq, progress=args.progress, verbose=0 if args.quiet else 1,
-                       threads=args.threads, select_freq=args.select_freq, select_episodes=args.select_episodes,
-                       command=" ".join(["python -m subenv_agents.train", *map(_quote, argv_list)]))
+        result = train(
+            config,
+            seed=args.seed,
+            log_folder=args.log_folder,
+            run_dir=args.run_dir,
+            trained_agent=args.trained_agent,
+            eval_freq=args.eval_freq,
+            eval_episodes=args.eval_episodes,
+            save_freq=args.save_freq,
+            progress=args.progress,
+            verbose=0 if args.quiet else 1,
+            threads=args.threads,
+            select_freq=args.select_freq,
+            select_episodes=args.select_episodes,
+            command=" ".join(["python -m subenv_agents.train", *map(_quote, argv_list)]),
+        )
     except (ValueError, FileExistsError, FileNotFoundError) as exc:
         raise SystemExit(f"subenv_agents.train: {exc}") from None
-    print(f"trained {config.algo} on {config.env_id} for {result.timesteps} steps in {result.wall_time_s:.0f} s "
-          f"(seed {args.seed}); run folder {result.run_dir}/")
+    print(
+        f"trained {config.algo} on {config.env_id} for {result.timesteps} steps in {result.wall_time_s:.0f} s "
+        f"(seed {args.seed}); run folder {result.run_dir}/"
+    )
     if result.final_stage is not None:
-        print(f"curriculum: stage {result.final_stage}, advances (step, stage): {list(result.curriculum_advances)}")
+        print(
+            f"curriculum: stage {result.final_stage}, advances (step, stage): {list(result.curriculum_advances)}"
+        )
     return 0
 
 

@@ -54,16 +54,31 @@ def tune_space(space: Mapping[str, Sequence[Any]]) -> dict[str, Any]:
                 raise ValueError(f"space[{key!r}]={spec!r} is invalid: must be ('choice', [values])")
             out[key] = tune.choice(list(spec[1]))
             continue
-        if len(spec) != 3 or not all(isinstance(v, (int, float)) and math.isfinite(v) for v in spec[1:]) \
-                or not spec[1] < spec[2] or (kind == "log" and spec[1] <= 0):
-            raise ValueError(f"space[{key!r}]={spec!r} is invalid: must be ({kind!r}, low, high) with "
-                             f"{'0 < ' if kind == 'log' else ''}low < high")
+        if (
+            len(spec) != 3
+            or not all(isinstance(v, (int, float)) and math.isfinite(v) for v in spec[1:])
+            or not spec[1] < spec[2]
+            or (kind == "log" and spec[1] <= 0)
+        ):
+            raise ValueError(
+                f"space[{key!r}]={spec!r} is invalid: must be ({kind!r}, low, high) with "
+                f"{'0 < ' if kind == 'log' else ''}low < high"
+            )
         out[key] = tune.loguniform(spec[1], spec[2]) if kind == "log" else tune.uniform(spec[1], spec[2])
     return out
 
 
-def _trial(values: dict[str, Any], *, algo: str, env_id: str, timesteps: int, seed: int, episodes: int,
-           trials_dir: str, overrides: dict[str, Any]) -> None:
+def _trial(
+    values: dict[str, Any],
+    *,
+    algo: str,
+    env_id: str,
+    timesteps: int,
+    seed: int,
+    episodes: int,
+    trials_dir: str,
+    overrides: dict[str, Any],
+) -> None:
     """One trial (the function Tune runs in a worker): train, score, report."""
     from ray import tune
 
@@ -116,8 +131,13 @@ def search(
 
     from subenv_agents.config import load_config
 
-    for name, value, low in (("samples", samples, 1), ("timesteps", timesteps, 1), ("episodes", episodes, 1),
-                             ("max_concurrent", max_concurrent, 1), ("seed", seed, 0)):
+    for name, value, low in (
+        ("samples", samples, 1),
+        ("timesteps", timesteps, 1),
+        ("episodes", episodes, 1),
+        ("max_concurrent", max_concurrent, 1),
+        ("seed", seed, 0),
+    ):
         if not (isinstance(value, int) and not isinstance(value, bool) and value >= low):
             raise ValueError(f"{name}={value!r} is invalid: must be an integer >= {low}")
     param_space = tune_space(space)
@@ -126,20 +146,47 @@ def search(
     if (out / "best.json").exists():
         raise FileExistsError(f"{str(out)!r} holds a finished search (best.json): choose another folder")
     (out / "trials").mkdir(parents=True, exist_ok=True)
-    trainable = tune.with_parameters(_trial, algo=algo, env_id=env_id, timesteps=timesteps, seed=seed,
-                                     episodes=episodes, trials_dir=str(out / "trials"), overrides=dict(overrides or {}))
-    grid = fit(lambda: tune.Tuner(
-        trainable, param_space=param_space,
-        tune_config=tune.TuneConfig(search_alg=OptunaSearch(metric="success_rate", mode="max", seed=seed),
-                                    num_samples=samples, max_concurrent_trials=max_concurrent),
-        run_config=tune.RunConfig(name="search", storage_path=str(out / "tune"), verbose=0),
-    ), address)
-    trials = [{"values": {k: r.config[k] for k in space}, **{k: r.metrics[k] for k in
-              ("success_rate", "plane_rms_rad", "run_dir", "timesteps")}} for r in grid]
+    trainable = tune.with_parameters(
+        _trial,
+        algo=algo,
+        env_id=env_id,
+        timesteps=timesteps,
+        seed=seed,
+        episodes=episodes,
+        trials_dir=str(out / "trials"),
+        overrides=dict(overrides or {}),
+    )
+    grid = fit(
+        lambda: tune.Tuner(
+            trainable,
+            param_space=param_space,
+            tune_config=tune.TuneConfig(
+                search_alg=OptunaSearch(metric="success_rate", mode="max", seed=seed),
+                num_samples=samples,
+                max_concurrent_trials=max_concurrent,
+            ),
+            run_config=tune.RunConfig(name="search", storage_path=str(out / "tune"), verbose=0),
+        ),
+        address,
+    )
+    trials = [
+        {
+            "values": {k: r.config[k] for k in space},
+            **{k: r.metrics[k] for k in ("success_rate", "plane_rms_rad", "run_dir", "timesteps")},
+        }
+        for r in grid
+    ]
     best = max(trials, key=lambda t: (t["success_rate"], -t["plane_rms_rad"]))
-    record = {"algo": algo, "env_id": env_id, "samples": samples, "timesteps_per_trial": timesteps, "seed": seed,
-              "validation": {"scenarios": list(SELECTION_SCENARIOS), "episodes": episodes}, "best": best,
-              "trials": trials}
+    record = {
+        "algo": algo,
+        "env_id": env_id,
+        "samples": samples,
+        "timesteps_per_trial": timesteps,
+        "seed": seed,
+        "validation": {"scenarios": list(SELECTION_SCENARIOS), "episodes": episodes},
+        "best": best,
+        "trials": trials,
+    }
     atomic_write_text(out / "best.json", json.dumps(record, indent=2) + "\n")
     return best
 
@@ -159,32 +206,57 @@ def fit(make_tuner: Callable[[], Any], address: str | None) -> Any:
             ray.shutdown()
     failed = [r.error for r in grid if r.error is not None]
     if failed:
-        raise RuntimeError(f"{len(failed)} of {len(grid)} trials failed (running the same command again retries "
-                           f"what a resumable run has not finished); the first: {failed[0]}")
+        raise RuntimeError(
+            f"{len(failed)} of {len(grid)} trials failed (running the same command again retries "
+            f"what a resumable run has not finished); the first: {failed[0]}"
+        )
     return grid
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m subenv_agents.tune", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m subenv_agents.tune", description=__doc__.split("\n\n")[0]
+    )
     parser.add_argument("--algo", required=True, help="ppo, sac or td3")
     parser.add_argument("--env", default="subenv/LowSpeed-v0", help="environment id (default: %(default)s)")
     parser.add_argument("--samples", type=int, default=8, help="trials (default: %(default)s)")
-    parser.add_argument("-n", "--n-timesteps", type=int, default=200_000, help="steps per trial (default: %(default)s)")
-    parser.add_argument("--episodes", type=int, default=20, help="validation episodes per scenario (default: %(default)s)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the trials and of the sampler (default: 0)")
+    parser.add_argument(
+        "-n", "--n-timesteps", type=int, default=200_000, help="steps per trial (default: %(default)s)"
+    )
+    parser.add_argument(
+        "--episodes", type=int, default=20, help="validation episodes per scenario (default: %(default)s)"
+    )
+    parser.add_argument(
+        "--seed", type=int, default=0, help="seed of the trials and of the sampler (default: 0)"
+    )
     parser.add_argument("--max-concurrent", type=int, default=2, help="trials at once (default: %(default)s)")
-    parser.add_argument("--space", help='JSON, e.g. \'{"learning_rate": ["log", 1e-4, 1e-3]}\' (default: learning_rate, gamma)')
+    parser.add_argument(
+        "--space",
+        help='JSON, e.g. \'{"learning_rate": ["log", 1e-4, 1e-3]}\' (default: learning_rate, gamma)',
+    )
     parser.add_argument("--out", default="results/tune", help="results folder (default: %(default)s)")
     parser.add_argument("--address", help="a Ray cluster's address; default: a local Ray instance")
     args = parser.parse_args(argv)
     try:
         space = json.loads(args.space) if args.space else DEFAULT_SPACE
-        best = search(args.algo, args.env, args.out, space=space, samples=args.samples, timesteps=args.n_timesteps,
-                      seed=args.seed, episodes=args.episodes, max_concurrent=args.max_concurrent, address=args.address)
+        best = search(
+            args.algo,
+            args.env,
+            args.out,
+            space=space,
+            samples=args.samples,
+            timesteps=args.n_timesteps,
+            seed=args.seed,
+            episodes=args.episodes,
+            max_concurrent=args.max_concurrent,
+            address=args.address,
+        )
     except (ValueError, FileExistsError, RuntimeError, json.JSONDecodeError, MissingExtra) as exc:
         raise SystemExit(f"subenv_agents.tune: {exc}") from None
-    print(f"best: {best['values']} success {best['success_rate']:.0%}, plane RMS {best['plane_rms_rad']:.4f} rad; "
-          f"run folder {best['run_dir']}; all trials in {Path(args.out) / 'best.json'}")
+    print(
+        f"best: {best['values']} success {best['success_rate']:.0%}, plane RMS {best['plane_rms_rad']:.4f} rad; "
+        f"run folder {best['run_dir']}; all trials in {Path(args.out) / 'best.json'}"
+    )
     return 0
 
 

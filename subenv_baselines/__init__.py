@@ -35,4 +35,11 @@ OPTIONAL_CONTROLLERS: dict[str, str] = {
 """The controllers that need an optional dependency, as entry-point values (importing them here would make
 the whole package need it): without their extra they are skipped with a one-line note."""
 
-__all__ = ["CONTROLLERS", "OPTIONAL_CONTROLLERS", "GainScheduledPolePlacement", "ReversalAware", "ScheduledLQR", "ThesisPolePlacement"]
+__all__ = [
+    "CONTROLLERS",
+    "OPTIONAL_CONTROLLERS",
+    "GainScheduledPolePlacement",
+    "ReversalAware",
+    "ScheduledLQR",
+    "ThesisPolePlacement",
+]

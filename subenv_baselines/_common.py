@@ -18,12 +18,16 @@ from subenv.vehicles import Vehicle
 
 _I = {name: i for i, name in enumerate(OBSERVATION_NAMES)}
 DEPTH_ERROR, PITCH, HEAVE, PITCH_RATE, SPEED = (
-    _I["depth_error_m"], _I["pitch_rad"], _I["heave_mps"], _I["pitch_rate_radps"], _I["speed_mps"]
+    _I["depth_error_m"],
+    _I["pitch_rad"],
+    _I["heave_mps"],
+    _I["pitch_rate_radps"],
+    _I["speed_mps"],
 )
 
 
 def feedback_state(observations: np.ndarray, depth_error_limit_m: float = np.inf) -> np.ndarray:
-    """x = (theta, w, q, depth error) of every row of ``observations`` (N, obs_dim): shape (N, 4), the
+    """X = (theta, w, q, depth error) of every row of ``observations`` (N, obs_dim): shape (N, 4), the
     error clipped to +-limit.
 
     Clipping the depth error bounds the command far from the ordered depth, so the boat approaches
@@ -69,7 +73,9 @@ class GainSchedule:
     points: np.ndarray  # (n_points,)
 
     @classmethod
-    def design(cls, points: Sequence[float] | np.ndarray, design: Callable[[float], np.ndarray]) -> GainSchedule:
+    def design(
+        cls, points: Sequence[float] | np.ndarray, design: Callable[[float], np.ndarray]
+    ) -> GainSchedule:
         """Run ``design(speed)`` at every point."""
         pts = np.asarray(points, dtype=float)
         if pts.ndim != 1 or pts.size < 2 or np.any(np.diff(pts) <= 0):

@@ -16,8 +16,13 @@ from subenv.vehicles import Vehicle
 from subenv_baselines._common import GainSchedule, feedback_state, row_dot, scaled_points, speeds
 
 # Bryson's rule: each state weighted by the inverse square of its acceptable size.
-ACCEPTABLE: Final = {"pitch_rad": 0.1, "heave_mps": 0.1, "pitch_rate_radps": 0.05, "depth_error_m": 1.0,
-                     "depth_error_integral_ms": 30.0}
+ACCEPTABLE: Final = {
+    "pitch_rad": 0.1,
+    "heave_mps": 0.1,
+    "pitch_rate_radps": 0.05,
+    "depth_error_m": 1.0,
+    "depth_error_integral_ms": 30.0,
+}
 INTEGRAL_LIMIT_M_S: Final = 3 * ACCEPTABLE["depth_error_integral_ms"]
 """The depth-error integral is held within +-this (anti-windup bound of the LQI baselines) [m s]."""
 DEPTH_ERROR_LIMIT_M: Final = 1.5
@@ -59,11 +64,14 @@ class DepthIntegrator:
     def update(self, error: np.ndarray, integral_gain: np.ndarray, saturated: np.ndarray) -> None:
         # Integrate unless the planes are saturated and integrating would push them further.
         hold = saturated & (np.sign(error) == np.sign(integral_gain * self.value))
-        self.value = np.where(hold, self.value, np.clip(self.value + error * self.dt_s, -self.limit, self.limit))
+        self.value = np.where(
+            hold, self.value, np.clip(self.value + error * self.dt_s, -self.limit, self.limit)
+        )
 
 
-def lqi_command(gains: np.ndarray, observations: np.ndarray, integrator: DepthIntegrator,
-                limit_rad: float) -> np.ndarray:
+def lqi_command(
+    gains: np.ndarray, observations: np.ndarray, integrator: DepthIntegrator, limit_rad: float
+) -> np.ndarray:
     """The saturated plane commands -K (theta, w, q, e, int e) of every row of ``observations``
     (``gains``: one row, or one per observation), advancing the integrator (anti-windup)."""
     x = feedback_state(observations, DEPTH_ERROR_LIMIT_M)

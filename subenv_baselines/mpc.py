@@ -29,7 +29,9 @@ import daqp
 
 __all__ = ["BLOCKS", "DepthMPC", "MPCWeights", "control_period", "discrete_jacobians"]
 
-DEPTH, STERN, BOW = (OBSERVATION_NAMES.index(name) for name in ("depth_m", "stern_plane_rad", "bow_plane_rad"))
+DEPTH, STERN, BOW = (
+    OBSERVATION_NAMES.index(name) for name in ("depth_m", "stern_plane_rad", "bow_plane_rad")
+)
 
 N_X: Final = 4  # (theta, w, q, Z)
 N_U: Final = 2  # (stern, bow) [rad]
@@ -43,8 +45,15 @@ force [N], moment [N m]. The truncation error is O(eps) against curvatures of or
 cost twice the evaluations (the Jacobians are most of a step's model time)."""
 
 
-def control_period(params: ModelParams, state: np.ndarray, speed_mps: Any, planes_rad: np.ndarray,
-                   disturbance: np.ndarray, dt_s: float = CONTROL_PERIOD_S, substeps: int = SUBSTEPS) -> np.ndarray:
+def control_period(
+    params: ModelParams,
+    state: np.ndarray,
+    speed_mps: Any,
+    planes_rad: np.ndarray,
+    disturbance: np.ndarray,
+    dt_s: float = CONTROL_PERIOD_S,
+    substeps: int = SUBSTEPS,
+) -> np.ndarray:
     """The state one control period on, as the environments integrate it: :func:`subenv.dynamics.rk4` of
     :func:`subenv.dynamics.derivatives` with the planes, the heave force and the pitch moment held (zero-order
     hold) and the speed constant.
@@ -68,8 +77,13 @@ def control_period(params: ModelParams, state: np.ndarray, speed_mps: Any, plane
     return rk4(rhs, 0.0, np.asarray(state, dtype=float), dt_s, substeps)
 
 
-def discrete_jacobians(params: ModelParams, points: np.ndarray, speed_mps: np.ndarray, dt_s: float = CONTROL_PERIOD_S,
-                       substeps: int = SUBSTEPS) -> tuple[np.ndarray, np.ndarray]:
+def discrete_jacobians(
+    params: ModelParams,
+    points: np.ndarray,
+    speed_mps: np.ndarray,
+    dt_s: float = CONTROL_PERIOD_S,
+    substeps: int = SUBSTEPS,
+) -> tuple[np.ndarray, np.ndarray]:
     """The discrete map x+ = F(x, u, d) of :func:`control_period` and its Jacobian at every point, by forward
     differences of the one model (no second copy of the equations).
 
@@ -88,8 +102,15 @@ def discrete_jacobians(params: ModelParams, points: np.ndarray, speed_mps: np.nd
     """
     speed = np.asarray(speed_mps, dtype=float)[..., None]
     perturbed = _perturbed(points)
-    out = control_period(params, perturbed[..., :N_X], speed, perturbed[..., N_X:N_X + N_U],
-                         perturbed[..., N_X + N_U:], dt_s, substeps)
+    out = control_period(
+        params,
+        perturbed[..., :N_X],
+        speed,
+        perturbed[..., N_X : N_X + N_U],
+        perturbed[..., N_X + N_U :],
+        dt_s,
+        substeps,
+    )
     return _differences(out)
 
 
@@ -223,19 +244,36 @@ class DepthMPC(SingleRowMixin):
     name = "mpc"
     control = "independent"
     alpha = 0.0
-    def __init__(self, blocks: Sequence[int] = BLOCKS, weights: MPCWeights = MPCWeights(),
-                 noise: ObserverNoise = ObserverNoise(), dt_s: float = CONTROL_PERIOD_S, substeps: int = SUBSTEPS,
-                 plane_rate_limit_radps: float | None = DivePlaneConfig.plane_rate_limit_radps,
-                 max_pitch_rad: float = DivePlaneConfig.max_pitch_rad,
-                 max_depth_error_m: float | None = DivePlaneConfig.max_depth_error_m,
-                 pitch_fraction: float = 0.5, depth_band_margin_m: float = 5.0, surface_margin_m: float = 0.25) -> None:
+
+    def __init__(
+        self,
+        blocks: Sequence[int] = BLOCKS,
+        weights: MPCWeights = MPCWeights(),
+        noise: ObserverNoise = ObserverNoise(),
+        dt_s: float = CONTROL_PERIOD_S,
+        substeps: int = SUBSTEPS,
+        plane_rate_limit_radps: float | None = DivePlaneConfig.plane_rate_limit_radps,
+        max_pitch_rad: float = DivePlaneConfig.max_pitch_rad,
+        max_depth_error_m: float | None = DivePlaneConfig.max_depth_error_m,
+        pitch_fraction: float = 0.5,
+        depth_band_margin_m: float = 5.0,
+        surface_margin_m: float = 0.25,
+    ) -> None:
         blocks = tuple(blocks)
-        if not (blocks and all(isinstance(b, int) and not isinstance(b, bool) and b >= 1 for b in blocks)
-                and blocks[0] == 1 and sum(blocks) >= 2):
-            raise ValueError(f"blocks={blocks!r} is invalid: must be integers >= 1 (control periods), the first 1, "
-                             "at least 2 periods in all")
+        if not (
+            blocks
+            and all(isinstance(b, int) and not isinstance(b, bool) and b >= 1 for b in blocks)
+            and blocks[0] == 1
+            and sum(blocks) >= 2
+        ):
+            raise ValueError(
+                f"blocks={blocks!r} is invalid: must be integers >= 1 (control periods), the first 1, "
+                "at least 2 periods in all"
+            )
         if plane_rate_limit_radps is not None and not plane_rate_limit_radps > 0:
-            raise ValueError(f"plane_rate_limit_radps={plane_rate_limit_radps!r} is invalid: must be None or > 0")
+            raise ValueError(
+                f"plane_rate_limit_radps={plane_rate_limit_radps!r} is invalid: must be None or > 0"
+            )
         self.blocks = blocks
         self.weights, self.noise = weights, noise
         self.dt_s, self.substeps = dt_s, substeps
@@ -256,15 +294,17 @@ class DepthMPC(SingleRowMixin):
         return sum(self.blocks)
 
     # --- the model ------------------------------------------------------------------------------
-    def predict(self, state: np.ndarray, planes_rad: np.ndarray, speed_mps: Any,
-                disturbance: np.ndarray | None = None) -> np.ndarray:
+    def predict(
+        self, state: np.ndarray, planes_rad: np.ndarray, speed_mps: Any, disturbance: np.ndarray | None = None
+    ) -> np.ndarray:
         """The state one control period on, as the controller predicts it (:func:`control_period` of the design
         vehicle)."""
         if self._params is None:
             raise RuntimeError("call reset() or reset_batch() first")
         d = np.zeros(np.shape(planes_rad)) if disturbance is None else np.asarray(disturbance, dtype=float)
-        return control_period(self._params, state, speed_mps, np.asarray(planes_rad, dtype=float), d, self.dt_s,
-                              self.substeps)
+        return control_period(
+            self._params, state, speed_mps, np.asarray(planes_rad, dtype=float), d, self.dt_s, self.substeps
+        )
 
     @property
     def disturbance(self) -> np.ndarray:
@@ -278,16 +318,19 @@ class DepthMPC(SingleRowMixin):
             self._limit = vehicle.planes.limit_rad
             self._surface_m = 0.5 * max(vehicle.hull.breadth_m) + self.surface_margin_m
             # None: the environments' default band, Froude-scaled to the vehicle as theirs is.
-            band = (DEPTH_BAND_M * reference_length_ratio(vehicle) if self.max_depth_error_m is None
-                    else self.max_depth_error_m)
+            band = (
+                DEPTH_BAND_M * reference_length_ratio(vehicle)
+                if self.max_depth_error_m is None
+                else self.max_depth_error_m
+            )
             self.band_m = band - self.depth_band_margin_m
             self._vehicle = vehicle
         n = self._n = len(infos)
-        self._y = np.zeros((n, N_X))                     # the last measured state
-        self._d = np.zeros((n, N_D))                     # the disturbance estimate
+        self._y = np.zeros((n, N_X))  # the last measured state
+        self._d = np.zeros((n, N_D))  # the disturbance estimate
         self._P = np.repeat(np.diag(np.square(self.noise.initial_disturbance))[None], n, axis=0)
-        self._planes = np.full((n, N_U), np.nan)         # applied (our last command); nan: none yet
-        self._sensitivity = np.zeros((n, N_X, N_D))      # dF/dd at the last linearisation, for the observer
+        self._planes = np.full((n, N_U), np.nan)  # applied (our last command); nan: none yet
+        self._sensitivity = np.zeros((n, N_X, N_D))  # dF/dd at the last linearisation, for the observer
 
     def act_batch(self, observations: np.ndarray) -> np.ndarray:
         if self._params is None:
@@ -303,12 +346,21 @@ class DepthMPC(SingleRowMixin):
         # on from the measured state with the planes held and the estimate, and its slopes.
         last = np.flatnonzero(~first)
         points = _perturbed(np.concatenate([y, planes, self._d], axis=1)).reshape(-1, N_X + N_U + N_D)
-        points = np.concatenate([points, np.concatenate([self._y[last], self._planes[last], self._d[last]], axis=1)])
-        out = control_period(self._params, points[:, :N_X], np.r_[np.repeat(speed, 1 + N_X + N_U + N_D), speed[last]],
-                             points[:, N_X:N_X + N_U], points[:, N_X + N_U:], self.dt_s, self.substeps)
-        F, J = _differences(out[:len(out) - len(last)].reshape(self._n, 1 + N_X + N_U + N_D, N_X))
-        change = self._observe(y, out[len(out) - len(last):], last)
-        A, B, Bd = J[:, :, :N_X], J[:, :, N_X:N_X + N_U], J[:, :, N_X + N_U:]
+        points = np.concatenate(
+            [points, np.concatenate([self._y[last], self._planes[last], self._d[last]], axis=1)]
+        )
+        out = control_period(
+            self._params,
+            points[:, :N_X],
+            np.r_[np.repeat(speed, 1 + N_X + N_U + N_D), speed[last]],
+            points[:, N_X : N_X + N_U],
+            points[:, N_X + N_U :],
+            self.dt_s,
+            self.substeps,
+        )
+        F, J = _differences(out[: len(out) - len(last)].reshape(self._n, 1 + N_X + N_U + N_D, N_X))
+        change = self._observe(y, out[len(out) - len(last) :], last)
+        A, B, Bd = J[:, :, :N_X], J[:, :, N_X : N_X + N_U], J[:, :, N_X + N_U :]
         self._sensitivity = Bd
         # x+ = A x + B u + c: exact at (y, planes) with the estimate before this period's update, which moves
         # the map by Bd times its change.
@@ -320,8 +372,22 @@ class DepthMPC(SingleRowMixin):
         first_low = np.maximum(-lim, planes - move + margin)
         first_high = np.minimum(lim, planes + move - margin)
         low_depth = np.maximum(command - self.band_m, self._surface_m)
-        qp = self._qp.build(A, B, c, y, x_s, u_s, planes, lim, first_low, first_high, move - margin,
-                            self.pitch_bound_rad, command + self.band_m, low_depth)
+        qp = self._qp.build(
+            A,
+            B,
+            c,
+            y,
+            x_s,
+            u_s,
+            planes,
+            lim,
+            first_low,
+            first_high,
+            move - margin,
+            self.pitch_bound_rad,
+            command + self.band_m,
+            low_depth,
+        )
         u0, solved = np.empty((self._n, N_U)), np.empty(self._n, dtype=bool)
         times = self.solve_times_s
         for i in range(self._n):
@@ -362,8 +428,9 @@ class DepthMPC(SingleRowMixin):
         return change
 
     # --- the steady-state target --------------------------------------------------------------------
-    def _target(self, A: np.ndarray, B: np.ndarray, c: np.ndarray, command: np.ndarray
-                ) -> tuple[np.ndarray, np.ndarray]:
+    def _target(
+        self, A: np.ndarray, B: np.ndarray, c: np.ndarray, command: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         """The steady state at the ordered depth that the cost's state and plane terms measure from, each row's.
 
         The linearised map x+ = A x + B u + c (at the measured state) held still, x = x+, with Z at the ordered
@@ -394,8 +461,11 @@ class DepthMPC(SingleRowMixin):
             inside = (low <= high) & np.all(~free | (np.abs(at) <= bound), axis=1)
             # No steady state inside the box on this line: the one needing the least plane angle, of t = 0 and
             # the two where the planes' angles are equal in size.
-            candidates = np.stack([np.zeros(len(v0))] + [-(v0[:, 3] - sign * v0[:, 4]) / (n[:, 3] - sign * n[:, 4])
-                                                         for sign in (1.0, -1.0)], axis=1)
+            candidates = np.stack(
+                [np.zeros(len(v0))]
+                + [-(v0[:, 3] - sign * v0[:, 4]) / (n[:, 3] - sign * n[:, 4]) for sign in (1.0, -1.0)],
+                axis=1,
+            )
         candidates = np.where(np.isfinite(candidates), candidates, 0.0)
         angle = np.max(np.abs(v0[:, None, 3:] + candidates[:, :, None] * n[:, None, 3:]), axis=2)
         nearest = candidates[np.arange(len(v0)), np.argmin(angle, axis=1)]
@@ -463,28 +533,91 @@ class _CondensedQP:
         self.R = R
         self.lengths = np.asarray(blocks, dtype=float)
 
-    def build(self, A: np.ndarray, B: np.ndarray, c: np.ndarray, y: np.ndarray, x_s: np.ndarray, u_s: np.ndarray,
-              planes: np.ndarray, limit: float, first_low: np.ndarray, first_high: np.ndarray, move: float,
-              pitch_bound: float, depth_high: np.ndarray, depth_low: np.ndarray) -> _Rows:
+    def build(
+        self,
+        A: np.ndarray,
+        B: np.ndarray,
+        c: np.ndarray,
+        y: np.ndarray,
+        x_s: np.ndarray,
+        u_s: np.ndarray,
+        planes: np.ndarray,
+        limit: float,
+        first_low: np.ndarray,
+        first_high: np.ndarray,
+        move: float,
+        pitch_bound: float,
+        depth_high: np.ndarray,
+        depth_low: np.ndarray,
+    ) -> _Rows:
         n, M, nv, K = len(y), self.M, self.nv, len(self.stages)
         w = self.weights
         moves = np.isfinite(move) and M > 1
         rows = nv + 4 * K + (N_U * (M - 1) if moves else 0)
         H, g = np.empty((n, nv, nv)), np.empty((n, nv))
         C, upper, lower = np.zeros((n, rows - nv, nv)), np.empty((n, rows)), np.empty((n, rows))
-        _condense(A, B, c, y, x_s, u_s, planes, self.step_blocks, self.step_lengths, self.sqrt_state_weights,
-                  self.lengths, self.R, w.plane, w.move, w.slack_linear, limit, first_low, first_high,
-                  move if moves else -1.0, pitch_bound, depth_high, depth_low, H, g, C, upper, lower)
+        _condense(
+            A,
+            B,
+            c,
+            y,
+            x_s,
+            u_s,
+            planes,
+            self.step_blocks,
+            self.step_lengths,
+            self.sqrt_state_weights,
+            self.lengths,
+            self.R,
+            w.plane,
+            w.move,
+            w.slack_linear,
+            limit,
+            first_low,
+            first_high,
+            move if moves else -1.0,
+            pitch_bound,
+            depth_high,
+            depth_low,
+            H,
+            g,
+            C,
+            upper,
+            lower,
+        )
         return _Rows(H, g, C, upper, lower)
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _condense(A: np.ndarray, B: np.ndarray, c: np.ndarray, y: np.ndarray, x_s: np.ndarray, u_s: np.ndarray,
-              planes: np.ndarray, step_blocks: np.ndarray, step_lengths: np.ndarray, sqrt_w: np.ndarray,
-              lengths: np.ndarray, R: np.ndarray, w_plane: float, w_move: float, slack_linear: float, limit: float,
-              first_low: np.ndarray, first_high: np.ndarray, move: float, pitch_bound: float, depth_high: np.ndarray,
-              depth_low: np.ndarray, H: np.ndarray, g: np.ndarray, C: np.ndarray, upper: np.ndarray,
-              lower: np.ndarray) -> None:  # pragma: no cover (compiled)
+def _condense(
+    A: np.ndarray,
+    B: np.ndarray,
+    c: np.ndarray,
+    y: np.ndarray,
+    x_s: np.ndarray,
+    u_s: np.ndarray,
+    planes: np.ndarray,
+    step_blocks: np.ndarray,
+    step_lengths: np.ndarray,
+    sqrt_w: np.ndarray,
+    lengths: np.ndarray,
+    R: np.ndarray,
+    w_plane: float,
+    w_move: float,
+    slack_linear: float,
+    limit: float,
+    first_low: np.ndarray,
+    first_high: np.ndarray,
+    move: float,
+    pitch_bound: float,
+    depth_high: np.ndarray,
+    depth_low: np.ndarray,
+    H: np.ndarray,
+    g: np.ndarray,
+    C: np.ndarray,
+    upper: np.ndarray,
+    lower: np.ndarray,
+) -> None:  # pragma: no cover (compiled)
     """Each row's condensed QP (:class:`_CondensedQP`) into H, g, C, upper, lower: the states at the stages
     x = f + S v from x_0 = y through x -> A^L x + (sum_{i<L} A^i)(B U_j + c) over a stage of L periods in
     block j, the state cost sum (x - x_s)' W (x - x_s) over them, and the rows. A loop per row, so a row's
@@ -503,8 +636,12 @@ def _condense(A: np.ndarray, B: np.ndarray, c: np.ndarray, y: np.ndarray, x_s: n
         for L in range(1, max_step + 1):
             for r in range(N_X):
                 for k in range(N_X):
-                    P[L, r, k] = (A[i, r, 0] * P[L - 1, 0, k] + A[i, r, 1] * P[L - 1, 1, k]
-                                  + A[i, r, 2] * P[L - 1, 2, k] + A[i, r, 3] * P[L - 1, 3, k])
+                    P[L, r, k] = (
+                        A[i, r, 0] * P[L - 1, 0, k]
+                        + A[i, r, 1] * P[L - 1, 1, k]
+                        + A[i, r, 2] * P[L - 1, 2, k]
+                        + A[i, r, 3] * P[L - 1, 3, k]
+                    )
                     T[L, r, k] = T[L - 1, r, k] + P[L - 1, r, k]
         H[i] = R
         g[i] = 0.0
@@ -514,12 +651,29 @@ def _condense(A: np.ndarray, B: np.ndarray, c: np.ndarray, y: np.ndarray, x_s: n
             L, j = step_lengths[s], step_blocks[s]
             for r in range(N_X):
                 for a in range(nv):
-                    S_next[r, a] = P[L, r, 0] * S[0, a] + P[L, r, 1] * S[1, a] + P[L, r, 2] * S[2, a] + P[L, r, 3] * S[3, a]
+                    S_next[r, a] = (
+                        P[L, r, 0] * S[0, a]
+                        + P[L, r, 1] * S[1, a]
+                        + P[L, r, 2] * S[2, a]
+                        + P[L, r, 3] * S[3, a]
+                    )
                 for a in range(N_U):
-                    S_next[r, N_U * j + a] += (T[L, r, 0] * B[i, 0, a] + T[L, r, 1] * B[i, 1, a]
-                                               + T[L, r, 2] * B[i, 2, a] + T[L, r, 3] * B[i, 3, a])
-                f_next[r] = (P[L, r, 0] * f[0] + P[L, r, 1] * f[1] + P[L, r, 2] * f[2] + P[L, r, 3] * f[3]
-                             + T[L, r, 0] * c[i, 0] + T[L, r, 1] * c[i, 1] + T[L, r, 2] * c[i, 2] + T[L, r, 3] * c[i, 3])
+                    S_next[r, N_U * j + a] += (
+                        T[L, r, 0] * B[i, 0, a]
+                        + T[L, r, 1] * B[i, 1, a]
+                        + T[L, r, 2] * B[i, 2, a]
+                        + T[L, r, 3] * B[i, 3, a]
+                    )
+                f_next[r] = (
+                    P[L, r, 0] * f[0]
+                    + P[L, r, 1] * f[1]
+                    + P[L, r, 2] * f[2]
+                    + P[L, r, 3] * f[3]
+                    + T[L, r, 0] * c[i, 0]
+                    + T[L, r, 1] * c[i, 1]
+                    + T[L, r, 2] * c[i, 2]
+                    + T[L, r, 3] * c[i, 3]
+                )
             S[:], f[:] = S_next, f_next
             for r in range(N_X):  # the state cost: H += 2 S' W S, g += 2 S' W (f - x_s)
                 wr = sqrt_w[s, r] * sqrt_w[s, r]
@@ -534,8 +688,9 @@ def _condense(A: np.ndarray, B: np.ndarray, c: np.ndarray, y: np.ndarray, x_s: n
                             H[i, a, b] += h
                             H[i, b, a] += h
             # Soft rows: pitch - s_p <= bound, pitch + s_p >= -bound, depth - s_d <= high, depth + s_d >= low.
-            for q, (state, slack, high, low) in enumerate(((0, nv - 2, pitch_bound, -pitch_bound),
-                                                           (3, nv - 1, depth_high[i], depth_low[i]))):
+            for q, (state, slack, high, low) in enumerate(
+                ((0, nv - 2, pitch_bound, -pitch_bound), (3, nv - 1, depth_high[i], depth_low[i]))
+            ):
                 for side in range(2):
                     row = (2 * q + side) * K + s
                     C[i, row, :] = S[state]

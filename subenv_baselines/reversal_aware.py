@@ -75,12 +75,15 @@ class ReversalAware(SingleRowMixin):
             ucr = {a: critical_speed(vehicle, a) for a in ALLOCATIONS}
             low, high = sorted(ucr.values())
             self.switch_speed_mps = brentq(
-                lambda u: self._margin(u, ucr[ALLOCATIONS[0]]) - self._margin(u, ucr[ALLOCATIONS[1]]), low, high
+                lambda u: self._margin(u, ucr[ALLOCATIONS[0]]) - self._margin(u, ucr[ALLOCATIONS[1]]),
+                low,
+                high,
             )
             self._slow, self._fast = (a for a, _ in sorted(ucr.items(), key=lambda kv: -kv[1]))
             self.schedules = {
-                a: GainSchedule.design(scaled_points(self.points, vehicle),
-                                       lambda u, a=a: lqi_gain(vehicle, u, a, self._limit))
+                a: GainSchedule.design(
+                    scaled_points(self.points, vehicle), lambda u, a=a: lqi_gain(vehicle, u, a, self._limit)
+                )
                 for a in ALLOCATIONS
             }
             self._vehicle = vehicle
@@ -117,7 +120,10 @@ class ReversalAware(SingleRowMixin):
             old = self._gains(self.allocation, speed)[:, 4]
             rescale = switched & (gains[:, 4] != 0)
             self.integrator.value = np.where(
-                rescale, self.integrator.value * (old / np.where(rescale, gains[:, 4], 1.0)), self.integrator.value)
+                rescale,
+                self.integrator.value * (old / np.where(rescale, gains[:, 4], 1.0)),
+                self.integrator.value,
+            )
         self.allocation = allocation
         delta = lqi_command(gains, obs, self.integrator, self._limit)
         return np.stack([delta, allocation * delta], axis=1).astype(np.float32) / np.float32(self._limit)

@@ -42,7 +42,8 @@ class GainScheduledPolePlacement(SingleRowMixin):
     def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
         if vehicle is not self._vehicle:
             self.schedule = GainSchedule.design(
-                scaled_points(self.points, vehicle), lambda u: place_gain(vehicle, u, thesis_poles(vehicle), self.alpha)
+                scaled_points(self.points, vehicle),
+                lambda u: place_gain(vehicle, u, thesis_poles(vehicle), self.alpha),
             )
             self._vehicle = vehicle
             self._limit = vehicle.planes.limit_rad

@@ -19,7 +19,9 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 # At least two numba threads (read once, when numba is first imported), so that the tests that step a
 # vector environment on two threads run on a one-core machine too: results never depend on it.
-os.environ["NUMBA_NUM_THREADS"] = str(max(2, int(os.environ.get("NUMBA_NUM_THREADS", "0") or 0), os.cpu_count() or 1))
+os.environ["NUMBA_NUM_THREADS"] = str(
+    max(2, int(os.environ.get("NUMBA_NUM_THREADS", "0") or 0), os.cpu_count() or 1)
+)
 
 _MEASURED: list[tuple[str, str]] = []
 
@@ -59,7 +61,11 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 # too.) One Ray instance in the suite also means that the sweep test which kills "a Ray worker running a
 # chunk" finds its own.
 _SHARED_SESSION_FIXTURES = {
-    "analysis_report": ("tests/analysis/test_analysis.py", "tests/analysis/test_hopf.py", "tests/test_cli.py"),
+    "analysis_report": (
+        "tests/analysis/test_analysis.py",
+        "tests/analysis/test_hopf.py",
+        "tests/test_cli.py",
+    ),
     "local_ray": ("tests/test_sweep.py", "tests/agents/test_tune.py", "tests/agents/test_reference.py"),
     "small_run": ("tests/evaluation/test_results.py", "tests/evaluation/test_plots.py"),
 }
@@ -86,8 +92,10 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
         for name in set(getattr(item, "fixturenames", ())) & _SHARED_SESSION_FIXTURES.keys():
             # (tests/envs/test_rllib.py has a local_ray of its own: RLlib's, run in .venv-gym12/)
             if file not in _SHARED_SESSION_FIXTURES[name] and file != "tests/envs/test_rllib.py":
-                raise pytest.UsageError(f"{file} uses the session fixture {name}: add it to "
-                                        f"_SHARED_SESSION_FIXTURES['{name}'] in tests/conftest.py")
+                raise pytest.UsageError(
+                    f"{file} uses the session fixture {name}: add it to "
+                    f"_SHARED_SESSION_FIXTURES['{name}'] in tests/conftest.py"
+                )
     if config.getoption("--run-slow"):
         return
     skip = pytest.mark.skip(reason="slow: opt in with --run-slow")

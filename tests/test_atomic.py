@@ -58,7 +58,11 @@ def _state(out: Path) -> str:
     if not out.is_dir():
         return "missing"
     versions = {(out / name).read_text() if (out / name).is_file() else "partial" for name in PARTS}
-    return versions.pop() if len(versions) == 1 and sorted(p.name for p in out.iterdir()) == list(PARTS) else "mixed"
+    return (
+        versions.pop()
+        if len(versions) == 1 and sorted(p.name for p in out.iterdir()) == list(PARTS)
+        else "mixed"
+    )
 
 
 def _exchange_works(tmp_path: Path) -> bool:
@@ -81,8 +85,12 @@ def test_a_writer_killed_at_any_step_leaves_a_complete_folder(tmp_path: Path, fa
         parent = tmp_path / f"kill{kill_at}"
         out = parent / "results"
         _write(out, "old")
-        child = subprocess.run([sys.executable, "-c", CHILD, str(out), str(kill_at), str(int(fallback)),
-                                atomic.__file__], check=False, capture_output=True, text=True)
+        child = subprocess.run(
+            [sys.executable, "-c", CHILD, str(out), str(kill_at), str(int(fallback)), atomic.__file__],
+            check=False,
+            capture_output=True,
+            text=True,
+        )
         if child.returncode == 0:
             assert _state(out) == "new" and os.listdir(parent) == ["results"]
             break
@@ -110,9 +118,14 @@ def test_overwrite_replaces_only_an_earlier_result_of_the_same_kind(tmp_path: Pa
     project = tmp_path / "project"
     (project / ".git").mkdir(parents=True)
     (project / "src").mkdir()
-    with pytest.raises(FileExistsError, match=r"'.*project' exists and is not an earlier result of my tool \(it has "
-                                              r"no \.subenv-output file"), \
-            atomic_output_dir(project, overwrite=True, kind="my tool"):
+    with (
+        pytest.raises(
+            FileExistsError,
+            match=r"'.*project' exists and is not an earlier result of my tool \(it has "
+            r"no \.subenv-output file",
+        ),
+        atomic_output_dir(project, overwrite=True, kind="my tool"),
+    ):
         pytest.fail("the block must not run")
     assert sorted(p.name for p in project.iterdir()) == [".git", "src"]
 
@@ -120,8 +133,10 @@ def test_overwrite_replaces_only_an_earlier_result_of_the_same_kind(tmp_path: Pa
     with atomic_output_dir(out, kind="my tool") as tmp:
         (tmp / "one.txt").write_text("1")
     assert (out / MARKER_FILE).read_text() == "my tool\n"
-    with pytest.raises(FileExistsError, match="not an earlier result of other tool"), \
-            atomic_output_dir(out, overwrite=True, kind="other tool"):
+    with (
+        pytest.raises(FileExistsError, match="not an earlier result of other tool"),
+        atomic_output_dir(out, overwrite=True, kind="other tool"),
+    ):
         pytest.fail("the block must not run")
     with atomic_output_dir(out, overwrite=True, kind="my tool") as tmp:
         (tmp / "two.txt").write_text("2")
@@ -130,8 +145,14 @@ def test_overwrite_replaces_only_an_earlier_result_of_the_same_kind(tmp_path: Pa
 
 def test_a_folder_that_cannot_be_created_is_reported_before_the_block(tmp_path: Path, monkeypatch):
     (tmp_path / "afile").write_text("x")
-    with pytest.raises(OutputDirError, match=r"output folder '.*afile/sub' cannot be created: '.*afile' is a "
-                                             r"file, not a folder"), atomic_output_dir(tmp_path / "afile" / "sub"):
+    with (
+        pytest.raises(
+            OutputDirError,
+            match=r"output folder '.*afile/sub' cannot be created: '.*afile' is a "
+            r"file, not a folder",
+        ),
+        atomic_output_dir(tmp_path / "afile" / "sub"),
+    ):
         pytest.fail("the block must not run")
 
     locked = tmp_path / "locked"
@@ -144,8 +165,10 @@ def test_a_folder_that_cannot_be_created_is_reported_before_the_block(tmp_path: 
         return real_mkdir(path, *args, **kwargs)
 
     monkeypatch.setattr(os, "mkdir", refuse)
-    with pytest.raises(OutputDirError, match=r"'.*locked/out' cannot be created: Permission denied"), \
-            atomic_output_dir(locked / "out"):
+    with (
+        pytest.raises(OutputDirError, match=r"'.*locked/out' cannot be created: Permission denied"),
+        atomic_output_dir(locked / "out"),
+    ):
         pytest.fail("the block must not run")
     assert list(locked.iterdir()) == []
 

@@ -84,8 +84,22 @@ def test_analyze_writes_the_report_and_refuses_to_overwrite(tmp_path: Path, anal
 
 def test_evaluate_end_to_end_on_the_tiny_suite(tmp_path: Path, capsys):
     out = tmp_path / "eval"
-    assert main(["evaluate", "--suite", "tiny", "--episodes", "1", "--controllers", "thesis,reversal_aware",
-                 "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "evaluate",
+                "--suite",
+                "tiny",
+                "--episodes",
+                "1",
+                "--controllers",
+                "thesis,reversal_aware",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     printed = capsys.readouterr()
     text = printed.out
     assert "| controller |" in text and "reversal_aware" in text and "thesis" in text
@@ -134,17 +148,24 @@ EVALUATE = ["evaluate", "--suite", "tiny", "--episodes", "1", "--controllers", "
 
 
 @pytest.mark.parametrize("command", [EVALUATE, ["analyze"]], ids=["evaluate", "analyze"])
-def test_an_output_folder_that_cannot_be_written_is_refused_before_any_work(tmp_path: Path, monkeypatch, no_work,
-                                                                             command):
+def test_an_output_folder_that_cannot_be_written_is_refused_before_any_work(
+    tmp_path: Path, monkeypatch, no_work, command
+):
     (tmp_path / "afile").write_text("x")
-    with pytest.raises(SystemExit, match=r"--out: output folder '.*afile/sub' cannot be created: '.*afile' is a "
-                                         r"file, not a folder"):
+    with pytest.raises(
+        SystemExit,
+        match=r"--out: output folder '.*afile/sub' cannot be created: '.*afile' is a "
+        r"file, not a folder",
+    ):
         main([*command, "--out", str(tmp_path / "afile" / "sub")])
     locked = tmp_path / "locked"
     locked.mkdir()
     _refuse_mkdir_in(monkeypatch, locked)
-    with pytest.raises(SystemExit, match=r"--out: output folder '.*locked/results' cannot be created: Permission "
-                                         r"denied"):
+    with pytest.raises(
+        SystemExit,
+        match=r"--out: output folder '.*locked/results' cannot be created: Permission "
+        r"denied",
+    ):
         main([*command, "--out", str(locked / "results")])
 
 
@@ -153,8 +174,11 @@ def test_force_replaces_only_an_earlier_result_of_the_command(tmp_path: Path, no
     project = tmp_path / "project"
     (project / ".git").mkdir(parents=True)
     (project / "src").mkdir()
-    with pytest.raises(SystemExit, match=rf"--out: output folder '.*project' exists and is not an earlier result of "
-                                         rf"subenv {command[0]}"):
+    with pytest.raises(
+        SystemExit,
+        match=rf"--out: output folder '.*project' exists and is not an earlier result of "
+        rf"subenv {command[0]}",
+    ):
         main([*command, "--out", str(project), "--force"])
     assert sorted(p.name for p in project.iterdir()) == [".git", "src"]
     (tmp_path / "afile").write_text("x")
@@ -164,8 +188,10 @@ def test_force_replaces_only_an_earlier_result_of_the_command(tmp_path: Path, no
 
 @pytest.mark.parametrize(
     ("vehicle", "reason"),
-    [("nope", r"vehicle='nope' is unknown: must be one of \['remus100', 'suboff', 'suboff_fullscale'\]"),
-     ("missing.toml", r"vehicle file 'missing.toml' does not exist")],
+    [
+        ("nope", r"vehicle='nope' is unknown: must be one of \['remus100', 'suboff', 'suboff_fullscale'\]"),
+        ("missing.toml", r"vehicle file 'missing.toml' does not exist"),
+    ],
 )
 def test_analyze_with_a_bad_vehicle_is_a_one_line_error(tmp_path: Path, no_work, vehicle, reason):
     with pytest.raises(SystemExit, match=rf"^subenv analyze: --vehicle '{vehicle}': {reason}"):
@@ -178,8 +204,9 @@ def test_analyze_with_a_singular_vehicle_is_a_one_line_error(tmp_path: Path, no_
     # With M_qdot' = I_y' and Z_qdot' = 0 the mass matrix [[m' - Z_wdot', -Z_qdot'], [-M_wdot', I_y' - M_qdot']]
     # is singular.
     inertia_nd = 561.32 / (0.97 * 13.9792**5)  # I_y / (rho/2 L^5), in the file's US customary units
-    singular = text.replace("M_qdot = -8.8e-4", f"M_qdot = {inertia_nd!r}").replace("Z_qdot = -6.33e-4",
-                                                                                   "Z_qdot = 0.0")
+    singular = text.replace("M_qdot = -8.8e-4", f"M_qdot = {inertia_nd!r}").replace(
+        "Z_qdot = -6.33e-4", "Z_qdot = 0.0"
+    )
     path = tmp_path / "singular.toml"
     path.write_text(singular)
     with pytest.raises(SystemExit, match=r"^subenv analyze: --vehicle '.*singular.toml': "):
@@ -188,15 +215,27 @@ def test_analyze_with_a_singular_vehicle_is_a_one_line_error(tmp_path: Path, no_
 
 @pytest.mark.parametrize(
     ("option", "value"),
-    [("--suite", "Nominal,"), ("--suite", ",Nominal"), ("--suite", "Nominal,,LowSpeed"), ("--suite", ""),
-     ("--controllers", ""), ("--controllers", "thesis,"), ("--plugins", ""), ("--out", ""), ("--out", " ")],
+    [
+        ("--suite", "Nominal,"),
+        ("--suite", ",Nominal"),
+        ("--suite", "Nominal,,LowSpeed"),
+        ("--suite", ""),
+        ("--controllers", ""),
+        ("--controllers", "thesis,"),
+        ("--plugins", ""),
+        ("--out", ""),
+        ("--out", " "),
+    ],
 )
-def test_evaluate_refuses_empty_names_and_an_empty_out(tmp_path: Path, monkeypatch, capsys, no_work, option,
-                                                        value):
+def test_evaluate_refuses_empty_names_and_an_empty_out(
+    tmp_path: Path, monkeypatch, capsys, no_work, option, value
+):
     monkeypatch.chdir(tmp_path)  # where the default --out would be written
     arguments = {"--suite": "tiny", "--controllers": "thesis", "--out": str(tmp_path / "eval"), option: value}
     with pytest.raises(SystemExit) as error:
-        main(["evaluate", "--episodes", "1", "--no-progress", *(x for pair in arguments.items() for x in pair)])
+        main(
+            ["evaluate", "--episodes", "1", "--no-progress", *(x for pair in arguments.items() for x in pair)]
+        )
     assert error.value.code == 2
     assert f"argument {option}: invalid value {value!r}: must be" in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []
@@ -211,11 +250,30 @@ def test_an_empty_out_is_refused_by_every_command(capsys, no_work, command):
 
 def test_evaluate_takes_scenario_names_for_the_suite(tmp_path: Path, capsys):
     out = tmp_path / "eval"
-    assert main(["evaluate", "--suite", "Nominal", "--episodes", "1", "--controllers", "thesis", "--no-plots",
-                 "--out", str(out), "--no-progress"]) == 0
+    assert (
+        main(
+            [
+                "evaluate",
+                "--suite",
+                "Nominal",
+                "--episodes",
+                "1",
+                "--controllers",
+                "thesis",
+                "--no-plots",
+                "--out",
+                str(out),
+                "--no-progress",
+            ]
+        )
+        == 0
+    )
     assert {row["scenario"] for row in csv.DictReader((out / "results.csv").open())} == {"Nominal"}
-    with pytest.raises(SystemExit, match=r"suite='Fastest' is unknown: must be a suite name \(one of \['default'.*"
-                                         r"or a scenario name \(one of \['Nominal'"):
+    with pytest.raises(
+        SystemExit,
+        match=r"suite='Fastest' is unknown: must be a suite name \(one of \['default'.*"
+        r"or a scenario name \(one of \['Nominal'",
+    ):
         main(["evaluate", "--suite", "Fastest", "--out", str(tmp_path / "y"), "--no-progress"])
 
 
@@ -223,17 +281,50 @@ class _Reached(Exception):
     """The command got past its checks to its work."""
 
 
-_WORDS = st.sampled_from(["tiny", "Nominal", "LowSpeed", "nope", "", ",", "thesis", "lqr", "-1", "0", "3", "1e9",
-                          "Nominal,", "subenv/Nominal-v0", "x/y", "\x00", " ", "é"])
+_WORDS = st.sampled_from(
+    [
+        "tiny",
+        "Nominal",
+        "LowSpeed",
+        "nope",
+        "",
+        ",",
+        "thesis",
+        "lqr",
+        "-1",
+        "0",
+        "3",
+        "1e9",
+        "Nominal,",
+        "subenv/Nominal-v0",
+        "x/y",
+        "\x00",
+        " ",
+        "é",
+    ]
+)
 
 
-@settings(max_examples=60, deadline=None, derandomize=True, database=None,
-          suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(options=st.lists(st.tuples(st.sampled_from(["--suite", "--controllers", "--episodes", "--seed", "--plugins",
-                                                   "--out"]), _WORDS), max_size=4))
+@settings(
+    max_examples=60,
+    deadline=None,
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
+)
+@given(
+    options=st.lists(
+        st.tuples(
+            st.sampled_from(["--suite", "--controllers", "--episodes", "--seed", "--plugins", "--out"]),
+            _WORDS,
+        ),
+        max_size=4,
+    )
+)
 def test_evaluate_arguments_are_refused_in_one_line_or_reach_the_work(options, tmp_path_factory, monkeypatch):
     """Fuzzing ``subenv evaluate``'s arguments: each is refused by a usage error or a one-line
     message (no traceback), or the command reaches its rollouts."""
+
     def reached(*args, **kwargs):  # type: ignore[no-untyped-def]
         raise _Reached
 
@@ -259,8 +350,8 @@ def test_help_lists_every_command_in_one_line(capsys):
         main(["--help"])
     assert exit_.value.code == 0
     lines = capsys.readouterr().out.splitlines()
-    section = lines[lines.index("commands:") + 2:]  # after the "<command>" line
-    section = section[:section.index("")]
+    section = lines[lines.index("commands:") + 2 :]  # after the "<command>" line
+    section = section[: section.index("")]
     assert [line.split()[0] for line in section] == list(COMMANDS)  # no help wraps onto a second line
 
 
@@ -271,11 +362,16 @@ def test_no_command_prints_the_help_as_a_usage_error(capsys):
     assert all(f"    {command} " in printed.err for command in COMMANDS)
 
 
-@pytest.mark.parametrize("command", [["demo"], ["analyze"], ["evaluate", "--suite", "tiny", "--controllers", "thesis"]],
-                         ids=["demo", "analyze", "evaluate"])
+@pytest.mark.parametrize(
+    "command",
+    [["demo"], ["analyze"], ["evaluate", "--suite", "tiny", "--controllers", "thesis"]],
+    ids=["demo", "analyze", "evaluate"],
+)
 def test_a_missing_matplotlib_is_one_line_naming_the_extra(tmp_path: Path, monkeypatch, no_work, command):
     monkeypatch.setitem(sys.modules, "matplotlib", None)  # as if not installed: `import matplotlib` fails
-    monkeypatch.setattr(subenv.cli, "fly", lambda *args: pytest.fail("demo flew before checking for matplotlib"))
+    monkeypatch.setattr(
+        subenv.cli, "fly", lambda *args: pytest.fail("demo flew before checking for matplotlib")
+    )
     with pytest.raises(SystemExit) as exit_:
         main([*command, "--out", str(tmp_path / "out")])
     message = str(exit_.value.code)
@@ -297,25 +393,51 @@ def test_controllers_that_cannot_load_are_skipped_with_a_note(tmp_path: Path, mo
     declared = [EntryPoint(name, f"subenv_agents.shipped:{name}", group) for name in ("ppo", "sac")]
     unavailable = controller.discover_controllers(declared)
     assert sorted(unavailable) == ["ppo", "sac"] and controller.controller_names() == ["thesis"]
-    assert unavailable["ppo"].startswith("the 'rl' extra is needed for the shipped agents: pip install \"subenv[rl]\"")
+    assert unavailable["ppo"].startswith(
+        "the 'rl' extra is needed for the shipped agents: pip install \"subenv[rl]\""
+    )
 
-    monkeypatch.setattr(subenv.evaluation.comparison, "evaluate", lambda *a, **k: pytest.fail("reached the work"))
+    monkeypatch.setattr(
+        subenv.evaluation.comparison, "evaluate", lambda *a, **k: pytest.fail("reached the work")
+    )
     assert main(["evaluate", "--list"]) == 0
     printed = capsys.readouterr()
     assert "controllers: thesis\n" in printed.out
     assert printed.err == f"(skipped ppo, sac: {unavailable['ppo']})\n"
-    with pytest.raises(SystemExit, match=r"^subenv evaluate: controller 'sac' cannot load: the 'rl' extra is needed"):
+    with pytest.raises(
+        SystemExit, match=r"^subenv evaluate: controller 'sac' cannot load: the 'rl' extra is needed"
+    ):
         main(["evaluate", "--controllers", "thesis,sac", "--out", str(tmp_path / "out")])
 
 
 def test_evaluate_takes_a_vehicle_and_says_what_is_not_scaled(tmp_path: Path, capsys) -> None:
     out = tmp_path / "full"
-    main(["evaluate", "--vehicle", "suboff_fullscale", "--controllers", "thesis", "--suite", "tiny", "--episodes", "1",
-          "--no-plots", "--no-progress", "--out", str(out)])
+    main(
+        [
+            "evaluate",
+            "--vehicle",
+            "suboff_fullscale",
+            "--controllers",
+            "thesis",
+            "--suite",
+            "tiny",
+            "--episodes",
+            "1",
+            "--no-plots",
+            "--no-progress",
+            "--out",
+            str(out),
+        ]
+    )
     err = capsys.readouterr().err
-    assert "--vehicle suboff_fullscale: the scenarios, the success criterion and the classical baselines' designs are " \
-           "Froude-scaled to its 102.3 m (x24)" in err
+    assert (
+        "--vehicle suboff_fullscale: the scenarios, the success criterion and the classical baselines' designs are "
+        "Froude-scaled to its 102.3 m (x24)" in err
+    )
     assert json.loads((out / "run.json").read_text())["vehicle"] == "suboff_fullscale"
-    with pytest.raises(SystemExit, match=r"vehicle='boat' is unknown: must be one of \['remus100', 'suboff', 'suboff_fullscale'\]"):
+    with pytest.raises(
+        SystemExit,
+        match=r"vehicle='boat' is unknown: must be one of \['remus100', 'suboff', 'suboff_fullscale'\]",
+    ):
         main(["evaluate", "--vehicle", "boat", "--out", str(tmp_path / "none")])
     assert not (tmp_path / "none").exists()

@@ -33,8 +33,12 @@ ROOT = Path(__file__).resolve().parents[1]
 def test_every_controller_is_declared_as_an_entry_point():
     """pyproject.toml declares each classical controller and each shipped model, by its name (the JAX
     PPO's folder has its own loader)."""
-    declared = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["entry-points"][ENTRY_POINT_GROUP]
-    expected = {name: f"{cls.__module__}:{cls.__qualname__}" for name, cls in subenv_baselines.CONTROLLERS.items()}
+    declared = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["entry-points"][
+        ENTRY_POINT_GROUP
+    ]
+    expected = {
+        name: f"{cls.__module__}:{cls.__qualname__}" for name, cls in subenv_baselines.CONTROLLERS.items()
+    }
     expected |= subenv_baselines.OPTIONAL_CONTROLLERS
     expected |= {name: f"subenv_agents.shipped:{name}" for name in shipped_models()}
     expected["ppo_jax"] = "subenv_agents.jax_ppo:shipped"
@@ -45,7 +49,9 @@ def _run(*command: str | Path, cwd: Path, ok: bool = True) -> subprocess.Complet
     # Without PYTHONPATH: set (to a checkout) where the suite runs, it would put the checkout before the
     # clean venv's site-packages.
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    done = subprocess.run([str(c) for c in command], check=False, capture_output=True, text=True, cwd=cwd, env=env)
+    done = subprocess.run(
+        [str(c) for c in command], check=False, capture_output=True, text=True, cwd=cwd, env=env
+    )
     assert (done.returncode == 0) == ok, (done.returncode, done.stdout, done.stderr)
     return done
 
@@ -60,17 +66,40 @@ def test_wheel_installs_into_a_clean_venv_and_evaluates(tmp_path: Path):
     pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text())
     for name in ("pyproject.toml", pyproject["project"]["readme"], *pyproject["project"]["license-files"]):
         shutil.copy2(ROOT / name, source / name)
-    for package in {name.split(".")[0] for name in pyproject["tool"]["setuptools"]["packages"]["find"]["include"]}:
+    for package in {
+        name.split(".")[0] for name in pyproject["tool"]["setuptools"]["packages"]["find"]["include"]
+    }:
         shutil.copytree(ROOT / package, source / package, ignore=shutil.ignore_patterns("__pycache__"))
     dist = tmp_path / "dist"
-    _run(sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w", dist, source, cwd=tmp_path)
+    _run(
+        sys.executable,
+        "-m",
+        "pip",
+        "wheel",
+        "--no-deps",
+        "--no-build-isolation",
+        "-q",
+        "-w",
+        dist,
+        source,
+        cwd=tmp_path,
+    )
     (wheel,) = dist.glob("subenv-*.whl")
     archive = zipfile.ZipFile(wheel)
     names = archive.namelist()
-    for name in ("subenv/vehicles/data/suboff.toml", "subenv/py.typed", "subenv_baselines/thesis.py",
-                 "subenv_agents/shipped.py", "subenv_agents/hyperparams/ppo.yml", "subenv_agents/models/ppo/model.zip",
-                 "subenv_agents/models/sac/vecnormalize.pkl", "subenv_agents/models/ppo_jax/network.npz",
-                 "subenv_agents/jax_ppo.py", "subenv/jax/env.py", "subenv-0.1.0.dist-info/licenses/LICENSE"):
+    for name in (
+        "subenv/vehicles/data/suboff.toml",
+        "subenv/py.typed",
+        "subenv_baselines/thesis.py",
+        "subenv_agents/shipped.py",
+        "subenv_agents/hyperparams/ppo.yml",
+        "subenv_agents/models/ppo/model.zip",
+        "subenv_agents/models/sac/vecnormalize.pkl",
+        "subenv_agents/models/ppo_jax/network.npz",
+        "subenv_agents/jax_ppo.py",
+        "subenv/jax/env.py",
+        "subenv-0.1.0.dist-info/licenses/LICENSE",
+    ):
         assert name in names, name
     assert not any(n.startswith(("tests/", "benchmarks/", "baselines/", "agents/")) for n in names)
     metadata = archive.read("subenv-0.1.0.dist-info/METADATA").decode()
@@ -92,39 +121,85 @@ def test_wheel_installs_into_a_clean_venv_and_evaluates(tmp_path: Path):
 
     listed = _run(subenv, "evaluate", "--list", cwd=tmp_path)
     controllers = listed.stdout.splitlines()[0].removeprefix("controllers: ").split(", ")
-    assert sorted(controllers) == sorted(subenv_baselines.CONTROLLERS)  # without the extras: no agents, no MPC
+    assert sorted(controllers) == sorted(
+        subenv_baselines.CONTROLLERS
+    )  # without the extras: no agents, no MPC
     skipped = listed.stderr.splitlines()
     assert len(skipped) == 3
-    assert skipped[0].startswith("(skipped mpc: the 'mpc' extra is needed for the MPC baseline (subenv_baselines.mpc): "
-                                 'pip install "subenv[mpc]" (or pip install "daqp>=0.11"; ')
-    assert skipped[1].startswith("(skipped ppo, sac: the 'rl' extra is needed for the shipped agents: "
-                                 'pip install "subenv[rl]" (or pip install "stable-baselines3>=2.3" ')
-    assert skipped[2].startswith("(skipped ppo_jax: the 'jax-rl' extra is needed for PPO on the JAX environment "
-                                 '(subenv_agents.jax_ppo): pip install "subenv[jax-rl]" (or pip install "jax>=0.4.30" '
-                                 '"optax>=0.2"; ')
+    assert skipped[0].startswith(
+        "(skipped mpc: the 'mpc' extra is needed for the MPC baseline (subenv_baselines.mpc): "
+        'pip install "subenv[mpc]" (or pip install "daqp>=0.11"; '
+    )
+    assert skipped[1].startswith(
+        "(skipped ppo, sac: the 'rl' extra is needed for the shipped agents: "
+        'pip install "subenv[rl]" (or pip install "stable-baselines3>=2.3" '
+    )
+    assert skipped[2].startswith(
+        "(skipped ppo_jax: the 'jax-rl' extra is needed for PPO on the JAX environment "
+        '(subenv_agents.jax_ppo): pip install "subenv[jax-rl]" (or pip install "jax>=0.4.30" '
+        '"optax>=0.2"; '
+    )
 
     refused = _run(python, "-c", "import subenv.jax", cwd=tmp_path, ok=False)  # jax is not installed
-    assert refused.stderr.strip().splitlines()[-1].startswith(
-        "subenv.extras.MissingExtra: the 'jax' extra is needed for the physics on JAX (subenv.jax): "
-        'pip install "subenv[jax]" (or pip install "jax>=0.4.30"; ')
+    assert (
+        refused.stderr.strip()
+        .splitlines()[-1]
+        .startswith(
+            "subenv.extras.MissingExtra: the 'jax' extra is needed for the physics on JAX (subenv.jax): "
+            'pip install "subenv[jax]" (or pip install "jax>=0.4.30"; '
+        )
+    )
 
     out = tmp_path / "evaluation"
-    evaluate = ("evaluate", "--suite", "tiny", "--episodes", "1", "--controllers", "thesis", "--no-progress", "--out", out)
+    evaluate = (
+        "evaluate",
+        "--suite",
+        "tiny",
+        "--episodes",
+        "1",
+        "--controllers",
+        "thesis",
+        "--no-progress",
+        "--out",
+        out,
+    )
     refused = _run(subenv, *evaluate, cwd=tmp_path, ok=False)  # matplotlib is not installed
     assert refused.returncode == 1 and refused.stderr.count("\n") == 1 and not out.exists()
-    assert refused.stderr.startswith("subenv evaluate: the 'plot' extra is needed for the plots (or pass --no-plots): "
-                                     'pip install "subenv[plot]" (or pip install "matplotlib>=3.7"; ')
+    assert refused.stderr.startswith(
+        "subenv evaluate: the 'plot' extra is needed for the plots (or pass --no-plots): "
+        'pip install "subenv[plot]" (or pip install "matplotlib>=3.7"; '
+    )
     _run(subenv, *evaluate, "--no-plots", cwd=tmp_path)
     rows = list(csv.DictReader((out / "results.csv").open()))
-    assert [row["controller"] for row in rows] == ["thesis", "thesis"]  # the tiny suite: two scenarios, one episode
+    assert [row["controller"] for row in rows] == [
+        "thesis",
+        "thesis",
+    ]  # the tiny suite: two scenarios, one episode
 
     # The README's own controller, saved beside the user and run from the wheel's command.
     readme = (ROOT / "README.md").read_text("utf-8")
     (tmp_path / "depth_p.py").write_text(readme.split("```python\n# depth_p.py\n", 1)[1].split("```", 1)[0])
     mine = tmp_path / "mine"
-    _run(subenv, "evaluate", "--plugins", "depth_p.py", "--controllers", "depth_p,thesis", "--suite", "tiny",
-         "--episodes", "1", "--no-plots", "--no-progress", "--out", mine, cwd=tmp_path)
-    assert [row["controller"] for row in csv.DictReader((mine / "results.csv").open())] == ["depth_p"] * 2 + ["thesis"] * 2
+    _run(
+        subenv,
+        "evaluate",
+        "--plugins",
+        "depth_p.py",
+        "--controllers",
+        "depth_p,thesis",
+        "--suite",
+        "tiny",
+        "--episodes",
+        "1",
+        "--no-plots",
+        "--no-progress",
+        "--out",
+        mine,
+        cwd=tmp_path,
+    )
+    assert [row["controller"] for row in csv.DictReader((mine / "results.csv").open())] == ["depth_p"] * 2 + [
+        "thesis"
+    ] * 2
 
     bare = _run(subenv, cwd=tmp_path, ok=False)
     assert bare.returncode == 2 and "commands:" in bare.stderr

@@ -19,8 +19,12 @@ README = Path(__file__).resolve().parents[1] / "README.md"
 TEXT = README.read_text("utf-8")
 BLOCKS = re.findall(r"```python\n(.*?)```", TEXT, flags=re.DOTALL)
 FILES = {m.group(1): block for block in BLOCKS if (m := re.match(r"# (\w+\.py)\n", block))}
-PLUGIN_COMMANDS = [line for block in re.findall(r"```bash\n(.*?)```", TEXT, flags=re.DOTALL)
-                   for line in block.splitlines() if line.startswith("subenv evaluate --plugins")]
+PLUGIN_COMMANDS = [
+    line
+    for block in re.findall(r"```bash\n(.*?)```", TEXT, flags=re.DOTALL)
+    for line in block.splitlines()
+    if line.startswith("subenv evaluate --plugins")
+]
 
 
 def _leaderboard_row(printed: str, name: str) -> dict[str, str]:
@@ -66,8 +70,14 @@ def test_the_readme_command_runs_your_own_controller(tmp_path) -> None:
     # The installed console script (whose path, unlike `python -m`'s, does not hold the current directory).
     script = shutil.which("subenv", path=str(Path(sys.executable).parent))
     command = [script] if script else [sys.executable, "-m", "subenv"]
-    done = subprocess.run([*command, *args[1:], "--no-progress", "--no-plots"], cwd=tmp_path,
-                          capture_output=True, text=True, timeout=600, check=False)
+    done = subprocess.run(
+        [*command, *args[1:], "--no-progress", "--no-plots"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
     assert done.returncode == 0, done.stderr
     columns = _leaderboard_row(done.stdout, "depth_p")
     assert columns["Nominal"].startswith("0% ") and columns["LowSpeed"].startswith("100% "), done.stdout

@@ -18,8 +18,13 @@ from subenv.evaluation import make_controller, run_episodes
 from subenv.scenarios import get_scenario
 from subenv.sweep import Chunk, SweepSpec, run_sweep
 
-SPEC = SweepSpec(controllers=("lqr", "thesis"), scenarios=("LowSpeed",), grid=(("speed_ratio", (0.5, 1.2)),),
-                 episodes=6, chunk_episodes=3)
+SPEC = SweepSpec(
+    controllers=("lqr", "thesis"),
+    scenarios=("LowSpeed",),
+    grid=(("speed_ratio", (0.5, 1.2)),),
+    episodes=6,
+    chunk_episodes=3,
+)
 
 
 def _table(path: Path) -> list[dict]:  # type: ignore[type-arg]
@@ -53,7 +58,9 @@ def test_an_interrupted_sweep_resumes_without_running_finished_chunks_again(loca
     assert second == first and lost.exists()
     assert {p: p.stat().st_mtime_ns for p in kept} == stamps  # read back, not run again
     with pytest.raises(FileExistsError, match="holds another sweep"):
-        run_sweep(SweepSpec(controllers=("lqr",), scenarios=("LowSpeed",), grid=(), episodes=2), out, progress=False)
+        run_sweep(
+            SweepSpec(controllers=("lqr",), scenarios=("LowSpeed",), grid=(), episodes=2), out, progress=False
+        )
 
 
 def _kill_a_chunk_worker(stop: threading.Event, killed: list[int]) -> None:
@@ -74,8 +81,13 @@ def _kill_a_chunk_worker(stop: threading.Event, killed: list[int]) -> None:
 
 
 def test_a_worker_killed_mid_sweep_loses_and_duplicates_no_row(local_ray, tmp_path) -> None:  # type: ignore[no-untyped-def]
-    spec = SweepSpec(controllers=("reversal_aware",), scenarios=("LowSpeed", "NearCritical"), grid=(), episodes=40,
-                     chunk_episodes=20)
+    spec = SweepSpec(
+        controllers=("reversal_aware",),
+        scenarios=("LowSpeed", "NearCritical"),
+        grid=(),
+        episodes=40,
+        chunk_episodes=20,
+    )
     stop, killed = threading.Event(), []  # type: ignore[var-annotated]
     killer = threading.Thread(target=_kill_a_chunk_worker, args=(stop, killed), daemon=True)
     killer.start()
@@ -90,12 +102,15 @@ def test_a_worker_killed_mid_sweep_loses_and_duplicates_no_row(local_ray, tmp_pa
     assert sorted(keys) == sorted((s, spec.seed + i) for s in ("LowSpeed", "NearCritical") for i in range(40))
 
 
-@pytest.mark.parametrize(("changes", "match"), [
-    ({"grid": (("speed", (1.0,)),)}, r"grid parameter 'speed' is unknown: must be one of \["),
-    ({"grid": (("x_GB_m", (float("nan"),)),)}, r"grid\['x_GB_m'\]=\[nan\] is invalid"),
-    ({"scenarios": ("Nowhere",)}, r"scenarios \['Nowhere'\] are unknown"),
-    ({"episodes": 0}, r"episodes=0 is invalid: must be an integer >= 1"),
-])
+@pytest.mark.parametrize(
+    ("changes", "match"),
+    [
+        ({"grid": (("speed", (1.0,)),)}, r"grid parameter 'speed' is unknown: must be one of \["),
+        ({"grid": (("x_GB_m", (float("nan"),)),)}, r"grid\['x_GB_m'\]=\[nan\] is invalid"),
+        ({"scenarios": ("Nowhere",)}, r"scenarios \['Nowhere'\] are unknown"),
+        ({"episodes": 0}, r"episodes=0 is invalid: must be an integer >= 1"),
+    ],
+)
 def test_a_bad_sweep_is_refused_before_anything_runs(changes, match) -> None:  # type: ignore[no-untyped-def]
     base = {"controllers": ("lqr",), "scenarios": ("LowSpeed",), "grid": (), "episodes": 2}
     with pytest.raises(ValueError, match=match):
@@ -106,15 +121,33 @@ def test_a_chunk_pins_the_grid_point_in_its_scenario() -> None:
     chunk = Chunk("lqr", "BallastOffset", (("x_GB_m", 0.002), ("disturbance_std_N", 1.0)), 0, 1)
     scenario = chunk.scenario_at_point()
     assert scenario.x_GB_m == (0.002, 0.002) and scenario.disturbance_std_N == 1.0
-    assert Chunk("lqr", "Nominal", (("speed_ratio", 2.0),), 0, 1).scenario_at_point().speed_ratio == (2.0, 2.0)
+    assert Chunk("lqr", "Nominal", (("speed_ratio", 2.0),), 0, 1).scenario_at_point().speed_ratio == (
+        2.0,
+        2.0,
+    )
 
 
 def test_the_command_line_sweeps_a_grid_and_prints_success_per_point(local_ray, tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
     from subenv.cli import main
 
     out = tmp_path / "cli"
-    assert main(["sweep", "--controllers", "thesis", "--grid", "speed_ratio=0.5:1.5:2", "--episodes", "2",
-                 "--no-progress", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "sweep",
+                "--controllers",
+                "thesis",
+                "--grid",
+                "speed_ratio=0.5:1.5:2",
+                "--episodes",
+                "2",
+                "--no-progress",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     printed = capsys.readouterr().out
     # Below u_cr the thesis design fails, above it holds depth (on these seeds).
     assert "| thesis | LowSpeed | 0.5 | 0% |" in printed and "| thesis | LowSpeed | 1.5 | 100% |" in printed
@@ -129,8 +162,12 @@ def test_performance_maps_are_drawn_from_a_two_axis_sweep(local_ray, tmp_path) -
     pytest.importorskip("matplotlib")
     from subenv.sweep import plot_performance_maps
 
-    spec = SweepSpec(controllers=("reversal_aware",), scenarios=("LowSpeed",),
-                     grid=(("speed_ratio", (0.5, 1.5)), ("x_GB_m", (0.0, 0.003))), episodes=2)
+    spec = SweepSpec(
+        controllers=("reversal_aware",),
+        scenarios=("LowSpeed",),
+        grid=(("speed_ratio", (0.5, 1.5)), ("x_GB_m", (0.0, 0.003))),
+        episodes=2,
+    )
     rows = run_sweep(spec, tmp_path / "sweep", progress=False)
     png = plot_performance_maps(rows, tmp_path / "maps.png")
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -43,7 +43,7 @@ CuspForm = Literal["consistent", "thesis"]
 
 
 def speed_from_lambda(vehicle: Vehicle, lam: FloatArray | float) -> FloatArray:
-    """u = sqrt(lambda g z_GB) [m/s], lambda as in eq. 4.25."""
+    """U = sqrt(lambda g z_GB) [m/s], lambda as in eq. 4.25."""
     return np.sqrt(np.asarray(lam, dtype=float) * vehicle.gravity_m_s2 * vehicle.z_GB_m)
 
 
@@ -53,13 +53,15 @@ def offset_from_beta(vehicle: Vehicle, beta: FloatArray | float, speed_mps: Floa
 
 
 def zeta(vehicle: Vehicle, alpha: float = 0.0) -> float:
-    """zeta = g (Z_w M_d - M_w Z_d) / (Z_d W) (eq. 4.28); 1 + zeta lambda = 0 at the critical speed."""
+    """Zeta = g (Z_w M_d - M_w Z_d) / (Z_d W) (eq. 4.28); 1 + zeta lambda = 0 at the critical speed."""
     Z_d, M_d = plane_derivatives(vehicle, alpha)
     c = vehicle.coefficients
     return vehicle.gravity_m_s2 * (c.Z_w * M_d - c.M_w * Z_d) / (Z_d * vehicle.weight_N)
 
 
-def exact_cusp(vehicle: Vehicle, lam: FloatArray, alpha: float = 0.0, form: CuspForm = "consistent") -> FloatArray:
+def exact_cusp(
+    vehicle: Vehicle, lam: FloatArray, alpha: float = 0.0, form: CuspForm = "consistent"
+) -> FloatArray:
     """|beta| on the cusp of the simplified pitchfork (eq. 4.37) for each lambda below critical.
 
     ``form="consistent"``: 27 beta^2 lambda^2 = 8 (1 + zeta lambda)^3 (dimensionless);
@@ -73,9 +75,10 @@ def exact_cusp(vehicle: Vehicle, lam: FloatArray, alpha: float = 0.0, form: Cusp
         return np.where(growth >= 0, np.sqrt(8.0 * factor * growth**3 / (27.0 * lam**2)), np.nan)
 
 
-def approximate_cusp(vehicle: Vehicle, beta: FloatArray, alpha: float = 0.0,
-                     form: CuspForm = "consistent") -> FloatArray:
-    """lambda on the cusp near its point, the small-beta expansion of eq. 4.37 (eq. 4.39).
+def approximate_cusp(
+    vehicle: Vehicle, beta: FloatArray, alpha: float = 0.0, form: CuspForm = "consistent"
+) -> FloatArray:
+    """Lambda on the cusp near its point, the small-beta expansion of eq. 4.37 (eq. 4.39).
 
     lambda = lambda_0 (1 - 3/2 (|beta| lambda_0)^(2/3) c), lambda_0 = -1/zeta, c = 1 (consistent)
     or u_cr^(-2/3) with u_cr in ft/s (the printed form).
@@ -145,7 +148,9 @@ def buoyancy_bifurcation_set(
     return _fold_edges(excess, speeds_mps)
 
 
-def _fold_edges(parameter: Callable[[float, float], float], speeds_mps: FloatArray) -> tuple[FloatArray, FloatArray]:
+def _fold_edges(
+    parameter: Callable[[float, float], float], speeds_mps: FloatArray
+) -> tuple[FloatArray, FloatArray]:
     """The two extrema of ``parameter(theta, u)`` nearest zero over theta, per speed: the folds of the
     steady states (two merge where the parameter that puts theta at a steady state turns back)."""
     lows, highs = [], []
@@ -157,9 +162,12 @@ def _fold_edges(parameter: Callable[[float, float], float], speeds_mps: FloatArr
         extrema = []
         for i in turns:
             sign = -1.0 if slope[i - 1] > 0 else 1.0  # (a maximum, or a minimum)
-            res = minimize_scalar(lambda t, u=u, sign=sign: sign * parameter(t, u),
-                                  bounds=(grid[i - 1], grid[i + 1]), method="bounded",
-                                  options={"xatol": 1e-10})
+            res = minimize_scalar(
+                lambda t, u=u, sign=sign: sign * parameter(t, u),
+                bounds=(grid[i - 1], grid[i + 1]),
+                method="bounded",
+                options={"xatol": 1e-10},
+            )
             extrema.append(parameter(float(res.x), u))
         inner = sorted(extrema, key=abs)[:2]
         if len(inner) == 2:
@@ -209,14 +217,19 @@ def saturation_cusp(
             theta = brentq(heave, lo, hi, xtol=1e-14)
             w = u * math.tan(theta)
             # Eq. 4.45 / 5.2 solved for x_G W - x_B B, then x_GB with x_B kept.
-            xGW_xBB = (c.M_w * u * w + drag_moment_factor * w * abs(w)
-                       - (vehicle.z_G_m * W - vehicle.z_B_m * B) * math.sin(theta)
-                       + M_d * u * u * delta) / math.cos(theta)
+            xGW_xBB = (
+                c.M_w * u * w
+                + drag_moment_factor * w * abs(w)
+                - (vehicle.z_G_m * W - vehicle.z_B_m * B) * math.sin(theta)
+                + M_d * u * u * delta
+            ) / math.cos(theta)
             out[sign].append((xGW_xBB + vehicle.x_B_m * B) / W - vehicle.x_B_m)
     return np.array(out[1.0]), np.array(out[-1.0])
 
 
-def saturation_cusp_closed_form(vehicle: Vehicle, x_GB_m: FloatArray, sign: float, alpha: float = 0.0) -> FloatArray:
+def saturation_cusp_closed_form(
+    vehicle: Vehicle, x_GB_m: FloatArray, sign: float, alpha: float = 0.0
+) -> FloatArray:
     """Eq. 4.43 (C_D = 0, W = B): the speed^2 at which the planes saturate, for each x_GB.
 
     u^2 = (-x_GB Z_w W + z_GB W Z_d delta) / ((Z_d M_w - M_d Z_w) delta (1 + (Z_d/Z_w)^2 delta^2)^(1/2)).

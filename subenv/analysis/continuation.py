@@ -148,7 +148,9 @@ def continue_equilibria(
             return t if t[3] * (stop - start) >= 0 else -t
         return t if float(t @ previous) >= 0 else -t
 
-    def newton(z: FloatArray, t: FloatArray | None, anchor: FloatArray | None) -> tuple[FloatArray, int] | None:
+    def newton(
+        z: FloatArray, t: FloatArray | None, anchor: FloatArray | None
+    ) -> tuple[FloatArray, int] | None:
         for it in range(20):
             F = residual(z)
             J = jacobian(z)
@@ -174,8 +176,9 @@ def continue_equilibria(
         raise ContinuationError(f"no steady state exists at {parameter}={start!r}")
     theta0 = min(roots, key=lambda r: abs(r - initial_pitch_rad))
     w0 = u0 * math.tan(theta0)
-    delta0 = -(vehicle.coefficients.Z_w * u0 * w0 + (vehicle.weight_N - vehicle.buoyancy_N) * math.cos(theta0)) / (
-        plane_derivatives(vehicle, alpha)[0] * u0 * u0)
+    delta0 = -(
+        vehicle.coefficients.Z_w * u0 * w0 + (vehicle.weight_N - vehicle.buoyancy_N) * math.cos(theta0)
+    ) / (plane_derivatives(vehicle, alpha)[0] * u0 * u0)
     solved = newton(np.array([theta0, w0, delta0, start / scale]), None, None)
     if solved is None:
         raise ContinuationError(f"no steady state found at {parameter}={start!r} from pitch {theta0!r} rad")
@@ -209,7 +212,9 @@ def continue_equilibria(
     rows = []
     for (th, w, d), p in zip(pts[:, :3], values):
         u, _, v = setup(float(p))
-        rows.append(np.linalg.eigvals(closed_loop_jacobian(v, u, np.array([th, w, 0.0, 0.0]), d, alpha, gain)))
+        rows.append(
+            np.linalg.eigvals(closed_loop_jacobian(v, u, np.array([th, w, 0.0, 0.0]), d, alpha, gain))
+        )
     eig = np.array(rows)
     direction = np.sign(np.diff(values))
     folds = np.flatnonzero(direction[1:] * direction[:-1] < 0) + 1

@@ -35,7 +35,9 @@ def critical_speed(vehicle: Vehicle, alpha: Allocation = 0.0) -> float:
     return critical_speed_for_planes(vehicle, Z_delta, M_delta, label=f"alpha={alpha!r}")
 
 
-def critical_speed_for_planes(vehicle: Vehicle, Z_delta: float, M_delta: float, label: str = "planes") -> float:
+def critical_speed_for_planes(
+    vehicle: Vehicle, Z_delta: float, M_delta: float, label: str = "planes"
+) -> float:
     """Critical speed [m/s] for any dimensional plane derivatives Z_delta, M_delta (eq. 3.9).
 
     :func:`critical_speed` calls this with the derivatives of an allocation alpha; Fig. 5-4's

@@ -60,6 +60,15 @@ def speed_curriculum(
     for name, low, high in stages:
         if not (math.isfinite(low) and math.isfinite(high) and 0 < low <= high):
             raise ValueError(f"stage {name!r}: ({low!r}, {high!r}) is invalid: must satisfy 0 < low <= high")
-        out.append(SpeedStage(name, low, high, low * ucr, high * ucr,
-                              froude_number(vehicle, low * ucr), froude_number(vehicle, high * ucr)))
+        out.append(
+            SpeedStage(
+                name,
+                low,
+                high,
+                low * ucr,
+                high * ucr,
+                froude_number(vehicle, low * ucr),
+                froude_number(vehicle, high * ucr),
+            )
+        )
     return out

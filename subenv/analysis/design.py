@@ -66,7 +66,9 @@ def thesis_poles(vehicle: Vehicle) -> tuple[float, ...]:
 def thesis_gain(vehicle: Vehicle, alpha: float = 0.0) -> FloatArray:
     """The thesis controller's gain: poles (-0.3, -0.31, -0.32, -0.33) placed at 5 fps (eq. 2.98); on a
     vehicle of another length both Froude-scaled (:func:`thesis_poles`, ``froude_speed_factor``)."""
-    return place_gain(vehicle, THESIS_DESIGN_SPEED_MPS * froude_speed_factor(vehicle), thesis_poles(vehicle), alpha)
+    return place_gain(
+        vehicle, THESIS_DESIGN_SPEED_MPS * froude_speed_factor(vehicle), thesis_poles(vehicle), alpha
+    )
 
 
 def closed_loop_eigenvalues(
@@ -82,7 +84,7 @@ def closed_loop_eigenvalues(
 
 
 def controllability_determinant(vehicle: Vehicle, speed_mps: float, alpha: float = 0.0) -> float:
-    """det [B, AB, A^2 B, A^3 B] of the linear model (Riedel 1993 eqs 3.28-3.46, Fig. 3-14).
+    """Det [B, AB, A^2 B, A^3 B] of the linear model (Riedel 1993 eqs 3.28-3.46, Fig. 3-14).
 
     It vanishes at the critical speed: there the single plane command cannot move the boat's
     depth and pitch independently.
@@ -111,14 +113,19 @@ def controllability_losses(
     det = np.array([controllability_determinant(vehicle, float(u), alpha) for u in speeds])
     roots = [float(u) for u in speeds[det == 0]]
     for i in np.flatnonzero(np.sign(det[:-1]) * np.sign(det[1:]) < 0):
-        roots.append(brentq(lambda s: controllability_determinant(vehicle, s, alpha), speeds[i], speeds[i + 1],
-                            xtol=1e-14))
+        roots.append(
+            brentq(
+                lambda s: controllability_determinant(vehicle, s, alpha), speeds[i], speeds[i + 1], xtol=1e-14
+            )
+        )
     out = []
     for u in sorted(roots):
         lm = linear_model(vehicle, u, alpha)
         eig = np.linalg.eigvals(lm.A)
-        rank_gap = [np.linalg.svd(np.column_stack([lm.A - lam * np.eye(4), lm.B]), compute_uv=False)[-1]
-                    for lam in eig]
+        rank_gap = [
+            np.linalg.svd(np.column_stack([lm.A - lam * np.eye(4), lm.B]), compute_uv=False)[-1]
+            for lam in eig
+        ]
         out.append((float(u), complex(eig[int(np.argmin(rank_gap))])))
     return out
 

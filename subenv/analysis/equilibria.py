@@ -129,17 +129,23 @@ def steady_state_residual(
     )
 
 
-def _plane_for_heave_balance(vehicle: Vehicle, u: float, theta: float, w: float, alpha: float,
-                             drag: float) -> float:
-    """delta from the heave balance, eq. 4.1: Z_w u w - C w|w| + (W - B) cos(theta) + Z_d u^2 delta = 0."""
+def _plane_for_heave_balance(
+    vehicle: Vehicle, u: float, theta: float, w: float, alpha: float, drag: float
+) -> float:
+    """Delta from the heave balance, eq. 4.1: Z_w u w - C w|w| + (W - B) cos(theta) + Z_d u^2 delta = 0."""
     Z_d, _ = plane_derivatives(vehicle, alpha)
     W, B = vehicle.weight_N, vehicle.buoyancy_N
     return -(vehicle.coefficients.Z_w * u * w - drag * w * abs(w) + (W - B) * math.cos(theta)) / (Z_d * u * u)
 
 
 def closed_loop_jacobian(
-    vehicle: Vehicle, speed_mps: float, state: FloatArray, plane_rad: float, alpha: float,
-    gain: FloatArray | None, eps: float = 1e-7,
+    vehicle: Vehicle,
+    speed_mps: float,
+    state: FloatArray,
+    plane_rad: float,
+    alpha: float,
+    gain: FloatArray | None,
+    eps: float = 1e-7,
 ) -> FloatArray:
     """Jacobian of the full model about ``state`` with planes ``plane_rad`` (central differences).
 
@@ -178,18 +184,28 @@ def _roots(fun, grid: FloatArray) -> list[float]:  # type: ignore[no-untyped-def
     return sorted(set(roots))
 
 
-def _unsaturated(vehicle: Vehicle, u: float, theta: float, alpha: float, gain: FloatArray,
-                 drag: float) -> Equilibrium:
+def _unsaturated(
+    vehicle: Vehicle, u: float, theta: float, alpha: float, gain: FloatArray, drag: float
+) -> Equilibrium:
     w = u * math.tan(theta)
     delta = _plane_for_heave_balance(vehicle, u, theta, w, alpha, drag)
     # Eq. 3.23: Z_ss such that -(k1 theta + k2 w + k4 Z) = delta.
     depth = -(delta + gain[0] * theta + gain[1] * w) / gain[3]
-    eig = np.linalg.eigvals(closed_loop_jacobian(vehicle, u, np.array([theta, w, 0.0, depth]), delta, alpha, gain))
+    eig = np.linalg.eigvals(
+        closed_loop_jacobian(vehicle, u, np.array([theta, w, 0.0, depth]), delta, alpha, gain)
+    )
     return Equilibrium(u, theta, w, delta, False, 0.0, depth, eig, _stability(eig))
 
 
-def _saturated_branch(vehicle: Vehicle, u: float, sign: float, alpha: float, gain: FloatArray,
-                      drag: float, drag_moment_factor: float) -> list[Equilibrium]:
+def _saturated_branch(
+    vehicle: Vehicle,
+    u: float,
+    sign: float,
+    alpha: float,
+    gain: FloatArray,
+    drag: float,
+    drag_moment_factor: float,
+) -> list[Equilibrium]:
     """Steady pitch with the planes at sign * limit (eqs 4.40-4.42; 5.1-5.2 with W != B and drag)."""
     delta = sign * vehicle.planes.limit_rad
     Z_d, M_d = plane_derivatives(vehicle, alpha)
@@ -208,9 +224,13 @@ def _saturated_branch(vehicle: Vehicle, u: float, sign: float, alpha: float, gai
         for i, t in enumerate(th):
             w = heave(float(t))
             # Eq. 4.41 (5.2): the pitch-moment balance at the saturated plane angle.
-            out[i] = (c.M_w * u * w + drag_moment_factor * w * abs(w)
-                      - (vehicle.x_G_m * W - vehicle.x_B_m * B) * math.cos(t)
-                      - (vehicle.z_G_m * W - vehicle.z_B_m * B) * math.sin(t) + M_d * u * u * delta)
+            out[i] = (
+                c.M_w * u * w
+                + drag_moment_factor * w * abs(w)
+                - (vehicle.x_G_m * W - vehicle.x_B_m * B) * math.cos(t)
+                - (vehicle.z_G_m * W - vehicle.z_B_m * B) * math.sin(t)
+                + M_d * u * u * delta
+            )
         return out if np.ndim(theta) else out[0]
 
     found = []
@@ -221,7 +241,9 @@ def _saturated_branch(vehicle: Vehicle, u: float, sign: float, alpha: float, gai
         # d(delta_cmd)/dt = -k4 Z_dot must have the sign of the saturated plane angle.
         if -gain[3] * rate * sign < 0:
             continue
-        eig = np.linalg.eigvals(closed_loop_jacobian(vehicle, u, np.array([theta, w, 0.0, 0.0]), delta, alpha, None))
+        eig = np.linalg.eigvals(
+            closed_loop_jacobian(vehicle, u, np.array([theta, w, 0.0, 0.0]), delta, alpha, None)
+        )
         found.append(Equilibrium(u, theta, w, delta, True, rate, None, eig, _stability(eig)))
     return found
 
@@ -273,7 +295,9 @@ def equilibria(
     drag, drag_moment_factor = _drag_terms(vehicle, drag_moment, hull)
     limit = vehicle.planes.limit_rad
     found = []
-    roots = _roots(lambda th: steady_state_residual(vehicle, speed_mps, th, alpha, drag_moment, hull), _PITCH_GRID)
+    roots = _roots(
+        lambda th: steady_state_residual(vehicle, speed_mps, th, alpha, drag_moment, hull), _PITCH_GRID
+    )
     for theta in roots:
         eq = _unsaturated(vehicle, speed_mps, theta, alpha, gain, drag)
         if not saturation or abs(eq.plane_rad) <= limit:

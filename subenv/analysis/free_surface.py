@@ -153,13 +153,21 @@ def _external(vehicle: Vehicle, sea_state: SeaState | None, depth_m: float) -> t
     """A sea's mean suction at ``depth_m`` (heave force [N], moment [N m]); none in calm water."""
     if sea_state is None:
         return 0.0, 0.0
-    Z, M = sea_state.mean_suction(depth_m, vehicle.hull.x_m, vehicle.hull.breadth_m, vehicle.water_density_kg_m3,
-                                  vehicle.gravity_m_s2)
+    Z, M = sea_state.mean_suction(
+        depth_m, vehicle.hull.x_m, vehicle.hull.breadth_m, vehicle.water_density_kg_m3, vehicle.gravity_m_s2
+    )
     return float(Z), float(M)
 
 
-def _field(vehicle: Vehicle, params: ModelParams, sea_state: SeaState | None, u: float, stern: float,
-           bow: float, x: FloatArray) -> FloatArray:
+def _field(
+    vehicle: Vehicle,
+    params: ModelParams,
+    sea_state: SeaState | None,
+    u: float,
+    stern: float,
+    bow: float,
+    x: FloatArray,
+) -> FloatArray:
     force, moment = _external(vehicle, sea_state, float(x[3]))
     return derivatives(np.asarray(x, dtype=float), u, stern, bow, params, force, moment)
 
@@ -172,13 +180,24 @@ def _check(vehicle: Vehicle, speed_mps: float, depth_m: float) -> tuple[float, f
     u = check.positive("speed_mps", speed_mps, upper=100.0)
     radius = max(vehicle.hull.breadth_m) / 2
     h = check.number("depth_m", depth_m)
-    check.require("depth_m", depth_m, h > radius, f"deeper than the hull radius, {radius:.4g} m (above it the hull broaches)")
+    check.require(
+        "depth_m",
+        depth_m,
+        h > radius,
+        f"deeper than the hull radius, {radius:.4g} m (above it the hull broaches)",
+    )
     return u, h
 
 
-def surface_trim(vehicle: Vehicle, speed_mps: float, depth_m: float, alpha: float = 0.0,
-                 free_surface: FreeSurface | None = None, sea_state: SeaState | None = None,
-                 start: tuple[float, float] | None = None) -> SurfaceTrim:
+def surface_trim(
+    vehicle: Vehicle,
+    speed_mps: float,
+    depth_m: float,
+    alpha: float = 0.0,
+    free_surface: FreeSurface | None = None,
+    sea_state: SeaState | None = None,
+    start: tuple[float, float] | None = None,
+) -> SurfaceTrim:
     """Level flight at ``depth_m`` and ``speed_mps`` with the free surface's suction (and a sea's mean
     suction): the pitch and dual-control plane angle that balance heave and pitch with q = 0 and
     w = u tan(theta), and the stability of that steady state with the planes held.
@@ -228,27 +247,50 @@ def surface_trim(vehicle: Vehicle, speed_mps: float, depth_m: float, alpha: floa
         if found and first[0] == 0.0:
             break
     if not found:
-        raise RuntimeError(f"surface_trim: no level-flight trim at depth {h} m, speed {u} m/s from pitch "
-                           f"{_PITCH_STARTS_RAD} rad")
+        raise RuntimeError(
+            f"surface_trim: no level-flight trim at depth {h} m, speed {u} m/s from pitch "
+            f"{_PITCH_STARTS_RAD} rad"
+        )
     result = min(found, key=lambda r: abs(r.x[0]))
     theta, delta = (float(v) for v in result.x)
     x0 = np.array([theta, u * math.tan(theta), 0.0, h])
     steps = _EPS * np.eye(4)
-    jac = np.stack([(_field(vehicle, params, sea_state, u, delta, alpha * delta, x0 + e)
-                     - _field(vehicle, params, sea_state, u, delta, alpha * delta, x0 - e)) / (2 * _EPS)
-                    for e in steps], axis=1)
+    jac = np.stack(
+        [
+            (
+                _field(vehicle, params, sea_state, u, delta, alpha * delta, x0 + e)
+                - _field(vehicle, params, sea_state, u, delta, alpha * delta, x0 - e)
+            )
+            / (2 * _EPS)
+            for e in steps
+        ],
+        axis=1,
+    )
     eig = np.linalg.eigvals(jac)
     Zfs, Mfs = (float(a) for a in suction(params.hull, theta, h, u, params.rho_suction))
     Zw, Mw = _external(vehicle, sea_state, h)
     return SurfaceTrim(
-        depth_m=h, speed_mps=u, pitch_rad=theta, heave_mps=float(x0[1]), plane_rad=delta,
+        depth_m=h,
+        speed_mps=u,
+        pitch_rad=theta,
+        heave_mps=float(x0[1]),
+        plane_rad=delta,
         within_limits=max(abs(delta), abs(alpha * delta)) <= _plane_limit(vehicle),
-        suction_N=Zfs + Zw, suction_moment_Nm=Mfs + Mw, eigenvalues=eig, stable=bool(np.all(eig.real < 0)),
-        solver=result)
+        suction_N=Zfs + Zw,
+        suction_moment_Nm=Mfs + Mw,
+        eigenvalues=eig,
+        stable=bool(np.all(eig.real < 0)),
+        solver=result,
+    )
 
 
-def min_level_flight_depth(vehicle: Vehicle, speed_mps: float, alpha: float = 0.0,
-                           free_surface: FreeSurface | None = None, sea_state: SeaState | None = None) -> LevelFlightDepth:
+def min_level_flight_depth(
+    vehicle: Vehicle,
+    speed_mps: float,
+    alpha: float = 0.0,
+    free_surface: FreeSurface | None = None,
+    sea_state: SeaState | None = None,
+) -> LevelFlightDepth:
     """The shallowest depth at which ``speed_mps`` holds level flight with the planes within their limit.
 
     The level-flight trim of deep water (level, planes amidships, for a neutral boat) is followed up
@@ -265,14 +307,18 @@ def min_level_flight_depth(vehicle: Vehicle, speed_mps: float, alpha: float = 0.
 
     def follow(h: float, below: SurfaceTrim) -> tuple[SurfaceTrim | None, str]:
         try:
-            trim = surface_trim(vehicle, u, h, alpha, free_surface, sea_state, start=(below.pitch_rad, below.plane_rad))
+            trim = surface_trim(
+                vehicle, u, h, alpha, free_surface, sea_state, start=(below.pitch_rad, below.plane_rad)
+            )
         except RuntimeError:
             return None, "no trim"
         if abs(trim.pitch_rad - below.pitch_rad) > _BRANCH_JUMP_RAD:
             return None, "no trim"
         return trim, "" if trim.within_limits else "planes"
 
-    deepest = _DEEPEST_M * froude_factor("length", reference_length_ratio(vehicle))  # (x 1.0 exactly on SUBOFF)
+    deepest = _DEEPEST_M * froude_factor(
+        "length", reference_length_ratio(vehicle)
+    )  # (x 1.0 exactly on SUBOFF)
     held = surface_trim(vehicle, u, deepest, alpha, free_surface, sea_state)
     if not held.within_limits:
         raise ValueError(f"speed_mps={u!r}: level flight cannot be held even at {deepest:.6g} m")
@@ -292,8 +338,9 @@ def min_level_flight_depth(vehicle: Vehicle, speed_mps: float, alpha: float = 0.
     return LevelFlightDepth(u, radius, "broaching", limit, alpha)
 
 
-def surface_critical_speed(vehicle: Vehicle, depth_m: float, alpha: float = 0.0,
-                           free_surface: FreeSurface | None = None) -> SurfaceCriticalSpeed:
+def surface_critical_speed(
+    vehicle: Vehicle, depth_m: float, alpha: float = 0.0, free_surface: FreeSurface | None = None
+) -> SurfaceCriticalSpeed:
     """The critical speed at ``depth_m`` below the surface, by the closed form and by the linearised
     right-hand side (:class:`SurfaceCriticalSpeed`)."""
     _, h = _check(vehicle, 1.0, depth_m)
@@ -313,9 +360,13 @@ def surface_critical_speed(vehicle: Vehicle, depth_m: float, alpha: float = 0.0,
         # Held planes delta: the steady (theta, w) of the (w, q) balances with q = 0, and its depth rate.
         x0 = np.array([0.0, 0.0, 0.0, h])
         steps = _EPS * np.eye(4)[:3]
-        f = [derivatives(x0 + e, u, 0.0, 0.0, params) - derivatives(x0 - e, u, 0.0, 0.0, params) for e in steps]
+        f = [
+            derivatives(x0 + e, u, 0.0, 0.0, params) - derivatives(x0 - e, u, 0.0, 0.0, params) for e in steps
+        ]
         A = np.stack(f, axis=1)[:, :3] / (2 * _EPS)  # columns theta, w, q
-        B = (derivatives(x0, u, _EPS, alpha * _EPS, params) - derivatives(x0, u, -_EPS, -alpha * _EPS, params)) / (2 * _EPS)
+        B = (
+            derivatives(x0, u, _EPS, alpha * _EPS, params) - derivatives(x0, u, -_EPS, -alpha * _EPS, params)
+        ) / (2 * _EPS)
         # q = 0 (theta_dot row), w_dot = q_dot = 0: solve rows 1, 2 for (theta, w) per unit delta.
         theta, w = np.linalg.solve(A[1:3, :2], -B[1:3])
         return float(-u * theta + w)

@@ -39,8 +39,15 @@ from subenv.analysis.linear import check_alpha, linear_model
 from subenv.dynamics.model import derivatives, model_params
 from subenv.vehicles.vehicle import Vehicle
 
-__all__ = ["HopfPoint", "PeriodicOrbit", "continue_periodic_orbits", "hopf_points", "level_flight_eigenvalues",
-           "oscillatory_growth_rate", "periodic_orbit"]
+__all__ = [
+    "HopfPoint",
+    "PeriodicOrbit",
+    "continue_periodic_orbits",
+    "hopf_points",
+    "level_flight_eigenvalues",
+    "oscillatory_growth_rate",
+    "periodic_orbit",
+]
 
 DEFAULT_FROUDE_GRID: Final = np.linspace(0.008, 0.464, 457)
 """Where :func:`hopf_points` looks for crossings by default: these length Froude numbers u / sqrt(g L),
@@ -81,7 +88,9 @@ class HopfPoint:
         """Supercritical: stable cycles of small amplitude where level flight is unstable."""
         return "supercritical" if self.amplitude_coefficient < 0.0 else "subcritical"
 
-    def predicted_amplitude_rad(self, vehicle: Vehicle, speed_mps: float, gain: FloatArray | None = None) -> float:
+    def predicted_amplitude_rad(
+        self, vehicle: Vehicle, speed_mps: float, gain: FloatArray | None = None
+    ) -> float:
         """The normal form's pitch amplitude of the cycle at ``speed_mps``, ``-Re(lambda) / c2``
         (NaN where it has none); valid while the amplitude is small (a few degrees)."""
         growth = oscillatory_growth_rate(vehicle, speed_mps, gain, self.alpha)
@@ -111,8 +120,9 @@ class PeriodicOrbit:
         return bool(np.all(np.abs(nontrivial) < 1.0))
 
 
-def level_flight_eigenvalues(vehicle: Vehicle, speed_mps: float, gain: FloatArray | None = None,
-                             alpha: float = 0.0) -> np.ndarray:
+def level_flight_eigenvalues(
+    vehicle: Vehicle, speed_mps: float, gain: FloatArray | None = None, alpha: float = 0.0
+) -> np.ndarray:
     """Eigenvalues of level flight at ``speed_mps``: of the (theta, w, q) subsystem with the planes
     held (``gain=None``; depth is a pure integrator that does not feed back), or of
     ``A - B gain`` on (theta, w, q, Z) with dual control ``alpha`` (Riedel 1993 eqs 2.59-2.68)."""
@@ -122,8 +132,9 @@ def level_flight_eigenvalues(vehicle: Vehicle, speed_mps: float, gain: FloatArra
     return np.linalg.eigvals(model.A - np.outer(model.B, gain))
 
 
-def oscillatory_growth_rate(vehicle: Vehicle, speed_mps: float, gain: FloatArray | None = None,
-                            alpha: float = 0.0) -> float:
+def oscillatory_growth_rate(
+    vehicle: Vehicle, speed_mps: float, gain: FloatArray | None = None, alpha: float = 0.0
+) -> float:
     """The largest real part [1/s] among the complex pairs of :func:`level_flight_eigenvalues`: the growth
     (> 0) or decay of level flight's oscillation; -inf where no eigenvalue is complex."""
     eigenvalues = level_flight_eigenvalues(vehicle, speed_mps, gain, alpha)
@@ -136,7 +147,8 @@ def _check_level_flight(vehicle: Vehicle) -> None:
         raise ValueError(
             f"vehicle {vehicle.name!r} has excess buoyancy {vehicle.excess_buoyancy_N:.4g} N and x_GB "
             f"{vehicle.x_GB_m:.4g} m: Hopf points are found about level flight, which needs both 0 "
-            "(a neutrally trimmed loading)")
+            "(a neutrally trimmed loading)"
+        )
 
 
 def _check_gain(gain: FloatArray | None) -> FloatArray | None:
@@ -152,24 +164,31 @@ def _field(vehicle: Vehicle, speed_mps: float, gain: FloatArray | None, alpha: f
     """The nonlinear right-hand side in the loop's coordinates, for a batch of states (..., n)."""
     params = model_params(vehicle)
     if gain is None:
+
         def open_loop(x: FloatArray) -> FloatArray:
             state = np.concatenate([x, np.zeros((*x.shape[:-1], 1))], axis=-1)
             return derivatives(state, speed_mps, 0.0, 0.0, params)[..., :3]
+
         return open_loop
 
     def closed_loop(x: FloatArray) -> FloatArray:
         delta = -(x @ gain)  # unsaturated: the small oscillations about level flight
         return derivatives(x, speed_mps, delta, alpha * delta, params)
+
     return closed_loop
 
 
-def _amplitude_coefficient(vehicle: Vehicle, speed_mps: float, gain: FloatArray | None, alpha: float) -> float:
+def _amplitude_coefficient(
+    vehicle: Vehicle, speed_mps: float, gain: FloatArray | None, alpha: float
+) -> float:
     """c2 of the averaged amplitude equation at a Hopf point (see the module docstring)."""
     model = linear_model(vehicle, speed_mps, alpha)
     A = model.A[:3, :3] if gain is None else model.A - np.outer(model.B, gain)
     values, vectors = np.linalg.eig(A)
     k = int(np.argmax(values.imag))
-    v = vectors[:, k] / (2.0 * vectors[0, k])  # pitch component 1/2: x = 2 r Re(v e^{i phi}) has pitch amplitude r
+    v = vectors[:, k] / (
+        2.0 * vectors[0, k]
+    )  # pitch component 1/2: x = 2 r Re(v e^{i phi}) has pitch amplitude r
     left_values, left_vectors = np.linalg.eig(A.conj().T)
     w = left_vectors[:, int(np.argmin(np.abs(left_values - values[k].conj())))]
     w = w / np.conj(np.vdot(w, v))  # w^H v = 1: z = w^H x is the critical mode's coordinate
@@ -218,9 +237,16 @@ def hopf_points(
     alpha = check_alpha(alpha)
     froude_speed = math.sqrt(vehicle.gravity_m_s2 * vehicle.length_m)
     grid = DEFAULT_FROUDE_GRID * froude_speed if speeds_mps is None else np.asarray(speeds_mps, dtype=float)
-    check.require("speeds_mps", speeds_mps, grid.ndim == 1 and grid.size >= 2 and bool(np.all(np.isfinite(grid)))
-                  and bool(np.all(grid >= 0.0)) and bool(np.all(np.diff(grid) > 0.0)),
-                  "an increasing array of at least 2 finite speeds >= 0")
+    check.require(
+        "speeds_mps",
+        speeds_mps,
+        grid.ndim == 1
+        and grid.size >= 2
+        and bool(np.all(np.isfinite(grid)))
+        and bool(np.all(grid >= 0.0))
+        and bool(np.all(np.diff(grid) > 0.0)),
+        "an increasing array of at least 2 finite speeds >= 0",
+    )
 
     def growth(u: float) -> float:
         return oscillatory_growth_rate(vehicle, u, k, alpha)
@@ -235,14 +261,23 @@ def hopf_points(
         frequency = float(np.abs(eigenvalues[np.abs(eigenvalues.imag) > _COMPLEX].imag).max())
         h = 1e-6
         slope = (growth(speed + h) - growth(speed - h)) / (2 * h)
-        points.append(HopfPoint(speed_mps=float(speed), frequency_radps=frequency, growth_slope=float(slope),
-                                amplitude_coefficient=_amplitude_coefficient(vehicle, speed, k, alpha),
-                                loop="open" if k is None else "closed", alpha=alpha))
+        points.append(
+            HopfPoint(
+                speed_mps=float(speed),
+                frequency_radps=frequency,
+                growth_slope=float(slope),
+                amplitude_coefficient=_amplitude_coefficient(vehicle, speed, k, alpha),
+                loop="open" if k is None else "closed",
+                alpha=alpha,
+            )
+        )
     return points
 
 
 def _flow(field, x0: FloatArray, period: float, **kwargs: Any) -> Any:  # type: ignore[no-untyped-def]
-    return solve_ivp(lambda t, x: field(x), (0.0, period), x0, method="DOP853", rtol=1e-10, atol=1e-12, **kwargs)
+    return solve_ivp(
+        lambda t, x: field(x), (0.0, period), x0, method="DOP853", rtol=1e-10, atol=1e-12, **kwargs
+    )
 
 
 def periodic_orbit(
@@ -264,7 +299,9 @@ def periodic_orbit(
     _check_level_flight(vehicle)
     k = _check_gain(gain)
     alpha = check_alpha(alpha)
-    check.require("speed_mps", speed_mps, check.is_number(speed_mps) and speed_mps > 0.0, "a finite number > 0")
+    check.require(
+        "speed_mps", speed_mps, check.is_number(speed_mps) and speed_mps > 0.0, "a finite number > 0"
+    )
     field = _field(vehicle, float(speed_mps), k, alpha)
     n = 3 if k is None else 4
     if guess is None:
@@ -279,8 +316,9 @@ def periodic_orbit(
     theta = settled.sol(t)[0]
     rising = np.flatnonzero((theta[:-1] < 0.0) & (theta[1:] >= 0.0))
     if len(rising) < 2:
-        raise RuntimeError(f"no oscillation at speed_mps={speed_mps}: level flight is stable there (or the "
-                           "motion diverged)")
+        raise RuntimeError(
+            f"no oscillation at speed_mps={speed_mps}: level flight is stable there (or the motion diverged)"
+        )
     x0, period0 = settled.sol(t[rising[-2]]), float(t[rising[-1]] - t[rising[-2]])
 
     def residual(z: FloatArray) -> FloatArray:
@@ -301,12 +339,19 @@ def periodic_orbit(
     for j in range(n):
         step = np.zeros(n)
         step[j] = eps
-        columns.append((_flow(field, state + step, period).y[:, -1] - _flow(field, state - step, period).y[:, -1])
-                       / (2 * eps))
+        columns.append(
+            (_flow(field, state + step, period).y[:, -1] - _flow(field, state - step, period).y[:, -1])
+            / (2 * eps)
+        )
     multipliers = np.linalg.eigvals(np.column_stack(columns))
-    return PeriodicOrbit(speed_mps=float(speed_mps), period_s=period, state=state,
-                         pitch_amplitude_rad=float(0.5 * (theta.max() - theta.min())),
-                         floquet_multipliers=multipliers, solver=solution)
+    return PeriodicOrbit(
+        speed_mps=float(speed_mps),
+        period_s=period,
+        state=state,
+        pitch_amplitude_rad=float(0.5 * (theta.max() - theta.min())),
+        floquet_multipliers=multipliers,
+        solver=solution,
+    )
 
 
 def continue_periodic_orbits(

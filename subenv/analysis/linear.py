@@ -13,7 +13,15 @@ from subenv.dynamics.free_surface import NO_FREE_SURFACE, FreeSurface
 from subenv.dynamics.model import derivatives, model_params
 from subenv.vehicles.vehicle import Vehicle
 
-__all__ = ["BOW_PLANES_ONLY", "Allocation", "LinearModel", "check_alpha", "linear_model", "numerical_jacobian", "plane_derivatives"]
+__all__ = [
+    "BOW_PLANES_ONLY",
+    "Allocation",
+    "LinearModel",
+    "check_alpha",
+    "linear_model",
+    "numerical_jacobian",
+    "plane_derivatives",
+]
 
 
 def check_alpha(alpha: float) -> float:
@@ -36,8 +44,12 @@ def plane_derivatives(vehicle: Vehicle, alpha: Allocation) -> tuple[float, float
     """
     c = vehicle.coefficients
     if alpha == BOW_PLANES_ONLY:
-        check.require("alpha", alpha, vehicle.planes.has_bow_planes,
-                      f"a number in [-1, 1]: vehicle {vehicle.name!r} has no bow planes")
+        check.require(
+            "alpha",
+            alpha,
+            vehicle.planes.has_bow_planes,
+            f"a number in [-1, 1]: vehicle {vehicle.name!r} has no bow planes",
+        )
         return c.Z_delta_b, c.M_delta_b
     alpha = check_alpha(alpha)  # type: ignore[arg-type]
     return c.Z_delta_s + alpha * c.Z_delta_b, c.M_delta_s + alpha * c.M_delta_b
@@ -120,8 +132,14 @@ def numerical_jacobian(
     f_plus = derivatives(x0 + steps, speed_mps, stern_rad, bow_rad, params)
     f_minus = derivatives(x0 - steps, speed_mps, stern_rad, bow_rad, params)
     A = ((f_plus - f_minus) / (2 * eps)).T
-    planes = np.array([[stern_rad + eps, bow_rad], [stern_rad - eps, bow_rad],
-                       [stern_rad, bow_rad + eps], [stern_rad, bow_rad - eps]])
+    planes = np.array(
+        [
+            [stern_rad + eps, bow_rad],
+            [stern_rad - eps, bow_rad],
+            [stern_rad, bow_rad + eps],
+            [stern_rad, bow_rad - eps],
+        ]
+    )
     f = derivatives(np.broadcast_to(x0, (4, 4)), speed_mps, planes[:, 0], planes[:, 1], params)
     B = np.stack([(f[0] - f[1]) / (2 * eps), (f[2] - f[3]) / (2 * eps)], axis=1)
     return A, B

@@ -75,13 +75,18 @@ def _planes(vehicle: Vehicle, speed_mps: float, pitch_rad: np.ndarray, surface: 
     params = model_params(vehicle, free_surface)
     force, moment = 0.0, 0.0
     if sea_state is not None:  # the waves' mean suction (their first order averages out)
-        force, moment = sea_state.mean_suction(depth, vehicle.hull.x_m, vehicle.hull.breadth_m,
-                                               vehicle.water_density_kg_m3, vehicle.gravity_m_s2)
+        force, moment = sea_state.mean_suction(
+            depth, vehicle.hull.x_m, vehicle.hull.breadth_m, vehicle.water_density_kg_m3, vehicle.gravity_m_s2
+        )
     theta = np.asarray(pitch_rad, dtype=float)
-    state = np.stack([theta, speed_mps * np.tan(theta), np.zeros_like(theta), np.full_like(theta, depth)], axis=-1)
+    state = np.stack(
+        [theta, speed_mps * np.tan(theta), np.zeros_like(theta), np.full_like(theta, depth)], axis=-1
+    )
     # The balances are affine in the planes: the accelerations at zero planes and per unit of each.
-    f0, fs, fb = (derivatives(state, speed_mps, s, b, params, force, moment)[..., 1:3]
-                  for s, b in ((0, 0), (1, 0), (0, 1)))
+    f0, fs, fb = (
+        derivatives(state, speed_mps, s, b, params, force, moment)[..., 1:3]
+        for s, b in ((0, 0), (1, 0), (0, 1))
+    )
     if not vehicle.planes.has_bow_planes:
         # One plane, two balances: the stern angle that best meets both (least squares), which meets both
         # exactly only at the pitches where _stern_only_mismatch is zero.
@@ -92,26 +97,36 @@ def _planes(vehicle: Vehicle, speed_mps: float, pitch_rad: np.ndarray, surface: 
     return np.linalg.solve(G, -f0[..., None])[..., 0]
 
 
-def _stern_only_mismatch(vehicle: Vehicle, speed_mps: float, pitch_rad: np.ndarray, surface: _Surface) -> np.ndarray:
+def _stern_only_mismatch(
+    vehicle: Vehicle, speed_mps: float, pitch_rad: np.ndarray, surface: _Surface
+) -> np.ndarray:
     """Without bow planes: the heave acceleration left at the stern angle that zeroes the pitch acceleration,
     at (theta, u tan(theta), 0, depth). A trim exists at the pitches where it is zero."""
     depth, free_surface, sea_state = surface
     params = model_params(vehicle, free_surface)
     force, moment = 0.0, 0.0
     if sea_state is not None:
-        force, moment = sea_state.mean_suction(depth, vehicle.hull.x_m, vehicle.hull.breadth_m,
-                                               vehicle.water_density_kg_m3, vehicle.gravity_m_s2)
+        force, moment = sea_state.mean_suction(
+            depth, vehicle.hull.x_m, vehicle.hull.breadth_m, vehicle.water_density_kg_m3, vehicle.gravity_m_s2
+        )
     theta = np.asarray(pitch_rad, dtype=float)
-    state = np.stack([theta, speed_mps * np.tan(theta), np.zeros_like(theta), np.full_like(theta, depth)], axis=-1)
+    state = np.stack(
+        [theta, speed_mps * np.tan(theta), np.zeros_like(theta), np.full_like(theta, depth)], axis=-1
+    )
     f0, fs = (derivatives(state, speed_mps, s, 0.0, params, force, moment)[..., 1:3] for s in (0.0, 1.0))
     gs = fs - f0
     # (w_dot, q_dot) = f0 + stern gs is affine in the stern angle: zero q_dot, and w_dot is what is left.
     return f0[..., 0] - gs[..., 0] * f0[..., 1] / gs[..., 1]
 
 
-def depth_holding_trim(vehicle: Vehicle, speed_mps: float, max_pitch_rad: float, depth_m: float = 0.0,
-                       free_surface: FreeSurface = NO_FREE_SURFACE,
-                       sea_state: SeaState | None = None) -> DepthHoldingTrim:
+def depth_holding_trim(
+    vehicle: Vehicle,
+    speed_mps: float,
+    max_pitch_rad: float,
+    depth_m: float = 0.0,
+    free_surface: FreeSurface = NO_FREE_SURFACE,
+    sea_state: SeaState | None = None,
+) -> DepthHoldingTrim:
     """The depth-holding trim of ``vehicle`` (its loading) at ``speed_mps`` that needs the least plane angle,
     with every plane pair free (the stern planes alone on a vehicle without bow planes) and the pitch inside ``max_pitch_rad``: in deep water, or at ``depth_m``
     below the free surface (its suction, :mod:`subenv.dynamics.free_surface`, and a sea's mean suction).
@@ -131,10 +146,18 @@ def depth_holding_trim(vehicle: Vehicle, speed_mps: float, max_pitch_rad: float,
     sea_state : SeaState, optional
         A sea whose mean suction is added.
     """
-    check.require("speed_mps", speed_mps, check.is_number(speed_mps) and math.isfinite(speed_mps) and speed_mps > 0,
-                  "a finite number > 0")
-    check.require("max_pitch_rad", max_pitch_rad,
-                  check.is_number(max_pitch_rad) and 0 < max_pitch_rad < math.pi / 2, "a number in (0, pi/2)")
+    check.require(
+        "speed_mps",
+        speed_mps,
+        check.is_number(speed_mps) and math.isfinite(speed_mps) and speed_mps > 0,
+        "a finite number > 0",
+    )
+    check.require(
+        "max_pitch_rad",
+        max_pitch_rad,
+        check.is_number(max_pitch_rad) and 0 < max_pitch_rad < math.pi / 2,
+        "a number in (0, pi/2)",
+    )
     u, limit = float(speed_mps), vehicle.planes.limit_rad
     grid = np.linspace(-max_pitch_rad, max_pitch_rad, _PITCH_POINTS)[1:-1]
 
@@ -148,15 +171,18 @@ def depth_holding_trim(vehicle: Vehicle, speed_mps: float, max_pitch_rad: float,
     needs = need(grid)
     i = int(np.argmin(needs))
     lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
-    best = minimize_scalar(lambda t: float(need(t)), bounds=(lo, hi), method="bounded",
-                           options={"xatol": 1e-12})
+    best = minimize_scalar(
+        lambda t: float(need(t)), bounds=(lo, hi), method="bounded", options={"xatol": 1e-12}
+    )
     theta = float(best.x) if best.fun <= needs[i] else float(grid[i])
     stern, bow = (float(v) for v in _planes(vehicle, u, np.asarray(theta), surface))
     margin = limit - max(abs(stern), abs(bow))
     return DepthHoldingTrim(u, margin >= 0, theta, u * math.tan(theta), stern, bow, margin)
 
 
-def _stern_only_trim(vehicle: Vehicle, u: float, limit: float, grid: np.ndarray, surface: _Surface) -> DepthHoldingTrim:
+def _stern_only_trim(
+    vehicle: Vehicle, u: float, limit: float, grid: np.ndarray, surface: _Surface
+) -> DepthHoldingTrim:
     """:func:`depth_holding_trim` for a vehicle without bow planes: the stern planes alone must meet both balances,
     so the trims are the roots in pitch of :func:`_stern_only_mismatch` (more than one below the critical speed,
     the pitchfork's branches); the one that needs the least plane angle. Where there is none within the pitch
@@ -172,7 +198,9 @@ def _stern_only_trim(vehicle: Vehicle, u: float, limit: float, grid: np.ndarray,
         elif mismatch[i + 1] == 0.0:
             theta = b
         else:
-            theta = brentq(lambda t: float(_stern_only_mismatch(vehicle, u, np.asarray(t), surface)), a, b, xtol=1e-14)
+            theta = brentq(
+                lambda t: float(_stern_only_mismatch(vehicle, u, np.asarray(t), surface)), a, b, xtol=1e-14
+            )
         stern = float(_planes(vehicle, u, np.asarray(theta), surface)[0])
         if best is None or abs(stern) < abs(best[1]):
             best = (theta, stern)
@@ -185,10 +213,18 @@ def _stern_only_trim(vehicle: Vehicle, u: float, limit: float, grid: np.ndarray,
     return DepthHoldingTrim(u, margin >= 0, theta, u * math.tan(theta), stern, 0.0, margin)
 
 
-def winnable(vehicle: Vehicle, speeds_mps: Iterable[float], max_pitch_rad: float, depth_m: float = 0.0,
-             free_surface: FreeSurface = NO_FREE_SURFACE, sea_state: SeaState | None = None) -> bool:
+def winnable(
+    vehicle: Vehicle,
+    speeds_mps: Iterable[float],
+    max_pitch_rad: float,
+    depth_m: float = 0.0,
+    free_surface: FreeSurface = NO_FREE_SURFACE,
+    sea_state: SeaState | None = None,
+) -> bool:
     """Whether a depth-holding trim within the plane limits exists at every speed of ``speeds_mps`` (for an
     episode: the speed it holds at the end, the last knot of its profile, at its ordered depth; see
     :func:`depth_holding_trim`)."""
-    return all(depth_holding_trim(vehicle, u, max_pitch_rad, depth_m, free_surface, sea_state).exists
-               for u in speeds_mps)
+    return all(
+        depth_holding_trim(vehicle, u, max_pitch_rad, depth_m, free_surface, sea_state).exists
+        for u in speeds_mps
+    )

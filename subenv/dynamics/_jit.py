@@ -40,14 +40,30 @@ from typing import Any, Final, TypeVar, cast
 import numba
 import numpy as np
 
-__all__ = ["KERNEL_OPTIONS", "KERNEL_SOURCES", "inline_kernel", "kernel", "parallel_kernel", "rows", "select",
-           "threading_layer_available"]
+__all__ = [
+    "KERNEL_OPTIONS",
+    "KERNEL_SOURCES",
+    "inline_kernel",
+    "kernel",
+    "parallel_kernel",
+    "rows",
+    "select",
+    "threading_layer_available",
+]
 
 KERNEL_OPTIONS: Final[dict[str, Any]] = {"cache": True, "nogil": True, "error_model": "numpy"}
 
 _PACKAGE = Path(__file__).resolve().parents[1]
-KERNEL_SOURCES: Final = ("dynamics/_jit.py", "dynamics/hull.py", "dynamics/free_surface.py", "dynamics/waves.py",
-                         "dynamics/model.py", "dynamics/integrate.py", "dynamics/sincos.py", "envs/transition.py")
+KERNEL_SOURCES: Final = (
+    "dynamics/_jit.py",
+    "dynamics/hull.py",
+    "dynamics/free_surface.py",
+    "dynamics/waves.py",
+    "dynamics/model.py",
+    "dynamics/integrate.py",
+    "dynamics/sincos.py",
+    "envs/transition.py",
+)
 """The files the compiled kernels are written in (relative to the package): any edit recompiles them all."""
 _STAMP_PREFIX: Final = "subenv-kernels."
 
@@ -68,8 +84,9 @@ def parallel_kernel(fn: FunctionT) -> FunctionT:
     files a function's cached machine code under its name and signature only, so the two would
     load each other's code from the cache. Call it only where :func:`threading_layer_available`.
     """
-    twin = types.FunctionType(fn.__code__, fn.__globals__, f"{fn.__name__}_parallel", fn.__defaults__,
-                              fn.__closure__)
+    twin = types.FunctionType(
+        fn.__code__, fn.__globals__, f"{fn.__name__}_parallel", fn.__defaults__, fn.__closure__
+    )
     twin.__qualname__ = f"{fn.__qualname__}_parallel"
     twin.__module__, twin.__doc__ = fn.__module__, fn.__doc__
     _drop_stale_cache(twin)

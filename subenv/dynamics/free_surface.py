@@ -137,8 +137,9 @@ def source_rows(x_m: FloatArray, breadth_m: FloatArray) -> FloatArray:
 
 
 @inline_kernel
-def suction_point(theta: float, depth: float, u: float, rho_suction: float, hull: FloatArray,
-                  first_row: int) -> tuple[float, float]:
+def suction_point(
+    theta: float, depth: float, u: float, rho_suction: float, hull: FloatArray, first_row: int
+) -> tuple[float, float]:
     """Free-surface heave force Z_fs [N, down positive] and pitch moment M_fs [N m, nose-up positive]
     on the hull at pitch ``theta`` [rad], depth ``depth`` [m] and speed ``u`` [m/s].
 
@@ -194,23 +195,33 @@ def source_pair(xk: float, hk: float, sk: float, xm: float, hm: float, sm: float
 
 
 @inline_kernel
-def suction_from_sums(force: float, moment: float, u: float, rho_suction: float,
-                      cos_theta: float) -> tuple[float, float]:
+def suction_from_sums(
+    force: float, moment: float, u: float, rho_suction: float, cos_theta: float
+) -> tuple[float, float]:
     """(Z_fs [N], M_fs [N m]) from the sums over the pairs (``force``: up positive; ``moment``: with x_k weights)."""
     scale = rho_suction * u * u / _FOUR_PI
     return -scale * force * cos_theta, scale * moment * cos_theta
 
 
 @kernel
-def _suction_rows(theta: FloatArray, depth: FloatArray, u: FloatArray, rho_suction: FloatArray, hull: FloatArray,
-                  first_row: int, Z: FloatArray, M: FloatArray) -> None:
+def _suction_rows(
+    theta: FloatArray,
+    depth: FloatArray,
+    u: FloatArray,
+    rho_suction: FloatArray,
+    hull: FloatArray,
+    first_row: int,
+    Z: FloatArray,
+    M: FloatArray,
+) -> None:
     # A loop over rows, not a generalized ufunc (see subenv.dynamics._jit).
     for i in range(theta.shape[0]):
         Z[i], M[i] = suction_point(theta[i], depth[i], u[i], rho_suction[i], hull, first_row)
 
 
-def suction(hull: Any, pitch_rad: ArrayLike, depth_m: ArrayLike, speed_mps: ArrayLike,
-            rho_suction: ArrayLike) -> tuple[FloatArray, FloatArray]:
+def suction(
+    hull: Any, pitch_rad: ArrayLike, depth_m: ArrayLike, speed_mps: ArrayLike, rho_suction: ArrayLike
+) -> tuple[FloatArray, FloatArray]:
     """:func:`suction_point` broadcast over arrays: (Z_fs [N], M_fs [N m]).
 
     Parameters
@@ -227,15 +238,17 @@ def suction(hull: Any, pitch_rad: ArrayLike, depth_m: ArrayLike, speed_mps: Arra
 
     shape = np.broadcast_shapes(*(np.shape(a) for a in (pitch_rad, depth_m, speed_mps, rho_suction)))
     Z, M = np.empty(math.prod(shape)), np.empty(math.prod(shape))
-    _suction_rows(*(rows(a, shape) for a in (pitch_rad, depth_m, speed_mps, rho_suction)), hull.packed, SOURCE_ROW,
-                  Z, M)
+    _suction_rows(
+        *(rows(a, shape) for a in (pitch_rad, depth_m, speed_mps, rho_suction)), hull.packed, SOURCE_ROW, Z, M
+    )
     return Z.reshape(shape), M.reshape(shape)
 
 
-def dipole_suction_N(volume_m3: ArrayLike, depth_m: ArrayLike, speed_mps: ArrayLike,
-                     density_kg_m3: float) -> FloatArray:
+def dipole_suction_N(
+    volume_m3: ArrayLike, depth_m: ArrayLike, speed_mps: ArrayLike, density_kg_m3: float
+) -> FloatArray:
     """The far-field limit of the suction, 3 rho u^2 V^2 / (64 pi h^4) [N, up positive]: the hull as
     one dipole of moment u V attracted by its image at 2 h (a check of :func:`suction_point`, valid
     for h >> L)."""
     V, h, u = (np.asarray(a, dtype=float) for a in (volume_m3, depth_m, speed_mps))
-    return 3.0 * density_kg_m3 * u * u * V * V / (64.0 * math.pi * h ** 4)
+    return 3.0 * density_kg_m3 * u * u * V * V / (64.0 * math.pi * h**4)

@@ -54,12 +54,12 @@ class HullTable:
     Built once per hull by :meth:`from_offsets`; ``x`` is ascending (tail to nose).
     """
 
-    x: FloatArray          # breakpoints, ascending [m]
-    c0: FloatArray         # b(x) = c0[i] + c1[i] x on segment i [m]
-    c1: FloatArray         # [-]
-    offset: FloatArray     # shape (4, n_segments): C_k(s) = offset[k, i] + P_k,i(s)
-    total: FloatArray      # shape (4,): C_k at the nose, i.e. int x^k b dx over the hull
-    breadth: FloatArray    # b at the breakpoints [m]
+    x: FloatArray  # breakpoints, ascending [m]
+    c0: FloatArray  # b(x) = c0[i] + c1[i] x on segment i [m]
+    c1: FloatArray  # [-]
+    offset: FloatArray  # shape (4, n_segments): C_k(s) = offset[k, i] + P_k,i(s)
+    total: FloatArray  # shape (4,): C_k at the nose, i.e. int x^k b dx over the hull
+    breadth: FloatArray  # b at the breakpoints [m]
 
     @classmethod
     def from_offsets(cls, x_m: tuple[float, ...], breadth_m: tuple[float, ...]) -> HullTable:
@@ -116,8 +116,9 @@ def hull_segment(s: float, hull: FloatArray) -> int:
 
 
 @inline_kernel
-def moments_on_segment(s: float, c0: float, c1: float, o0: float, o1: float, o2: float,
-                       o3: float) -> tuple[float, float, float, float]:
+def moments_on_segment(
+    s: float, c0: float, c1: float, o0: float, o1: float, o2: float, o3: float
+) -> tuple[float, float, float, float]:
     """C_0..C_3 at ``s`` on a segment with breadth ``c0 + c1 x`` and offsets ``o0..o3``
     (:attr:`HullTable.packed` rows 1-6 of the segment's column)."""
     s2 = s * s
@@ -153,8 +154,9 @@ def crossflow_root(w: float, q: float, hull: FloatArray) -> float:
 
 
 @inline_kernel
-def crossflow_from_moments(w: float, q: float, C0: float, C1: float, C2: float, C3: float,
-                           hull: FloatArray) -> tuple[float, float]:
+def crossflow_from_moments(
+    w: float, q: float, C0: float, C1: float, C2: float, C3: float, hull: FloatArray
+) -> tuple[float, float]:
     """I_0, I_1 from the cumulative moments C_0..C_3 at the (clipped) root of w_loc."""
     n_seg = hull.shape[1] - 1
     T0, T1, T2, T3 = hull[3, n_seg], hull[4, n_seg], hull[5, n_seg], hull[6, n_seg]

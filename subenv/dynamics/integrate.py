@@ -105,9 +105,23 @@ _RHO_SUCTION: Final = PARAM_FIELDS.index("rho_suction")
 
 
 @inline_kernel
-def set_lane(block: FloatArray, j: int, theta: float, w: float, q: float, depth: float, t0: float, speed0: float,
-             speed_slope: float, stern: float, bow: float, force: float, prm: FloatArray, distance: float = 0.0,
-             n_waves: int = 0) -> None:
+def set_lane(
+    block: FloatArray,
+    j: int,
+    theta: float,
+    w: float,
+    q: float,
+    depth: float,
+    t0: float,
+    speed0: float,
+    speed_slope: float,
+    stern: float,
+    bow: float,
+    force: float,
+    prm: FloatArray,
+    distance: float = 0.0,
+    n_waves: int = 0,
+) -> None:
     """Put one state's inputs of :func:`control_period_lanes` into column ``j`` of a block: the state
     (theta, w, q, depth), the period's start ``t0`` [s] and speed ``speed0 + speed_slope (t - t0)``
     [m/s], the planes and heave ``force`` held over the period, the packed model parameters
@@ -149,10 +163,21 @@ def _free_surface_lanes(block: FloatArray, n: int, hull: FloatArray, waves: Floa
     theta, depth = _STAGE * L, (_STAGE + 3) * L
     rho_suction = (LANE_PARAMS + _RHO_SUCTION) * L
     for j in range(n):  # exactly 0.0 for a lane in deep water without a sea
-        Z_fs, M_fs = suction_point(block[theta + j], block[depth + j], block[_SPEED * L + j], block[rho_suction + j],
-                                   hull, SOURCE_ROW)
-        Z_w, M_w = wave_force_point(block[_TIME * L + j], block[_DISTANCE * L + j], block[depth + j],
-                                    waves[min(j, waves.shape[0] - 1)], int(block[LANE_WAVES * L + j]))
+        Z_fs, M_fs = suction_point(
+            block[theta + j],
+            block[depth + j],
+            block[_SPEED * L + j],
+            block[rho_suction + j],
+            hull,
+            SOURCE_ROW,
+        )
+        Z_w, M_w = wave_force_point(
+            block[_TIME * L + j],
+            block[_DISTANCE * L + j],
+            block[depth + j],
+            waves[min(j, waves.shape[0] - 1)],
+            int(block[LANE_WAVES * L + j]),
+        )
         block[_FREE_SURFACE * L + j] = Z_fs + Z_w
         block[(_FREE_SURFACE + 1) * L + j] = M_fs + M_w
 
@@ -184,14 +209,33 @@ def _rhs_lanes(block: FloatArray, n: int, hull: FloatArray, waves: FloatArray, f
     c = _SEGMENT_COEFFICIENTS * L
     for j in range(n):
         w_j, q_j = block[w + j], block[q + j]
-        C0, C1, C2, C3 = moments_on_segment(block[_ROOT * L + j], block[c + j], block[c + L + j],
-                                            block[c + 2 * L + j], block[c + 3 * L + j], block[c + 4 * L + j],
-                                            block[c + 5 * L + j])
+        C0, C1, C2, C3 = moments_on_segment(
+            block[_ROOT * L + j],
+            block[c + j],
+            block[c + L + j],
+            block[c + 2 * L + j],
+            block[c + 3 * L + j],
+            block[c + 4 * L + j],
+            block[c + 5 * L + j],
+        )
         I0, I1 = crossflow_from_moments(w_j, q_j, C0, C1, C2, C3, hull)
-        d0, d1, d2, d3 = rhs_given_drag(block[theta + j], w_j, q_j, block[_SPEED * L + j], block[LANE_STERN * L + j],
-                                        block[LANE_BOW * L + j], block[LANE_FORCE * L + j], 0.0, I0, I1,
-                                        block[_FREE_SURFACE * L + j], block[(_FREE_SURFACE + 1) * L + j], block,
-                                        LANE_PARAMS * L + j, L)
+        d0, d1, d2, d3 = rhs_given_drag(
+            block[theta + j],
+            w_j,
+            q_j,
+            block[_SPEED * L + j],
+            block[LANE_STERN * L + j],
+            block[LANE_BOW * L + j],
+            block[LANE_FORCE * L + j],
+            0.0,
+            I0,
+            I1,
+            block[_FREE_SURFACE * L + j],
+            block[(_FREE_SURFACE + 1) * L + j],
+            block,
+            LANE_PARAMS * L + j,
+            L,
+        )
         block[_SLOPE_OUT * L + j] = d0
         block[(_SLOPE_OUT + 1) * L + j] = d1
         block[(_SLOPE_OUT + 2) * L + j] = d2
@@ -199,8 +243,9 @@ def _rhs_lanes(block: FloatArray, n: int, hull: FloatArray, waves: FloatArray, f
 
 
 @inline_kernel
-def control_period_lanes(block: FloatArray, n: int, dt: float, substeps: int, hull: FloatArray,
-                         waves: FloatArray) -> None:
+def control_period_lanes(
+    block: FloatArray, n: int, dt: float, substeps: int, hull: FloatArray, waves: FloatArray
+) -> None:
     """:func:`rk4` of :func:`~subenv.dynamics.rhs_point` over one control period ``dt`` with ``substeps``
     steps, for columns 0 .. n-1 (n <= :data:`LANES`) of ``block``, in place.
 
@@ -239,11 +284,15 @@ def control_period_lanes(block: FloatArray, n: int, dt: float, substeps: int, hu
                 block[_SPEED * L + j] = speed0 + slope * elapsed
                 if free_surface:  # (the time and distance of the stage: a sea's phase)
                     block[_TIME * L + j] = t0 + elapsed
-                    block[_DISTANCE * L + j] = distance_travelled(block[LANE_DISTANCE * L + j], elapsed, speed0, slope)
+                    block[_DISTANCE * L + j] = distance_travelled(
+                        block[LANE_DISTANCE * L + j], elapsed, speed0, slope
+                    )
             for r in range(4):
                 for j in range(n):
                     x = block[(LANE_PITCH + r) * L + j]
-                    block[(_STAGE + r) * L + j] = x if stage == 0 else x + step * block[(previous + r) * L + j]
+                    block[(_STAGE + r) * L + j] = (
+                        x if stage == 0 else x + step * block[(previous + r) * L + j]
+                    )
             _rhs_lanes(block, n, hull, waves, free_surface)
             # Into k_stage here, not in _rhs_lanes: rows that depend on the stage would hide from the
             # compiler that they differ from the rows it reads, and it would not vectorize.
@@ -254,6 +303,8 @@ def control_period_lanes(block: FloatArray, n: int, dt: float, substeps: int, hu
         for r in range(4):
             for j in range(n):
                 x = (LANE_PITCH + r) * L + j
-                block[x] = block[x] + sixth * (block[(k1 + r) * L + j] + 2.0 * (block[(k2 + r) * L + j]
-                                                                               + block[(k3 + r) * L + j])
-                                               + block[(k4 + r) * L + j])
+                block[x] = block[x] + sixth * (
+                    block[(k1 + r) * L + j]
+                    + 2.0 * (block[(k2 + r) * L + j] + block[(k3 + r) * L + j])
+                    + block[(k4 + r) * L + j]
+                )

@@ -46,24 +46,24 @@ class ModelParams(NamedTuple):
     Build with :func:`model_params`; never by hand.
     """
 
-    inv_m11: ArrayLike        # inverse of the 2x2 added-mass matrix of (w, q)
+    inv_m11: ArrayLike  # inverse of the 2x2 added-mass matrix of (w, q)
     inv_m12: ArrayLike
     inv_m21: ArrayLike
     inv_m22: ArrayLike
-    Z_uq: ArrayLike           # m + Z_q [kg]
-    m_zG: ArrayLike           # m z_G [kg m]
-    Z_w: ArrayLike            # [kg/m]
-    M_uq: ArrayLike           # M_q - m x_G [kg m]
-    M_w: ArrayLike            # [kg]
-    Z_delta_s: ArrayLike      # [kg/m per rad]
+    Z_uq: ArrayLike  # m + Z_q [kg]
+    m_zG: ArrayLike  # m z_G [kg m]
+    Z_w: ArrayLike  # [kg/m]
+    M_uq: ArrayLike  # M_q - m x_G [kg m]
+    M_w: ArrayLike  # [kg]
+    Z_delta_s: ArrayLike  # [kg/m per rad]
     Z_delta_b: ArrayLike
-    M_delta_s: ArrayLike      # [kg per rad]
+    M_delta_s: ArrayLike  # [kg per rad]
     M_delta_b: ArrayLike
-    W_minus_B: ArrayLike      # W - B [N]
+    W_minus_B: ArrayLike  # W - B [N]
     xGW_minus_xBB: ArrayLike  # x_G W - x_B B [N m]
     zGW_minus_zBB: ArrayLike  # z_G W - z_B B [N m]
-    half_rho_CD: ArrayLike    # (rho/2) C_D [kg/m^3]
-    rho_suction: ArrayLike    # rho times FreeSurface.suction_factor [kg/m^3]; 0: deep water
+    half_rho_CD: ArrayLike  # (rho/2) C_D [kg/m^3]
+    rho_suction: ArrayLike  # rho times FreeSurface.suction_factor [kg/m^3]; 0: deep water
     hull: HullTable
 
 
@@ -204,12 +204,43 @@ def rhs_given_drag(
     stride 1; the block integrator (:func:`subenv.dynamics.integrate.control_period_lanes`) keeps
     each field as a row of its block, one sub-environment per column.
     """
-    (inv_m11, inv_m12, inv_m21, inv_m22, Z_uq, m_zG, Z_w, M_uq, M_w, Z_delta_s, Z_delta_b, M_delta_s,
-     M_delta_b, W_minus_B, xGW_minus_xBB, zGW_minus_zBB, half_rho_CD) = (
-        prm[at], prm[at + stride], prm[at + 2 * stride], prm[at + 3 * stride], prm[at + 4 * stride],
-        prm[at + 5 * stride], prm[at + 6 * stride], prm[at + 7 * stride], prm[at + 8 * stride],
-        prm[at + 9 * stride], prm[at + 10 * stride], prm[at + 11 * stride], prm[at + 12 * stride],
-        prm[at + 13 * stride], prm[at + 14 * stride], prm[at + 15 * stride], prm[at + 16 * stride])
+    (
+        inv_m11,
+        inv_m12,
+        inv_m21,
+        inv_m22,
+        Z_uq,
+        m_zG,
+        Z_w,
+        M_uq,
+        M_w,
+        Z_delta_s,
+        Z_delta_b,
+        M_delta_s,
+        M_delta_b,
+        W_minus_B,
+        xGW_minus_xBB,
+        zGW_minus_zBB,
+        half_rho_CD,
+    ) = (
+        prm[at],
+        prm[at + stride],
+        prm[at + 2 * stride],
+        prm[at + 3 * stride],
+        prm[at + 4 * stride],
+        prm[at + 5 * stride],
+        prm[at + 6 * stride],
+        prm[at + 7 * stride],
+        prm[at + 8 * stride],
+        prm[at + 9 * stride],
+        prm[at + 10 * stride],
+        prm[at + 11 * stride],
+        prm[at + 12 * stride],
+        prm[at + 13 * stride],
+        prm[at + 14 * stride],
+        prm[at + 15 * stride],
+        prm[at + 16 * stride],
+    )
     sin_t, cos_t = sincos_point(theta)
     uu = u * u
     # Riedel (1993) eqs 2.38 and 2.39, right-hand sides, with the forces of eqs 2.42 and 2.43.
@@ -296,20 +327,49 @@ def derivatives(
     """
     state = np.asarray(state, dtype=float)
     if state.shape[-1:] != (4,):
-        raise ValueError(f"state has shape {state.shape}: must have shape (..., 4) (pitch, heave, pitch rate, depth)")
+        raise ValueError(
+            f"state has shape {state.shape}: must have shape (..., 4) (pitch, heave, pitch rate, depth)"
+        )
     prm = pack_params(params)  # (..., P): one set for all, or one per row (stack_params)
-    shape = np.broadcast_shapes(state.shape[:-1], prm.shape[:-1], *(np.shape(a) for a in (speed, stern, bow, force, moment)))
+    shape = np.broadcast_shapes(
+        state.shape[:-1], prm.shape[:-1], *(np.shape(a) for a in (speed, stern, bow, force, moment))
+    )
     states = rows(state, (*shape, 4)).reshape(-1, 4)
     out = np.empty((states.shape[0], 4))
-    _derivatives_rows(states, *(rows(a, shape) for a in (speed, stern, bow, force, moment)),
-                      rows(prm, (*shape, prm.shape[-1])).reshape(-1, prm.shape[-1]), params.hull.packed, out)
+    _derivatives_rows(
+        states,
+        *(rows(a, shape) for a in (speed, stern, bow, force, moment)),
+        rows(prm, (*shape, prm.shape[-1])).reshape(-1, prm.shape[-1]),
+        params.hull.packed,
+        out,
+    )
     return out.reshape(*shape, 4)
 
 
 @kernel
-def _derivatives_rows(state: FloatArray, u: FloatArray, stern: FloatArray, bow: FloatArray, force: FloatArray,
-                      moment: FloatArray, prm: FloatArray, hull: FloatArray, out: FloatArray) -> None:
+def _derivatives_rows(
+    state: FloatArray,
+    u: FloatArray,
+    stern: FloatArray,
+    bow: FloatArray,
+    force: FloatArray,
+    moment: FloatArray,
+    prm: FloatArray,
+    hull: FloatArray,
+    out: FloatArray,
+) -> None:
     # A loop over rows, not a generalized ufunc (see subenv.dynamics._jit).
     for i in range(state.shape[0]):
-        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = rhs_point(state[i, 0], state[i, 1], state[i, 2], state[i, 3], u[i],
-                                                               stern[i], bow[i], force[i], moment[i], prm[i], hull)
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = rhs_point(
+            state[i, 0],
+            state[i, 1],
+            state[i, 2],
+            state[i, 3],
+            u[i],
+            stern[i],
+            bow[i],
+            force[i],
+            moment[i],
+            prm[i],
+            hull,
+        )

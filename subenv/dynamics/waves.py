@@ -109,8 +109,10 @@ class SeaState:
         check.integer("waves", self.waves, 1, MAX_WAVES)
         low, high = check.interval("band", self.band, 0.0)
         if not 0.0 < low < 1.0 < high:
-            raise ValueError(f"band={self.band!r} is invalid: must be (low, high) with 0 < low < 1 < high "
-                             "(multiples of the peak frequency)")
+            raise ValueError(
+                f"band={self.band!r} is invalid: must be (low, high) with 0 < low < 1 < high "
+                "(multiples of the peak frequency)"
+            )
         check.number("mean_suction_factor", self.mean_suction_factor, 0.0, 10.0)
 
     @property
@@ -123,7 +125,7 @@ class SeaState:
         w = np.asarray(omega_radps, dtype=float)
         wp, hs, gamma = self.peak_frequency_radps, self.significant_height_m, self.peak_enhancement
         with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
-            pm = 5.0 / 16.0 * hs * hs * wp ** 4 * w ** -5.0 * np.exp(-1.25 * (wp / w) ** 4)
+            pm = 5.0 / 16.0 * hs * hs * wp**4 * w**-5.0 * np.exp(-1.25 * (wp / w) ** 4)
             sigma = np.where(w <= wp, _SIGMA_LOW, _SIGMA_HIGH)
             peak = gamma ** np.exp(-((w - wp) ** 2) / (2.0 * sigma * sigma * wp * wp))
             s = (1.0 - _PM_NORMALISATION * math.log(gamma)) * pm * peak
@@ -146,16 +148,26 @@ class SeaState:
         return np.sqrt(2.0 * self.spectrum(omega_radps) * self.bins[1])
 
     def band_variance_m2(self) -> float:
-        """int S d omega over the band [m^2] (adaptive quadrature): what the waves' variance
+        """Int S d omega over the band [m^2] (adaptive quadrature): what the waves' variance
         sum A_i^2 / 2 approximates; H_s^2 / 16 over all frequencies."""
         from scipy.integrate import quad
 
         low, high = (f * self.peak_frequency_radps for f in self.band)
-        return float(quad(lambda w: float(self.spectrum(w)), low, high, limit=200,
-                          points=[self.peak_frequency_radps])[0])
+        return float(
+            quad(lambda w: float(self.spectrum(w)), low, high, limit=200, points=[self.peak_frequency_radps])[
+                0
+            ]
+        )
 
-    def components(self, jitter: ArrayLike, phases_rad: ArrayLike, hull_x_m: ArrayLike, hull_breadth_m: ArrayLike,
-                   density_kg_m3: float, gravity_m_s2: float) -> FloatArray:
+    def components(
+        self,
+        jitter: ArrayLike,
+        phases_rad: ArrayLike,
+        hull_x_m: ArrayLike,
+        hull_breadth_m: ArrayLike,
+        density_kg_m3: float,
+        gravity_m_s2: float,
+    ) -> FloatArray:
         """The waves of one sea as an episode's record holds them: shape (:data:`WAVE_FIELDS`,
         :data:`MAX_WAVES`), the unused columns zero (:func:`wave_force_point` reads the first
         :attr:`waves`)."""
@@ -175,21 +187,34 @@ class SeaState:
         out[_F_MEAN, :n], out[_M_MEAN, :n] = mean * mean_heave, mean * mean_pitch
         return out
 
-    def mean_suction(self, depth_m: ArrayLike, hull_x_m: ArrayLike, hull_breadth_m: ArrayLike,
-                     density_kg_m3: float, gravity_m_s2: float) -> tuple[FloatArray, FloatArray]:
+    def mean_suction(
+        self,
+        depth_m: ArrayLike,
+        hull_x_m: ArrayLike,
+        hull_breadth_m: ArrayLike,
+        density_kg_m3: float,
+        gravity_m_s2: float,
+    ) -> tuple[FloatArray, FloatArray]:
         """The expected second-order mean heave force [N, down positive] and pitch moment [N m] at
         depth ``depth_m``: the spectral integral int (rho S + a_33) K omega^2 2 S(omega) e^(-2 K h)
         d omega over the hull, by the bins' midpoints (the waves of a sea with every jitter 1/2)."""
-        comps = self.components(np.full(self.waves, 0.5), np.zeros(self.waves), hull_x_m, hull_breadth_m,
-                                density_kg_m3, gravity_m_s2)[:, : self.waves]
+        comps = self.components(
+            np.full(self.waves, 0.5),
+            np.zeros(self.waves),
+            hull_x_m,
+            hull_breadth_m,
+            density_kg_m3,
+            gravity_m_s2,
+        )[:, : self.waves]
         h = np.asarray(depth_m, dtype=float)[..., None]
         decay = np.exp(-2.0 * comps[_K] * h)
         return -(comps[_F_MEAN] * decay).sum(-1), (comps[_M_MEAN] * decay).sum(-1)
 
 
-def hull_wave_integrals(k: ArrayLike, hull_x_m: ArrayLike, hull_breadth_m: ArrayLike,
-                        density_kg_m3: float) -> tuple[FloatArray, FloatArray, float, float]:
-    """int 2 rho S e^(i K x) dx and int 2 rho S x e^(i K x) dx for each K [1/m] (complex, [kg/m], [kg]), and
+def hull_wave_integrals(
+    k: ArrayLike, hull_x_m: ArrayLike, hull_breadth_m: ArrayLike, density_kg_m3: float
+) -> tuple[FloatArray, FloatArray, float, float]:
+    """Int 2 rho S e^(i K x) dx and int 2 rho S x e^(i K x) dx for each K [1/m] (complex, [kg/m], [kg]), and
     int 2 rho S dx [kg/m], int 2 rho S x dx [kg] (S = pi b^2 / 4: circular sections with a_33 = rho S).
 
     By the trapezoid rule on the hull's stations refined 8 times (b linear between stations)."""
@@ -207,7 +232,9 @@ def hull_wave_integrals(k: ArrayLike, hull_x_m: ArrayLike, hull_breadth_m: Array
 
 
 @inline_kernel
-def wave_force_point(t: float, distance: float, depth: float, waves: FloatArray, n: int) -> tuple[float, float]:
+def wave_force_point(
+    t: float, distance: float, depth: float, waves: FloatArray, n: int
+) -> tuple[float, float]:
     """The sea's heave force [N, down positive] and pitch moment [N m, nose-up positive] on the hull at
     time ``t`` [s], distance travelled ``distance`` [m] and depth ``depth`` [m]: the first ``n`` waves
     of ``waves`` (:meth:`SeaState.components`), first order plus the second-order mean; (0.0, 0.0)

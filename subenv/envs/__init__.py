@@ -5,4 +5,12 @@ from subenv.envs.dive_plane import OBSERVATION_NAMES, DivePlaneEnv
 from subenv.envs.registration import HEADLINE_ID, env_ids, register_envs
 from subenv.envs.vector import DivePlaneVectorEnv
 
-__all__ = ["HEADLINE_ID", "OBSERVATION_NAMES", "DivePlaneConfig", "DivePlaneEnv", "DivePlaneVectorEnv", "env_ids", "register_envs"]
+__all__ = [
+    "HEADLINE_ID",
+    "OBSERVATION_NAMES",
+    "DivePlaneConfig",
+    "DivePlaneEnv",
+    "DivePlaneVectorEnv",
+    "env_ids",
+    "register_envs",
+]

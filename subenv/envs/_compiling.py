@@ -41,8 +41,9 @@ class _CompileNotice:
             self._timer.daemon = True
             self._timer.start()
 
-    def __exit__(self, kind: type[BaseException] | None, value: BaseException | None,
-                 traceback: TracebackType | None) -> None:
+    def __exit__(
+        self, kind: type[BaseException] | None, value: BaseException | None, traceback: TracebackType | None
+    ) -> None:
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None

@@ -114,31 +114,50 @@ class DivePlaneConfig:
             raise ValueError(f"scenario={self.scenario!r} is invalid: must be a scenario name or a Scenario")
         if not isinstance(self.vehicle, Vehicle):
             put(self, "vehicle", load_vehicle(self.vehicle))
-        check.require("control", self.control, self.control in ("dual", "independent"),
-                      "one of ['dual', 'independent']")
+        check.require(
+            "control", self.control, self.control in ("dual", "independent"), "one of ['dual', 'independent']"
+        )
         put(self, "alpha", check_alpha(self.alpha))
         if self.control == "independent" and self.alpha != 0.0:
             raise ValueError(
                 f"alpha={self.alpha!r} is invalid with control='independent': must be 0 "
                 "(the bow planes have their own action)"
             )
-        if not self.base_vehicle.planes.has_bow_planes and (self.control == "independent" or self.alpha != 0.0):
-            name, value = ("control", self.control) if self.control == "independent" else ("alpha", self.alpha)
-            raise ValueError(f"{name}={value!r} is invalid for vehicle {self.base_vehicle.name!r}, which has no bow "
-                             "planes: must be control='dual' with alpha=0 (the stern planes alone)")
+        if not self.base_vehicle.planes.has_bow_planes and (
+            self.control == "independent" or self.alpha != 0.0
+        ):
+            name, value = (
+                ("control", self.control) if self.control == "independent" else ("alpha", self.alpha)
+            )
+            raise ValueError(
+                f"{name}={value!r} is invalid for vehicle {self.base_vehicle.name!r}, which has no bow "
+                "planes: must be control='dual' with alpha=0 (the stern planes alone)"
+            )
         put(self, "dt", check.positive("dt", self.dt, upper=10.0))
         put(self, "substeps", check.integer("substeps", self.substeps, 1, 1000))
         if self.plane_rate_limit_radps is not None:
-            put(self, "plane_rate_limit_radps",
-                check.positive("plane_rate_limit_radps", self.plane_rate_limit_radps, upper=MAX_PLANE_RATE_RADPS))
-        put(self, "max_pitch_rad", check.number("max_pitch_rad", self.max_pitch_rad, MIN_PITCH_LIMIT_RAD, math.pi / 2))
+            put(
+                self,
+                "plane_rate_limit_radps",
+                check.positive(
+                    "plane_rate_limit_radps", self.plane_rate_limit_radps, upper=MAX_PLANE_RATE_RADPS
+                ),
+            )
+        put(
+            self,
+            "max_pitch_rad",
+            check.number("max_pitch_rad", self.max_pitch_rad, MIN_PITCH_LIMIT_RAD, math.pi / 2),
+        )
         # None: the reference vehicle's value (SUBOFF's, for the shipped scenarios), Froude-scaled to
         # this vehicle's length as the scenario's episodes are (Scenario.reference_length_m).
         ratio = self.length_ratio
         for name, reference in (("max_depth_error_m", DEPTH_BAND_M), ("depth_scale_m", DEPTH_SCALE_M)):
             value = getattr(self, name)
-            put(self, name, check.positive(name, reference * ratio if value is None else value,
-                                           upper=MAX_DEPTH_BAND_M))
+            put(
+                self,
+                name,
+                check.positive(name, reference * ratio if value is None else value, upper=MAX_DEPTH_BAND_M),
+            )
         for name in ("pitch_weight", "effort_weight", "termination_penalty"):
             put(self, name, check.number(name, getattr(self, name), 0.0, MAX_WEIGHT))
 
@@ -161,7 +180,7 @@ class DivePlaneConfig:
 
     @property
     def length_ratio(self) -> float:
-        """lambda by which the scenario's episodes are Froude-scaled on this vehicle
+        """Lambda by which the scenario's episodes are Froude-scaled on this vehicle
         (:attr:`Scenario.reference_length_m <subenv.scenarios.Scenario.reference_length_m>`; 1.0 on the
         scenario's reference vehicle, or without one)."""
         return self.base_scenario.length_ratio(self.base_vehicle.length_m)
@@ -186,10 +205,30 @@ class DivePlaneConfig:
         """(low, high) of the observation (float64, :data:`OBSERVATION_NAMES` order)."""
         depth_error_bound = self.max_depth_error_m + OBS_MARGIN_M
         limit = self.plane_limit_rad
-        low = np.array([-depth_error_bound, -math.pi, -MAX_HEAVE_MPS, -MAX_PITCH_RATE_RADPS, 0.0, -limit, -limit,
-                        -OBS_MARGIN_M])
-        high = np.array([depth_error_bound, math.pi, MAX_HEAVE_MPS, MAX_PITCH_RATE_RADPS, MAX_SPEED_MPS, limit, limit,
-                         MAX_DEPTH_COMMAND_M + self.max_depth_error_m + OBS_MARGIN_M])
+        low = np.array(
+            [
+                -depth_error_bound,
+                -math.pi,
+                -MAX_HEAVE_MPS,
+                -MAX_PITCH_RATE_RADPS,
+                0.0,
+                -limit,
+                -limit,
+                -OBS_MARGIN_M,
+            ]
+        )
+        high = np.array(
+            [
+                depth_error_bound,
+                math.pi,
+                MAX_HEAVE_MPS,
+                MAX_PITCH_RATE_RADPS,
+                MAX_SPEED_MPS,
+                limit,
+                limit,
+                MAX_DEPTH_COMMAND_M + self.max_depth_error_m + OBS_MARGIN_M,
+            ]
+        )
         return low, high
 
     def action_space(self) -> spaces.Box:
@@ -214,12 +253,28 @@ class DivePlaneConfig:
         low, high = self.observation_bounds
         record = np.zeros(1, dtype=tr.CONFIG_DTYPE)
         record[0] = (
-            self.dt, self.substeps, self.control == "dual", self.alpha, self.plane_limit_rad,
-            self.plane_rate_limit_radps is not None, (self.plane_rate_limit_radps or 0.0) * self.dt,
-            self.max_pitch_rad, self.max_depth_error_m, self.broach_depth_m, self.depth_scale_m,
-            self.pitch_weight, self.effort_weight, self.termination_penalty, decay, math.sqrt(1 - decay * decay),
-            math.inf if max_episode_steps is None else float(max_episode_steps), MAX_HEAVE_MPS,
-            MAX_PITCH_RATE_RADPS, low, high, [NOISE_STD.get(name, 0.0) for name in OBSERVATION_NAMES],
+            self.dt,
+            self.substeps,
+            self.control == "dual",
+            self.alpha,
+            self.plane_limit_rad,
+            self.plane_rate_limit_radps is not None,
+            (self.plane_rate_limit_radps or 0.0) * self.dt,
+            self.max_pitch_rad,
+            self.max_depth_error_m,
+            self.broach_depth_m,
+            self.depth_scale_m,
+            self.pitch_weight,
+            self.effort_weight,
+            self.termination_penalty,
+            decay,
+            math.sqrt(1 - decay * decay),
+            math.inf if max_episode_steps is None else float(max_episode_steps),
+            MAX_HEAVE_MPS,
+            MAX_PITCH_RATE_RADPS,
+            low,
+            high,
+            [NOISE_STD.get(name, 0.0) for name in OBSERVATION_NAMES],
         )
         record.flags.writeable = False
         return record

@@ -176,7 +176,6 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
       Every other id's seeded rollouts are unchanged, bit for bit.
     """
 
-
     metadata: dict[str, Any] = {"render_modes": ["human", "rgb_array"], "render_fps": 30}
 
     def __init__(
@@ -198,11 +197,21 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         *,
         config: DivePlaneConfig | None = None,
     ) -> None:
-        given = {"scenario": scenario, "vehicle": vehicle, "control": control, "alpha": alpha, "dt": dt,
-                 "substeps": substeps, "plane_rate_limit_radps": plane_rate_limit_radps,
-                 "max_pitch_rad": max_pitch_rad, "max_depth_error_m": max_depth_error_m,
-                 "depth_scale_m": depth_scale_m, "pitch_weight": pitch_weight, "effort_weight": effort_weight,
-                 "termination_penalty": termination_penalty}
+        given = {
+            "scenario": scenario,
+            "vehicle": vehicle,
+            "control": control,
+            "alpha": alpha,
+            "dt": dt,
+            "substeps": substeps,
+            "plane_rate_limit_radps": plane_rate_limit_radps,
+            "max_pitch_rad": max_pitch_rad,
+            "max_depth_error_m": max_depth_error_m,
+            "depth_scale_m": depth_scale_m,
+            "pitch_weight": pitch_weight,
+            "effort_weight": effort_weight,
+            "termination_penalty": termination_penalty,
+        }
         if config is None:
             config = DivePlaneConfig(**given)
         elif not isinstance(config, DivePlaneConfig):
@@ -270,7 +279,9 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         write_episode(self._episode, 0, episode)
         write_episode(self._state, 0, state)
         write_sea(self._seas, 0, episode)
-        tr.observe(self._state, self._episode, _FIRST, self._obs, self._bound_rngs(), self._constants, self._report)
+        tr.observe(
+            self._state, self._episode, _FIRST, self._obs, self._bound_rngs(), self._constants, self._report
+        )
         self._history = [(0.0, state["depth_m"], episode["depth_command_m"])]
         if self.render_mode == "human":
             self.render()
@@ -288,9 +299,24 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
                 f"(control={self.config.control!r})"
             )
         rngs = self._rngs if self._rngs_source is self._np_random else self._bound_rngs()
-        if tr.step(self._state, self._episode, self._seas, a, self._active, self._obs, rngs, self._constants,
-                   self._hull, self._report) >= 0:
-            raise ValueError(f"action={np.asarray(action).tolist()!r} is invalid: must be finite (no NaN or inf)")
+        if (
+            tr.step(
+                self._state,
+                self._episode,
+                self._seas,
+                a,
+                self._active,
+                self._obs,
+                rngs,
+                self._constants,
+                self._hull,
+                self._report,
+            )
+            >= 0
+        ):
+            raise ValueError(
+                f"action={np.asarray(action).tolist()!r} is invalid: must be finite (no NaN or inf)"
+            )
         r = self._report.ravel().tolist()  # (its one column)
         if self.render_mode is not None:
             self._history.append((r[_TIME], r[_DEPTH], r[_COMMAND]))
@@ -417,4 +443,6 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
 _DEFAULTS: Final = {f.name: f.default for f in dataclasses.fields(DivePlaneConfig)}
 _FIRST: Final = np.zeros(1, dtype=np.intp)  # the index of a single environment
 _TIME, _DEPTH, _COMMAND, _REWARD, _TERMINATED, _TRUNCATED = (
-    tr.REPORT_KEYS.index(key) for key in ("time_s", "depth_m", "depth_command_m", "reward", "terminated", "truncated"))
+    tr.REPORT_KEYS.index(key)
+    for key in ("time_s", "depth_m", "depth_command_m", "reward", "terminated", "truncated")
+)

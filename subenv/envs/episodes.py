@@ -37,8 +37,19 @@ from subenv.envs.config import (
 from subenv.scenarios.scenario import EpisodeConfig
 from subenv.vehicles.vehicle import Vehicle
 
-__all__ = ["OPTIONS", "Loading", "Loadings", "check_options", "draw_episode", "draw_episode_batch", "episode_table",
-           "for_vehicle", "new_seas", "write_episode", "write_sea"]
+__all__ = [
+    "OPTIONS",
+    "Loading",
+    "Loadings",
+    "check_options",
+    "draw_episode",
+    "draw_episode_batch",
+    "episode_table",
+    "for_vehicle",
+    "new_seas",
+    "write_episode",
+    "write_sea",
+]
 
 OPTIONS: Final = ("speed", "depth_command", "initial_state")
 """The keys of ``reset(options=...)``."""
@@ -51,9 +62,9 @@ class Loading(NamedTuple):
     """An episode's vehicle and what the transition needs of it."""
 
     vehicle: Vehicle
-    params: np.ndarray           # ModelParams, packed (PARAM_FIELDS order), read-only
-    critical_speed_mps: float    # nan: none (z_GB <= 0)
-    froude_scale_mps: float      # sqrt(g z_GB); nan for z_GB <= 0
+    params: np.ndarray  # ModelParams, packed (PARAM_FIELDS order), read-only
+    critical_speed_mps: float  # nan: none (z_GB <= 0)
+    froude_scale_mps: float  # sqrt(g z_GB); nan for z_GB <= 0
 
 
 class Loadings:
@@ -69,11 +80,18 @@ class Loadings:
         base = self.base
         z_GB = draw.z_GB_m if draw.z_GB_m is not None else base.z_GB_m
         free_surface = draw.free_surface or NO_FREE_SURFACE
-        key = (z_GB * draw.z_GB_scale, base.x_GB_m + draw.x_GB_m, base.excess_buoyancy_N + draw.excess_buoyancy_N,
-               draw.crossflow_drag, free_surface.suction_factor)
+        key = (
+            z_GB * draw.z_GB_scale,
+            base.x_GB_m + draw.x_GB_m,
+            base.excess_buoyancy_N + draw.excess_buoyancy_N,
+            draw.crossflow_drag,
+            free_surface.suction_factor,
+        )
         found = self._found.get(key)
         if found is None:
-            vehicle = base.variant(z_GB_m=key[0], x_GB_m=key[1], excess_buoyancy_N=key[2], crossflow_drag=key[3])
+            vehicle = base.variant(
+                z_GB_m=key[0], x_GB_m=key[1], excess_buoyancy_N=key[2], crossflow_drag=key[3]
+            )
             if len(self._found) >= _LOADING_CACHE_SIZE:
                 self._found.clear()
             try:
@@ -83,8 +101,9 @@ class Loadings:
             z = vehicle.z_GB_m
             params = pack_params(model_params(vehicle, free_surface))
             params.flags.writeable = False
-            found = self._found[key] = Loading(vehicle, params, ucr,
-                                               math.sqrt(vehicle.gravity_m_s2 * z) if z > 0 else math.nan)
+            found = self._found[key] = Loading(
+                vehicle, params, ucr, math.sqrt(vehicle.gravity_m_s2 * z) if z > 0 else math.nan
+            )
         return found
 
 
@@ -94,8 +113,12 @@ def for_vehicle(config: DivePlaneConfig, draw: EpisodeConfig) -> EpisodeConfig:
     return draw.froude_scaled(config.length_ratio)
 
 
-def draw_episode(config: DivePlaneConfig, rng: np.random.Generator, loadings: Loadings,
-                 options: Mapping[str, Any] | None = None) -> tuple[EpisodeConfig, Loading, dict[str, Any], dict[str, Any]]:
+def draw_episode(
+    config: DivePlaneConfig,
+    rng: np.random.Generator,
+    loadings: Loadings,
+    options: Mapping[str, Any] | None = None,
+) -> tuple[EpisodeConfig, Loading, dict[str, Any], dict[str, Any]]:
     """One reset from ``rng``: the scenario's draw, then the initial heave force
     (``rng.normal(0, disturbance_std_N)`` where the draw has a disturbance).
 
@@ -121,7 +144,10 @@ def episode_table(config: DivePlaneConfig, seeds: Sequence[int]) -> tuple[np.nda
     """
     values = [check.integer(f"seeds[{k}]", seed, 0) for k, seed in enumerate(seeds)]
     check.require("seeds", seeds, len(values) > 0, "at least one seed")
-    episodes, states = np.zeros(len(values), dtype=tr.EPISODE_DTYPE), np.zeros(len(values), dtype=tr.STATE_DTYPE)
+    episodes, states = (
+        np.zeros(len(values), dtype=tr.EPISODE_DTYPE),
+        np.zeros(len(values), dtype=tr.STATE_DTYPE),
+    )
     seas = new_seas(len(values))
     loadings = Loadings(config)
     for k, seed in enumerate(values):
@@ -133,8 +159,9 @@ def episode_table(config: DivePlaneConfig, seeds: Sequence[int]) -> tuple[np.nda
     return episodes, states, seas
 
 
-def draw_episode_batch(config: DivePlaneConfig, uniforms: np.ndarray, disturbances: np.ndarray,
-                       loadings: Loadings) -> tuple[EpisodeConfig, Loading, dict[str, Any], dict[str, Any]]:
+def draw_episode_batch(
+    config: DivePlaneConfig, uniforms: np.ndarray, disturbances: np.ndarray, loadings: Loadings
+) -> tuple[EpisodeConfig, Loading, dict[str, Any], dict[str, Any]]:
     """A batch of resets of a scenario that draws every episode with one loading
     (:attr:`Scenario.samples_in_batches <subenv.scenarios.Scenario.samples_in_batches>`), from their
     numbers: row ``j`` of ``uniforms`` and ``disturbances[j]`` are what :func:`draw_episode` takes from
@@ -147,8 +174,13 @@ def draw_episode_batch(config: DivePlaneConfig, uniforms: np.ndarray, disturbanc
     return (draw, loading, *episode_fields(config, draw, loading, disturbances, None))
 
 
-def episode_fields(config: DivePlaneConfig, draw: EpisodeConfig, loading: Loading, disturbance: Any,
-                   options: Mapping[str, Any] | None) -> tuple[dict[str, Any], dict[str, Any]]:
+def episode_fields(
+    config: DivePlaneConfig,
+    draw: EpisodeConfig,
+    loading: Loading,
+    disturbance: Any,
+    options: Mapping[str, Any] | None,
+) -> tuple[dict[str, Any], dict[str, Any]]:
     """The fields of the episode's and the state's records at a reset (the state's speed is set when
     it is observed: :func:`subenv.envs.transition.observe`).
 
@@ -176,26 +208,49 @@ def episode_fields(config: DivePlaneConfig, draw: EpisodeConfig, loading: Loadin
             if not depth > config.broach_depth_m:
                 depth = command
         if "initial_state" in options:
-            pitch, heave, rate, depth = _initial_state(config, options["initial_state"], (pitch, heave, rate, depth),
-                                                       command)
+            pitch, heave, rate, depth = _initial_state(
+                config, options["initial_state"], (pitch, heave, rate, depth), command
+            )
     if len(knots) > tr.MAX_KNOTS:
-        raise ValueError(f"the speed profile has {len(knots)} knots; the environment takes at most {tr.MAX_KNOTS}")
+        raise ValueError(
+            f"the speed profile has {len(knots)} knots; the environment takes at most {tr.MAX_KNOTS}"
+        )
     # One row of knots, or one per episode of a batch.
-    shape = (len(draw.depth_command_m), tr.MAX_KNOTS) if isinstance(draw.depth_command_m, np.ndarray) else tr.MAX_KNOTS
+    shape = (
+        (len(draw.depth_command_m), tr.MAX_KNOTS)
+        if isinstance(draw.depth_command_m, np.ndarray)
+        else tr.MAX_KNOTS
+    )
     knot_time, knot_speed = np.zeros(shape), np.zeros(shape)
     for k, (t, u) in enumerate(knots):
         knot_time[..., k], knot_speed[..., k] = t, u
     n_waves, waves = _sea(draw, loading.vehicle, shape)
     episode = {
-        "params": loading.params, "n_knots": len(knots), "knot_time_s": knot_time, "knot_speed_mps": knot_speed,
-        "depth_command_m": command, "disturbance_std_N": draw.disturbance_std_N, "sensor_noise": draw.sensor_noise,
-        "duration_s": draw.duration_s, "critical_speed_mps": ucr, "froude_scale_mps": loading.froude_scale_mps,
-        "n_waves": n_waves, "waves": waves,
+        "params": loading.params,
+        "n_knots": len(knots),
+        "knot_time_s": knot_time,
+        "knot_speed_mps": knot_speed,
+        "depth_command_m": command,
+        "disturbance_std_N": draw.disturbance_std_N,
+        "sensor_noise": draw.sensor_noise,
+        "duration_s": draw.duration_s,
+        "critical_speed_mps": ucr,
+        "froude_scale_mps": loading.froude_scale_mps,
+        "n_waves": n_waves,
+        "waves": waves,
     }
     state = {
-        "pitch_rad": pitch, "heave_mps": heave, "pitch_rate_radps": rate, "depth_m": depth,
-        "stern_plane_rad": 0.0, "bow_plane_rad": 0.0, "time_s": 0.0, "steps": 0, "disturbance_N": disturbance,
-        "speed_mps": math.nan, "distance_m": 0.0,
+        "pitch_rad": pitch,
+        "heave_mps": heave,
+        "pitch_rate_radps": rate,
+        "depth_m": depth,
+        "stern_plane_rad": 0.0,
+        "bow_plane_rad": 0.0,
+        "time_s": 0.0,
+        "steps": 0,
+        "disturbance_N": disturbance,
+        "speed_mps": math.nan,
+        "distance_m": 0.0,
     }
     return episode, state
 
@@ -209,12 +264,13 @@ def _sea(draw: EpisodeConfig, vehicle: Vehicle, knot_shape: Any) -> tuple[int, n
     if sea is None:
         return 0, None
     units = np.asarray(draw.wave_uniforms, dtype=float)  # (2 n,) or (2 n, batch)
-    jitter, phase = units[: sea.waves], 2.0 * math.pi * units[sea.waves:]
+    jitter, phase = units[: sea.waves], 2.0 * math.pi * units[sea.waves :]
     hull, rho, g = vehicle.hull, vehicle.water_density_kg_m3, vehicle.gravity_m_s2
     if batch is None:
         return sea.waves, sea.components(jitter, phase, hull.x_m, hull.breadth_m, rho, g)
-    waves = np.stack([sea.components(jitter[:, i], phase[:, i], hull.x_m, hull.breadth_m, rho, g)
-                      for i in range(batch)])
+    waves = np.stack(
+        [sea.components(jitter[:, i], phase[:, i], hull.x_m, hull.breadth_m, rho, g) for i in range(batch)]
+    )
     return sea.waves, waves
 
 
@@ -255,17 +311,20 @@ def check_options(config: DivePlaneConfig, options: Mapping[str, Any] | None) ->
         checked["speed"] = check.positive("options['speed']", options["speed"], upper=MAX_SPEED_MPS)
     if "depth_command" in options:
         value = options["depth_command"]
-        check.require("options['depth_command']", value,
-                      check.is_finite(value)
-                      and config.broach_depth_m < value <= MAX_DEPTH_COMMAND_M,
-                      f"a number in ({config.broach_depth_m:.4g}, {MAX_DEPTH_COMMAND_M:g}] m (below the hull radius)")
+        check.require(
+            "options['depth_command']",
+            value,
+            check.is_finite(value) and config.broach_depth_m < value <= MAX_DEPTH_COMMAND_M,
+            f"a number in ({config.broach_depth_m:.4g}, {MAX_DEPTH_COMMAND_M:g}] m (below the hull radius)",
+        )
     if "initial_state" in options:
         _initial_state(config, options["initial_state"], (0.0, 0.0, 0.0, math.nan), math.nan)
     return checked
 
 
-def _initial_state(config: DivePlaneConfig, value: Any, drawn: tuple[float, float, float, float],
-                   command: float) -> tuple[float, float, float, float]:
+def _initial_state(
+    config: DivePlaneConfig, value: Any, drawn: tuple[float, float, float, float], command: float
+) -> tuple[float, float, float, float]:
     """``options["initial_state"]`` over the drawn state; the depth is checked where ``command`` is known."""
     if isinstance(value, Mapping):
         unknown = set(value) - set(STATE_KEYS)
@@ -289,19 +348,39 @@ def _initial_state(config: DivePlaneConfig, value: Any, drawn: tuple[float, floa
     state = [float(v) for v in state]
     pitch, heave, rate, depth = state
     limit = config.max_pitch_rad
-    check.require("options['initial_state']['pitch']", pitch, abs(pitch) < limit,
-                  f"in (-{limit}, {limit}) rad (max_pitch_rad)")
-    check.require("options['initial_state']['heave']", heave, abs(heave) <= MAX_HEAVE_MPS,
-                  f"in [-{MAX_HEAVE_MPS}, {MAX_HEAVE_MPS}] m/s")
-    check.require("options['initial_state']['pitch_rate']", rate, abs(rate) <= MAX_PITCH_RATE_RADPS,
-                  f"in [-{MAX_PITCH_RATE_RADPS}, {MAX_PITCH_RATE_RADPS}] rad/s")
+    check.require(
+        "options['initial_state']['pitch']",
+        pitch,
+        abs(pitch) < limit,
+        f"in (-{limit}, {limit}) rad (max_pitch_rad)",
+    )
+    check.require(
+        "options['initial_state']['heave']",
+        heave,
+        abs(heave) <= MAX_HEAVE_MPS,
+        f"in [-{MAX_HEAVE_MPS}, {MAX_HEAVE_MPS}] m/s",
+    )
+    check.require(
+        "options['initial_state']['pitch_rate']",
+        rate,
+        abs(rate) <= MAX_PITCH_RATE_RADPS,
+        f"in [-{MAX_PITCH_RATE_RADPS}, {MAX_PITCH_RATE_RADPS}] rad/s",
+    )
     low = config.broach_depth_m
     if math.isnan(command):
         if not math.isnan(depth):
-            check.require("options['initial_state']['depth']", depth, low < depth,
-                          f"in ({low:.4g}, ...] m (below the hull radius)")
+            check.require(
+                "options['initial_state']['depth']",
+                depth,
+                low < depth,
+                f"in ({low:.4g}, ...] m (below the hull radius)",
+            )
         return pitch, heave, rate, depth
     high = command + config.max_depth_error_m
-    check.require("options['initial_state']['depth']", depth, low < depth <= high,
-                  f"in ({low:.4g}, {high:.4g}] m (below the hull radius, within max_depth_error_m of the ordered depth)")
+    check.require(
+        "options['initial_state']['depth']",
+        depth,
+        low < depth <= high,
+        f"in ({low:.4g}, {high:.4g}] m (below the hull radius, within max_depth_error_m of the ordered depth)",
+    )
     return pitch, heave, rate, depth

@@ -33,8 +33,9 @@ def step_info(values: list[float]) -> dict[str, Any]:
     return info
 
 
-def step_infos(report: np.ndarray, mask: np.ndarray | None = None,
-               no_reasons: np.ndarray | None = None) -> dict[str, Any]:
+def step_infos(
+    report: np.ndarray, mask: np.ndarray | None = None, no_reasons: np.ndarray | None = None
+) -> dict[str, Any]:
     """Gymnasium's vector ``info`` from a report (its rows are handed out): every key an array over
     the sub-environments, with its ``"_" + key`` mask; with ``mask``, only those sub-environments
     report and the others are zero (None for strings), as in ``SyncVectorEnv``.

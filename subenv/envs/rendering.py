@@ -181,18 +181,28 @@ class Frame:
     commands_m: tuple[float, ...] = ()
 
     @classmethod
-    def of(cls, vehicle: Any, state: Any, episode: Any,
-           history: Sequence[tuple[float, float, float]] = ()) -> Frame:
+    def of(
+        cls, vehicle: Any, state: Any, episode: Any, history: Sequence[tuple[float, float, float]] = ()
+    ) -> Frame:
         """The frame of a sub-environment: its vehicle, its records
         (:data:`~subenv.envs.transition.STATE_DTYPE`, :data:`~subenv.envs.transition.EPISODE_DTYPE`)
         and its (time, depth, ordered depth) history."""
         times, depths, commands = zip(*history) if history else ((), (), ())
         return cls(
-            hull_x_m=vehicle.hull.x_m, hull_breadth_m=vehicle.hull.breadth_m, length_m=vehicle.length_m,
-            pitch_rad=state["pitch_rad"], depth_m=state["depth_m"], depth_command_m=episode["depth_command_m"],
-            stern_plane_rad=state["stern_plane_rad"], bow_plane_rad=state["bow_plane_rad"],
-            speed_mps=state["speed_mps"], critical_speed_mps=episode["critical_speed_mps"], time_s=state["time_s"],
-            times_s=times, depths_m=depths, commands_m=commands,
+            hull_x_m=vehicle.hull.x_m,
+            hull_breadth_m=vehicle.hull.breadth_m,
+            length_m=vehicle.length_m,
+            pitch_rad=state["pitch_rad"],
+            depth_m=state["depth_m"],
+            depth_command_m=episode["depth_command_m"],
+            stern_plane_rad=state["stern_plane_rad"],
+            bow_plane_rad=state["bow_plane_rad"],
+            speed_mps=state["speed_mps"],
+            critical_speed_mps=episode["critical_speed_mps"],
+            time_s=state["time_s"],
+            times_s=times,
+            depths_m=depths,
+            commands_m=commands,
         )
 
     def __post_init__(self) -> None:
@@ -377,9 +387,7 @@ def _dashed_polyline(
         travelled += seg
 
 
-def _finite_runs(
-    xs: Sequence[float], ys: Sequence[float]
-) -> list[list[tuple[float, float]]]:
+def _finite_runs(xs: Sequence[float], ys: Sequence[float]) -> list[list[tuple[float, float]]]:
     """Split ``(x, y)`` pairs into runs of consecutive finite points."""
     runs: list[list[tuple[float, float]]] = []
     current: list[tuple[float, float]] = []
@@ -399,9 +407,7 @@ def _finite_runs(
 # --------------------------------------------------------------------------------------------
 
 
-def _camera_depth(
-    depth_m: float, half_view_m: float, surface_margin_m: float, hull_margin_m: float
-) -> float:
+def _camera_depth(depth_m: float, half_view_m: float, surface_margin_m: float, hull_margin_m: float) -> float:
     """The depth shown at the side view's vertical centre.
 
     Deep down the camera follows the hull, which stays centred. Near the surface the camera
@@ -440,9 +446,7 @@ def _camera_depth(
     return depth_m - offset
 
 
-def _draw_side_view(
-    surface: pygame.Surface, pg: Any, font: Any | None, frame: Frame
-) -> None:
+def _draw_side_view(surface: pygame.Surface, pg: Any, font: Any | None, frame: Frame) -> None:
     """Draw the side view on ``surface`` (the panel's own surface, origin at its corner)."""
     pw, ph = surface.get_size()
     x = np.asarray(frame.hull_x_m)
@@ -484,8 +488,9 @@ def _draw_side_view(
         y = round(depth_to_y(d))
         if header_h <= y < ph:
             pg.draw.line(surface, GRID_RGB, (0, y), (pw - 1, y), 1)
-            _blit_text(surface, font, f"{_format_tick(d, step)} m", (pw - 4, y - 1),
-                       GRID_LABEL_RGB, "bottomright")
+            _blit_text(
+                surface, font, f"{_format_tick(d, step)} m", (pw - 4, y - 1), GRID_LABEL_RGB, "bottomright"
+            )
 
     # Commanded depth.
     if math.isfinite(frame.depth_command_m):
@@ -510,8 +515,7 @@ def _draw_side_view(
     # Planes: short segments centred on the hull axis, rotated by pitch + plane angle.
     chord = _PLANE_CHORD * frame.length_m * scale
     plane_w = max(3, round(_PLANE_THICKNESS * frame.length_m * scale))
-    for frac, angle in ((_STERN_PLANE_X, frame.stern_plane_rad),
-                        (_BOW_PLANE_X, frame.bow_plane_rad)):
+    for frac, angle in ((_STERN_PLANE_X, frame.stern_plane_rad), (_BOW_PLANE_X, frame.bow_plane_rad)):
         px, py = to_screen(frac * frame.length_m, 0.0)
         a = frame.pitch_rad + angle
         dx, dy = 0.5 * chord * math.cos(a), -0.5 * chord * math.sin(a)
@@ -520,15 +524,17 @@ def _draw_side_view(
     # Header text.
     if font is not None:
         pg.draw.rect(surface, SKY_RGB, (0, 0, pw, header_h))
-        crit = (f"{frame.critical_speed_mps:.2f} m/s"
-                if math.isfinite(frame.critical_speed_mps) else "n/a")
-        cmd = (f"{frame.depth_command_m:.2f} m"
-               if math.isfinite(frame.depth_command_m) else "n/a")
-        line1 = (f"t {frame.time_s:.1f} s    speed {frame.speed_mps:.2f} m/s    "
-                 f"critical {crit}    depth {frame.depth_m:.2f} m (command {cmd})")
-        line2 = (f"pitch {_fmt_signed(math.degrees(frame.pitch_rad))} deg    "
-                 f"stern plane {_fmt_signed(math.degrees(frame.stern_plane_rad))} deg    "
-                 f"bow plane {_fmt_signed(math.degrees(frame.bow_plane_rad))} deg")
+        crit = f"{frame.critical_speed_mps:.2f} m/s" if math.isfinite(frame.critical_speed_mps) else "n/a"
+        cmd = f"{frame.depth_command_m:.2f} m" if math.isfinite(frame.depth_command_m) else "n/a"
+        line1 = (
+            f"t {frame.time_s:.1f} s    speed {frame.speed_mps:.2f} m/s    "
+            f"critical {crit}    depth {frame.depth_m:.2f} m (command {cmd})"
+        )
+        line2 = (
+            f"pitch {_fmt_signed(math.degrees(frame.pitch_rad))} deg    "
+            f"stern plane {_fmt_signed(math.degrees(frame.stern_plane_rad))} deg    "
+            f"bow plane {_fmt_signed(math.degrees(frame.bow_plane_rad))} deg"
+        )
         _blit_text(surface, font, line1, (6, 3))
         _blit_text(surface, font, line2, (6, 3 + _FONT_SIZE - 2))
         pg.draw.line(surface, SEPARATOR_RGB, (0, header_h - 1), (pw - 1, header_h - 1), 1)
@@ -573,8 +579,10 @@ def _draw_trace(surface: pygame.Surface, pg: Any, font: Any | None, frame: Frame
     t_lo, t_hi, d_top, d_bot = _trace_limits(frame)
 
     def to_screen(t: float, d: float) -> tuple[float, float]:
-        return (left + (t - t_lo) / (t_hi - t_lo) * (ax_w - 1),
-                top + (d - d_top) / (d_bot - d_top) * (ax_h - 1))
+        return (
+            left + (t - t_lo) / (t_hi - t_lo) * (ax_w - 1),
+            top + (d - d_top) / (d_bot - d_top) * (ax_h - 1),
+        )
 
     # Grid, ticks and labels.
     n_t = max(2, ax_w // 90)
@@ -616,8 +624,7 @@ def _draw_trace(surface: pygame.Surface, pg: Any, font: Any | None, frame: Frame
     if font is not None:
         x_end = left + ax_w
         y_mid = top / 2
-        for label, colour, dashed in (("command", COMMAND_RGB, True),
-                                      ("depth", DEPTH_RGB, False)):
+        for label, colour, dashed in (("command", COMMAND_RGB, True), ("depth", DEPTH_RGB, False)):
             image = font.render(label, True, TEXT_RGB)
             x_text = x_end - image.get_width()
             surface.blit(image, image.get_rect(midleft=(round(x_text), round(y_mid))))

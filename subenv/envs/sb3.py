@@ -127,8 +127,9 @@ class SB3VecEnv(VecEnv):
             f"set_attr({attr_name!r}): the sub-environments of a native vector env share one configuration"
         )
 
-    def env_method(self, method_name: str, *method_args: Any, indices: VecEnvIndices = None,
-                   **method_kwargs: Any) -> list[Any]:
+    def env_method(
+        self, method_name: str, *method_args: Any, indices: VecEnvIndices = None, **method_kwargs: Any
+    ) -> list[Any]:
         """Call a method of the vector env itself, once, for all sub-environments together.
 
         The sub-environments of a native vector env are rows of one table, not objects, so only
@@ -169,7 +170,9 @@ class SB3VecEnv(VecEnv):
                 for d, sub in zip(out, self._split(values, indices)):
                     d[key] = sub
                 continue
-            picked = values[indices].tolist() if isinstance(values, np.ndarray) else [values[i] for i in indices]
+            picked = (
+                values[indices].tolist() if isinstance(values, np.ndarray) else [values[i] for i in indices]
+            )
             present = mask[indices].tolist() if mask is not None else [True] * len(indices)
             for d, value, ok in zip(out, picked, present):
                 if ok:

@@ -94,75 +94,122 @@ MAX_KNOTS: Final = 4
 N_OBS: Final = 8
 """Observation components (:data:`subenv.envs.config.OBSERVATION_NAMES`)."""
 
-STATE_DTYPE: Final = np.dtype([
-    ("pitch_rad", np.float64),         # theta, nose-up positive
-    ("heave_mps", np.float64),         # w, body axes, down positive
-    ("pitch_rate_radps", np.float64),  # q
-    ("depth_m", np.float64),           # Z, of midship, down positive
-    ("stern_plane_rad", np.float64),   # applied (after saturation and rate limit)
-    ("bow_plane_rad", np.float64),
-    ("time_s", np.float64),            # since the reset
-    ("steps", np.int64),               # since the reset
-    ("disturbance_N", np.float64),     # heave force, held over a control period
-    ("speed_mps", np.float64),         # of the profile at time_s
-    ("distance_m", np.float64),        # travelled since the reset (the phase of a sea's waves)
-])
+STATE_DTYPE: Final = np.dtype(
+    [
+        ("pitch_rad", np.float64),  # theta, nose-up positive
+        ("heave_mps", np.float64),  # w, body axes, down positive
+        ("pitch_rate_radps", np.float64),  # q
+        ("depth_m", np.float64),  # Z, of midship, down positive
+        ("stern_plane_rad", np.float64),  # applied (after saturation and rate limit)
+        ("bow_plane_rad", np.float64),
+        ("time_s", np.float64),  # since the reset
+        ("steps", np.int64),  # since the reset
+        ("disturbance_N", np.float64),  # heave force, held over a control period
+        ("speed_mps", np.float64),  # of the profile at time_s
+        ("distance_m", np.float64),  # travelled since the reset (the phase of a sea's waves)
+    ]
+)
 """What a step changes, per sub-environment."""
 
-EPISODE_DTYPE: Final = np.dtype([
-    ("params", np.float64, (len(PARAM_FIELDS),)),  # ModelParams of the loading, PARAM_FIELDS order
-    ("n_knots", np.int64),
-    ("knot_time_s", np.float64, (MAX_KNOTS,)),     # speed profile: piecewise linear through the
-    ("knot_speed_mps", np.float64, (MAX_KNOTS,)),  # knots, held after the last
-    ("depth_command_m", np.float64),
-    ("disturbance_std_N", np.float64),             # 0: no disturbance
-    ("sensor_noise", np.bool_),
-    ("duration_s", np.float64),
-    ("critical_speed_mps", np.float64),            # nan: none (z_GB <= 0)
-    ("froude_scale_mps", np.float64),              # sqrt(g z_GB), nan for z_GB <= 0
-    ("n_waves", np.int64),                         # 0: no sea; else the sea is the row of the seas
-])
+EPISODE_DTYPE: Final = np.dtype(
+    [
+        ("params", np.float64, (len(PARAM_FIELDS),)),  # ModelParams of the loading, PARAM_FIELDS order
+        ("n_knots", np.int64),
+        ("knot_time_s", np.float64, (MAX_KNOTS,)),  # speed profile: piecewise linear through the
+        ("knot_speed_mps", np.float64, (MAX_KNOTS,)),  # knots, held after the last
+        ("depth_command_m", np.float64),
+        ("disturbance_std_N", np.float64),  # 0: no disturbance
+        ("sensor_noise", np.bool_),
+        ("duration_s", np.float64),
+        ("critical_speed_mps", np.float64),  # nan: none (z_GB <= 0)
+        ("froude_scale_mps", np.float64),  # sqrt(g z_GB), nan for z_GB <= 0
+        ("n_waves", np.int64),  # 0: no sea; else the sea is the row of the seas
+    ]
+)
 """What a reset draws, per sub-environment (read-only during the episode)."""
 
-CONFIG_DTYPE: Final = np.dtype([
-    ("dt_s", np.float64),
-    ("substeps", np.int64),
-    ("dual", np.bool_),                   # one command, bow planes slaved (eq. 2.58)
-    ("alpha", np.float64),
-    ("plane_limit_rad", np.float64),
-    ("rate_limited", np.bool_),
-    ("max_move_rad", np.float64),         # per control period, with rate_limited
-    ("max_pitch_rad", np.float64),
-    ("max_depth_error_m", np.float64),
-    ("broach_depth_m", np.float64),
-    ("depth_scale_m", np.float64),
-    ("pitch_weight", np.float64),
-    ("effort_weight", np.float64),
-    ("termination_penalty", np.float64),
-    ("disturbance_decay", np.float64),    # Gauss-Markov: d' = decay d + gain N(0, std)
-    ("disturbance_gain", np.float64),
-    ("max_steps", np.float64),            # a TimeLimit (inf: none)
-    ("max_heave_mps", np.float64),        # beyond these the state has diverged
-    ("max_pitch_rate_radps", np.float64),
-    ("obs_low", np.float64, (N_OBS,)),
-    ("obs_high", np.float64, (N_OBS,)),
-    ("noise_std", np.float64, (N_OBS,)),
-])
+CONFIG_DTYPE: Final = np.dtype(
+    [
+        ("dt_s", np.float64),
+        ("substeps", np.int64),
+        ("dual", np.bool_),  # one command, bow planes slaved (eq. 2.58)
+        ("alpha", np.float64),
+        ("plane_limit_rad", np.float64),
+        ("rate_limited", np.bool_),
+        ("max_move_rad", np.float64),  # per control period, with rate_limited
+        ("max_pitch_rad", np.float64),
+        ("max_depth_error_m", np.float64),
+        ("broach_depth_m", np.float64),
+        ("depth_scale_m", np.float64),
+        ("pitch_weight", np.float64),
+        ("effort_weight", np.float64),
+        ("termination_penalty", np.float64),
+        ("disturbance_decay", np.float64),  # Gauss-Markov: d' = decay d + gain N(0, std)
+        ("disturbance_gain", np.float64),
+        ("max_steps", np.float64),  # a TimeLimit (inf: none)
+        ("max_heave_mps", np.float64),  # beyond these the state has diverged
+        ("max_pitch_rate_radps", np.float64),
+        ("obs_low", np.float64, (N_OBS,)),
+        ("obs_high", np.float64, (N_OBS,)),
+        ("noise_std", np.float64, (N_OBS,)),
+    ]
+)
 """The environment's constants (one record)."""
 
 REASONS: Final = ("", "diverged", "pitch_limit", "broached", "left_depth_band")
 """``info["termination_reason"]`` for each reason code of the report."""
 _DIVERGED, _PITCH_LIMIT, _BROACHED, _LEFT_DEPTH_BAND = 1, 2, 3, 4
 
-REPORT_KEYS: Final = ("time_s", "depth_m", "depth_command_m", "depth_error_m", "pitch_rad", "heave_mps",
-                      "pitch_rate_radps", "stern_plane_rad", "bow_plane_rad", "speed_mps", "froude_number",
-                      "critical_speed_mps", "critical_froude", "disturbance_N", "reward_depth", "reward_pitch",
-                      "reward_effort", "reward_termination", "reason", "reward", "terminated", "truncated")
+REPORT_KEYS: Final = (
+    "time_s",
+    "depth_m",
+    "depth_command_m",
+    "depth_error_m",
+    "pitch_rad",
+    "heave_mps",
+    "pitch_rate_radps",
+    "stern_plane_rad",
+    "bow_plane_rad",
+    "speed_mps",
+    "froude_number",
+    "critical_speed_mps",
+    "critical_froude",
+    "disturbance_N",
+    "reward_depth",
+    "reward_pitch",
+    "reward_effort",
+    "reward_termination",
+    "reason",
+    "reward",
+    "terminated",
+    "truncated",
+)
 """The rows of a step's report: the ``info`` keys (``reason`` is ``termination_reason``'s code),
 then the step's reward and end."""
-(_TIME, _DEPTH, _COMMAND, _DEPTH_ERROR, _PITCH, _HEAVE, _PITCH_RATE, _STERN, _BOW, _SPEED, _FROUDE,
- _CRITICAL_SPEED, _CRITICAL_FROUDE, _DISTURBANCE, _REWARD_DEPTH, _REWARD_PITCH, _REWARD_EFFORT,
- _REWARD_TERMINATION, _REASON, _REWARD, _TERMINATED, _TRUNCATED) = range(len(REPORT_KEYS))
+(
+    _TIME,
+    _DEPTH,
+    _COMMAND,
+    _DEPTH_ERROR,
+    _PITCH,
+    _HEAVE,
+    _PITCH_RATE,
+    _STERN,
+    _BOW,
+    _SPEED,
+    _FROUDE,
+    _CRITICAL_SPEED,
+    _CRITICAL_FROUDE,
+    _DISTURBANCE,
+    _REWARD_DEPTH,
+    _REWARD_PITCH,
+    _REWARD_EFFORT,
+    _REWARD_TERMINATION,
+    _REASON,
+    _REWARD,
+    _TERMINATED,
+    _TRUNCATED,
+) = range(len(REPORT_KEYS))
 _N_REPORT: Final = len(REPORT_KEYS)
 
 
@@ -193,8 +240,9 @@ def speed_at(t: float, n_knots: int, knot_time_s: FloatArray, knot_speed_mps: Fl
 
 
 @inline_kernel
-def plane_angles(stern_rad: float, bow_rad: float, action0: float, action1: float,
-                 cfg: np.void) -> tuple[float, float, float]:
+def plane_angles(
+    stern_rad: float, bow_rad: float, action0: float, action1: float, cfg: np.void
+) -> tuple[float, float, float]:
     """The applied (stern, bow) angles [rad] after an action (finite; clipped to [-1, 1]; ``action1``
     only with independent control) from the angles before, and the effort term's mean squared command."""
     limit = cfg.plane_limit_rad
@@ -218,8 +266,14 @@ def plane_angles(stern_rad: float, bow_rad: float, action0: float, action1: floa
 def episode_end(x0: float, x1: float, x2: float, x3: float, depth_command_m: float, cfg: np.void) -> int:
     """The reason code (:data:`REASONS`) of the state (theta, w, q, Z) at the end of a step: 0 while
     the episode goes on (the first reason that holds, in the order of :data:`REASONS`)."""
-    bounded = (math.isfinite(x0) & math.isfinite(x1) & math.isfinite(x2) & math.isfinite(x3)
-               & (abs(x1) <= cfg.max_heave_mps) & (abs(x2) <= cfg.max_pitch_rate_radps))
+    bounded = (
+        math.isfinite(x0)
+        & math.isfinite(x1)
+        & math.isfinite(x2)
+        & math.isfinite(x3)
+        & (abs(x1) <= cfg.max_heave_mps)
+        & (abs(x2) <= cfg.max_pitch_rate_radps)
+    )
     reason = select(abs(x3 - depth_command_m) > cfg.max_depth_error_m, _LEFT_DEPTH_BAND, 0)
     reason = select(x3 < cfg.broach_depth_m, _BROACHED, reason)
     reason = select(abs(x0) > cfg.max_pitch_rad, _PITCH_LIMIT, reason)
@@ -227,8 +281,9 @@ def episode_end(x0: float, x1: float, x2: float, x3: float, depth_command_m: flo
 
 
 @inline_kernel
-def reward_terms(pitch_rad: float, depth_error_m: float, effort: float, terminated: bool,
-                 cfg: np.void) -> tuple[float, float, float, float]:
+def reward_terms(
+    pitch_rad: float, depth_error_m: float, effort: float, terminated: bool, cfg: np.void
+) -> tuple[float, float, float, float]:
     """(depth, pitch, effort, termination) terms of the reward (``DivePlaneEnv``'s Rewards section)."""
     ratio = pitch_rad / cfg.max_pitch_rad
     # 1 - tanh(x) as 2 / (1 + e^(2x)), the same number: libm's exp costs a third of its tanh, and the
@@ -241,8 +296,9 @@ def reward_terms(pitch_rad: float, depth_error_m: float, effort: float, terminat
 
 
 @inline_kernel
-def period_start(s: np.void, e: np.void, action0: float, action1: float,
-                 cfg: np.void) -> tuple[float, float, float, float, float, float]:
+def period_start(
+    s: np.void, e: np.void, action0: float, action1: float, cfg: np.void
+) -> tuple[float, float, float, float, float, float]:
     """What a control period of state ``s`` in episode ``e`` holds, after the action (``action1``
     read only with independent control): the applied planes (stern, bow) [rad], the effort term's
     mean squared command, and the speed [m/s] at its start and end and its slope [m/s^2] (the
@@ -255,8 +311,19 @@ def period_start(s: np.void, e: np.void, action0: float, action1: float,
 
 
 @inline_kernel
-def period_end(s: np.void, e: np.void, x0: float, x1: float, x2: float, x3: float, u0: float, u1: float,
-               reason: int, disturbance_draw: float, cfg: np.void) -> tuple[Any, ...]:
+def period_end(
+    s: np.void,
+    e: np.void,
+    x0: float,
+    x1: float,
+    x2: float,
+    x3: float,
+    u0: float,
+    u1: float,
+    reason: int,
+    disturbance_draw: float,
+    cfg: np.void,
+) -> tuple[Any, ...]:
     """The state's fields after a control period from ``s`` that integrated to (theta, w, q, Z) =
     (``x0``, ``x1``, ``x2``, ``x3``) with the speed going from ``u0`` to ``u1``, and ended for
     ``reason`` (:func:`episode_end`); ``disturbance_draw`` is the heave force's new random term
@@ -269,9 +336,11 @@ def period_end(s: np.void, e: np.void, x0: float, x1: float, x2: float, x3: floa
     distance = s.distance_m + 0.5 * (u0 + u1) * dt  # exact for the linear speed of the period
     time = s.time_s + dt
     # a first-order Gauss-Markov process with stationary standard deviation disturbance_std_N
-    disturbance = select(e.disturbance_std_N > 0.0,
-                         cfg.disturbance_decay * s.disturbance_N + cfg.disturbance_gain * disturbance_draw,
-                         s.disturbance_N)
+    disturbance = select(
+        e.disturbance_std_N > 0.0,
+        cfg.disturbance_decay * s.disturbance_N + cfg.disturbance_gain * disturbance_draw,
+        s.disturbance_N,
+    )
     kept = reason == _DIVERGED
     pitch, heave = select(kept, s.pitch_rad, x0), select(kept, s.heave_mps, x1)
     rate, depth = select(kept, s.pitch_rate_radps, x2), select(kept, s.depth_m, x3)
@@ -281,7 +350,9 @@ def period_end(s: np.void, e: np.void, x0: float, x1: float, x2: float, x3: floa
 
 
 @inline_kernel
-def episode_outcome(reason: int, time_s: float, steps: int, duration_s: float, cfg: np.void) -> tuple[bool, bool]:
+def episode_outcome(
+    reason: int, time_s: float, steps: int, duration_s: float, cfg: np.void
+) -> tuple[bool, bool]:
     """(terminated, truncated) of a state reached at ``time_s`` after ``steps`` steps, ended for
     ``reason`` (:func:`episode_end`) in an episode of ``duration_s``."""
     terminated = reason != 0
@@ -294,8 +365,9 @@ _NO_NOISE: Final = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
 @inline_kernel
-def noise_values(z0: float, z1: float, z2: float, z3: float, z4: float, z5: float, z6: float, z7: float,
-                 cfg: np.void) -> tuple[float, ...]:
+def noise_values(
+    z0: float, z1: float, z2: float, z3: float, z4: float, z5: float, z6: float, z7: float, cfg: np.void
+) -> tuple[float, ...]:
     """The observation's noise from :data:`N_OBS` standard normal numbers: each times its standard
     deviation, one depth sensor for components 0 and 7."""
     std = cfg.noise_std
@@ -335,13 +407,22 @@ def observation_values(s: np.void, e: np.void, noise: tuple[float, ...], cfg: np
     v7 = select(noisy, depth + n7, depth)
     # Only a terminal state (or noise at zero speed) can reach the bounds.
     lo, hi = cfg.obs_low, cfg.obs_high
-    return (min(max(v0, lo[0]), hi[0]), min(max(v1, lo[1]), hi[1]), min(max(v2, lo[2]), hi[2]),
-            min(max(v3, lo[3]), hi[3]), min(max(v4, lo[4]), hi[4]), min(max(v5, lo[5]), hi[5]),
-            min(max(v6, lo[6]), hi[6]), min(max(v7, lo[7]), hi[7]))
+    return (
+        min(max(v0, lo[0]), hi[0]),
+        min(max(v1, lo[1]), hi[1]),
+        min(max(v2, lo[2]), hi[2]),
+        min(max(v3, lo[3]), hi[3]),
+        min(max(v4, lo[4]), hi[4]),
+        min(max(v5, lo[5]), hi[5]),
+        min(max(v6, lo[6]), hi[6]),
+        min(max(v7, lo[7]), hi[7]),
+    )
 
 
 @inline_kernel
-def observation(s: np.void, e: np.void, noise: tuple[float, ...], i: int, cfg: np.void, obs: np.ndarray) -> None:
+def observation(
+    s: np.void, e: np.void, noise: tuple[float, ...], i: int, cfg: np.void, obs: np.ndarray
+) -> None:
     """Write :func:`observation_values` into row ``i`` of ``obs`` (float32, :data:`N_OBS` columns)."""
     v0, v1, v2, v3, v4, v5, v6, v7 = observation_values(s, e, noise, cfg)
     obs[i, 0], obs[i, 1], obs[i, 2], obs[i, 3] = v0, v1, v2, v3
@@ -349,21 +430,64 @@ def observation(s: np.void, e: np.void, noise: tuple[float, ...], i: int, cfg: n
 
 
 @inline_kernel
-def report_values(s: np.void, e: np.void, r_depth: float, r_pitch: float, r_effort: float, r_termination: float,
-                  reason: int, terminated: bool, truncated: bool) -> tuple[float, ...]:
+def report_values(
+    s: np.void,
+    e: np.void,
+    r_depth: float,
+    r_pitch: float,
+    r_effort: float,
+    r_termination: float,
+    reason: int,
+    terminated: bool,
+    truncated: bool,
+) -> tuple[float, ...]:
     """The report (:data:`REPORT_KEYS`, in order, as floats) of state ``s`` in episode ``e``: its ``info``
     and the step's outcome."""
     depth, command, speed = s.depth_m, e.depth_command_m, s.speed_mps
-    froude_scale, ucr = e.froude_scale_mps, e.critical_speed_mps  # nan when z_GB <= 0 (then no Froude numbers)
-    return (s.time_s, depth, command, depth - command, s.pitch_rad, s.heave_mps, s.pitch_rate_radps,
-            s.stern_plane_rad, s.bow_plane_rad, speed, speed / froude_scale,  # Fn = u / sqrt(g z_GB)
-            ucr, ucr / froude_scale, s.disturbance_N, r_depth, r_pitch, r_effort, r_termination, reason * 1.0,
-            r_depth + r_pitch + r_effort + r_termination, select(terminated, 1.0, 0.0), select(truncated, 1.0, 0.0))
+    froude_scale, ucr = (
+        e.froude_scale_mps,
+        e.critical_speed_mps,
+    )  # nan when z_GB <= 0 (then no Froude numbers)
+    return (
+        s.time_s,
+        depth,
+        command,
+        depth - command,
+        s.pitch_rad,
+        s.heave_mps,
+        s.pitch_rate_radps,
+        s.stern_plane_rad,
+        s.bow_plane_rad,
+        speed,
+        speed / froude_scale,  # Fn = u / sqrt(g z_GB)
+        ucr,
+        ucr / froude_scale,
+        s.disturbance_N,
+        r_depth,
+        r_pitch,
+        r_effort,
+        r_termination,
+        reason * 1.0,
+        r_depth + r_pitch + r_effort + r_termination,
+        select(terminated, 1.0, 0.0),
+        select(truncated, 1.0, 0.0),
+    )
 
 
 @inline_kernel
-def _report(report: FloatArray, j: int, s: np.void, e: np.void, r_depth: float, r_pitch: float, r_effort: float,
-            r_termination: float, reason: int, terminated: bool, truncated: bool) -> None:
+def _report(
+    report: FloatArray,
+    j: int,
+    s: np.void,
+    e: np.void,
+    r_depth: float,
+    r_pitch: float,
+    r_effort: float,
+    r_termination: float,
+    reason: int,
+    terminated: bool,
+    truncated: bool,
+) -> None:
     """Column ``j`` of a report: :func:`report_values`."""
     values = report_values(s, e, r_depth, r_pitch, r_effort, r_termination, reason, terminated, truncated)
     for c in range(_N_REPORT):
@@ -388,9 +512,20 @@ arguments' reference counts, enough that two or four threads share 1,024 sub-env
 
 
 @kernel
-def step_blocks(state: np.ndarray, episode: np.ndarray, seas: FloatArray, actions: FloatArray, active: np.ndarray,
-                obs: np.ndarray, rngs: numba.typed.List, config: np.ndarray, hull: FloatArray, report: FloatArray,
-                first: int, stop: int) -> None:
+def step_blocks(
+    state: np.ndarray,
+    episode: np.ndarray,
+    seas: FloatArray,
+    actions: FloatArray,
+    active: np.ndarray,
+    obs: np.ndarray,
+    rngs: numba.typed.List,
+    config: np.ndarray,
+    hull: FloatArray,
+    report: FloatArray,
+    first: int,
+    stop: int,
+) -> None:
     """One control period of the active sub-environments of blocks ``first`` up to ``stop`` (block ``b``: rows
     ``b * LANES`` up to ``(b + 1) * LANES``), each block's lanes integrated together; arguments as
     :func:`step`'s. Compiled once, as its own function, and called by both :func:`step` and
@@ -413,15 +548,51 @@ def step_blocks(state: np.ndarray, episode: np.ndarray, seas: FloatArray, action
     speeds_end = np.empty(LANES)
     members = np.empty(LANES, dtype=np.int64)
     for b in range(first, stop):
-        _step_block(state, episode, seas, actions, active, obs, rngs, cfg, hull, report, b, n_rows, last_action, dt,
-                    block, block_report, efforts, speeds_end, members)
+        _step_block(
+            state,
+            episode,
+            seas,
+            actions,
+            active,
+            obs,
+            rngs,
+            cfg,
+            hull,
+            report,
+            b,
+            n_rows,
+            last_action,
+            dt,
+            block,
+            block_report,
+            efforts,
+            speeds_end,
+            members,
+        )
 
 
 @inline_kernel
-def _step_block(state: np.ndarray, episode: np.ndarray, seas: FloatArray, actions: FloatArray, active: np.ndarray,
-                obs: np.ndarray, rngs: numba.typed.List, cfg: np.void, hull: FloatArray, report: FloatArray, b: int,
-                n_rows: int, last_action: int, dt: float, block: FloatArray, block_report: FloatArray,
-                efforts: FloatArray, speeds_end: FloatArray, members: np.ndarray) -> None:
+def _step_block(
+    state: np.ndarray,
+    episode: np.ndarray,
+    seas: FloatArray,
+    actions: FloatArray,
+    active: np.ndarray,
+    obs: np.ndarray,
+    rngs: numba.typed.List,
+    cfg: np.void,
+    hull: FloatArray,
+    report: FloatArray,
+    b: int,
+    n_rows: int,
+    last_action: int,
+    dt: float,
+    block: FloatArray,
+    block_report: FloatArray,
+    efforts: FloatArray,
+    speeds_end: FloatArray,
+    members: np.ndarray,
+) -> None:
     """Block ``b`` of :func:`step_blocks`, in its work arrays."""
     in_sea = False
     for i in range(b * LANES, min((b + 1) * LANES, n_rows)):
@@ -432,11 +603,27 @@ def _step_block(state: np.ndarray, episode: np.ndarray, seas: FloatArray, action
     for i in range(b * LANES, min((b + 1) * LANES, n_rows)):
         if active[i]:
             s, e = state[i], episode[i]
-            stern, bow, efforts[n], u0, speeds_end[n], slope = period_start(s, e, actions[i, 0],
-                                                                            actions[i, last_action], cfg)
+            stern, bow, efforts[n], u0, speeds_end[n], slope = period_start(
+                s, e, actions[i, 0], actions[i, last_action], cfg
+            )
             s.stern_plane_rad, s.bow_plane_rad = stern, bow
-            set_lane(block, n, s.pitch_rad, s.heave_mps, s.pitch_rate_radps, s.depth_m, s.time_s, u0, slope,
-                     stern, bow, s.disturbance_N, e.params, s.distance_m, e.n_waves)
+            set_lane(
+                block,
+                n,
+                s.pitch_rad,
+                s.heave_mps,
+                s.pitch_rate_radps,
+                s.depth_m,
+                s.time_s,
+                u0,
+                slope,
+                stern,
+                bow,
+                s.disturbance_N,
+                e.params,
+                s.distance_m,
+                e.n_waves,
+            )
             if e.n_waves > 0:  # (element by element: a view of seas[i] would count references to seas)
                 for f in range(WAVE_FIELDS):
                     for k in range(MAX_WAVES):
@@ -463,22 +650,45 @@ def _step_block(state: np.ndarray, episode: np.ndarray, seas: FloatArray, action
                 draw = rng.normal(0.0, std)
             if noisy:
                 noise = sensor_noise(rng, cfg)
-        (s.pitch_rad, s.heave_mps, s.pitch_rate_radps, s.depth_m, s.time_s, s.steps, s.distance_m, s.speed_mps,
-         s.disturbance_N, terminated, truncated) = period_end(s, e, x0, x1, x2, x3, block[LANE_SPEED0 * L + j],
-                                                              speeds_end[j], reason, draw, cfg)
+        (
+            s.pitch_rad,
+            s.heave_mps,
+            s.pitch_rate_radps,
+            s.depth_m,
+            s.time_s,
+            s.steps,
+            s.distance_m,
+            s.speed_mps,
+            s.disturbance_N,
+            terminated,
+            truncated,
+        ) = period_end(s, e, x0, x1, x2, x3, block[LANE_SPEED0 * L + j], speeds_end[j], reason, draw, cfg)
         r_depth, r_pitch, r_effort, r_termination = reward_terms(
-            s.pitch_rad, s.depth_m - e.depth_command_m, efforts[j], terminated, cfg)
+            s.pitch_rad, s.depth_m - e.depth_command_m, efforts[j], terminated, cfg
+        )
         if reason != _DIVERGED:  # (a diverged state keeps its last observation)
             observation(s, e, noise, i, cfg, obs)
-        _report(block_report, j, s, e, r_depth, r_pitch, r_effort, r_termination, reason, terminated, truncated)
+        _report(
+            block_report, j, s, e, r_depth, r_pitch, r_effort, r_termination, reason, terminated, truncated
+        )
     # Key by key into the step's report (each key's row written in order, not 22 rows per env).
     for c in range(_N_REPORT):
         for j in range(n):
             report[c, members[j]] = block_report[c, j]
 
 
-def _step(state: np.ndarray, episode: np.ndarray, seas: FloatArray, actions: FloatArray, active: np.ndarray,
-          obs: np.ndarray, rngs: numba.typed.List, config: np.ndarray, hull: FloatArray, report: FloatArray) -> int:
+def _step(
+    state: np.ndarray,
+    episode: np.ndarray,
+    seas: FloatArray,
+    actions: FloatArray,
+    active: np.ndarray,
+    obs: np.ndarray,
+    rngs: numba.typed.List,
+    config: np.ndarray,
+    hull: FloatArray,
+    report: FloatArray,
+) -> int:
     """The blocks of :func:`step_blocks`, in one run (:func:`step`) or one run per thread (:func:`step_parallel`)."""
     bad = _first_non_finite(actions, active)
     if bad >= 0:
@@ -488,8 +698,20 @@ def _step(state: np.ndarray, episode: np.ndarray, seas: FloatArray, actions: Flo
     for r in numba.prange(runs):  # (a plain range in step: one thread)
         # (int64 bounds in both kernels: a parallel loop counts in uint64, and a second signature
         # would compile the blocks' code again)
-        step_blocks(state, episode, seas, actions, active, obs, rngs, config, hull, report,
-                    np.int64(r * n_blocks // runs), np.int64((r + 1) * n_blocks // runs))
+        step_blocks(
+            state,
+            episode,
+            seas,
+            actions,
+            active,
+            obs,
+            rngs,
+            config,
+            hull,
+            report,
+            np.int64(r * n_blocks // runs),
+            np.int64((r + 1) * n_blocks // runs),
+        )
     return -1
 
 
@@ -531,8 +753,13 @@ numba's threads (``numba.set_num_threads``); the same results for any number of 
 
 
 @kernel
-def draw_reset_numbers(rngs: numba.typed.List, indices: np.ndarray, uniforms: FloatArray, disturbance_std_N: float,
-                       disturbances: FloatArray) -> None:
+def draw_reset_numbers(
+    rngs: numba.typed.List,
+    indices: np.ndarray,
+    uniforms: FloatArray,
+    disturbance_std_N: float,
+    disturbances: FloatArray,
+) -> None:
     """The random numbers of a reset, from each sub-environment's generator, for those in ``indices``.
 
     As :meth:`subenv.scenarios.Scenario.sample` and :func:`subenv.envs.episodes.draw_episode` take
@@ -548,8 +775,15 @@ def draw_reset_numbers(rngs: numba.typed.List, indices: np.ndarray, uniforms: Fl
 
 
 @kernel
-def observe(state: np.ndarray, episode: np.ndarray, indices: np.ndarray, obs: np.ndarray, rngs: numba.typed.List,
-            config: np.ndarray, report: FloatArray) -> None:
+def observe(
+    state: np.ndarray,
+    episode: np.ndarray,
+    indices: np.ndarray,
+    obs: np.ndarray,
+    rngs: numba.typed.List,
+    config: np.ndarray,
+    report: FloatArray,
+) -> None:
     """After a reset of the sub-environments in ``indices``: their speed, observation and report column
     (reward terms 0, not ended)."""
     cfg = config[0]

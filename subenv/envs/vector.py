@@ -40,7 +40,9 @@ _BATCH_RESETS: Final = 4
 where it costs less than one at a time."""
 ENVS_PER_THREAD: Final = 512
 """``threads=None`` uses one thread per this many sub-environments, up to numba's thread count."""
-_REWARD, _TERMINATED, _TRUNCATED = (tr.REPORT_KEYS.index(key) for key in ("reward", "terminated", "truncated"))
+_REWARD, _TERMINATED, _TRUNCATED = (
+    tr.REPORT_KEYS.index(key) for key in ("reward", "terminated", "truncated")
+)
 _TIME, _DEPTH, _COMMAND = (tr.REPORT_KEYS.index(key) for key in ("time_s", "depth_m", "depth_command_m"))
 
 
@@ -137,16 +139,26 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         if threads is None:
             threads = min(most, max(1, n // ENVS_PER_THREAD))
         else:
-            check.require("threads", threads,
-                          isinstance(threads, (int, np.integer)) and not isinstance(threads, bool) and threads >= 1,
-                          "None or an integer >= 1")
-            check.require("threads", threads, threads <= most,
-                          f"at most {most} (numba's NUMBA_NUM_THREADS)" if most > 1 else
-                          "1 here: numba's TBB threading layer is not available (pip install tbb)")
+            check.require(
+                "threads",
+                threads,
+                isinstance(threads, (int, np.integer)) and not isinstance(threads, bool) and threads >= 1,
+                "None or an integer >= 1",
+            )
+            check.require(
+                "threads",
+                threads,
+                threads <= most,
+                f"at most {most} (numba's NUMBA_NUM_THREADS)"
+                if most > 1
+                else "1 here: numba's TBB threading layer is not available (pip install tbb)",
+            )
         if config is None:
             config = DivePlaneConfig(**kwargs)
         elif kwargs:
-            raise ValueError(f"config and keyword arguments {sorted(kwargs)} were given: give one or the other")
+            raise ValueError(
+                f"config and keyword arguments {sorted(kwargs)} were given: give one or the other"
+            )
         elif not isinstance(config, DivePlaneConfig):
             raise ValueError(f"config={config!r} is invalid: must be a DivePlaneConfig")
 
@@ -189,8 +201,12 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         self._unbuilt_scenario = np.full(n, None, dtype=object)
         self._unbuilt_uniforms = np.empty((n, 0))
         # (time, depth, ordered depth) of each sub-environment's episode so far, for render()
-        self._histories: list[list[tuple[float, float, float]]] = [[] for _ in range(n)] if render_mode else []
-        self._interrupted = False  # a step or reset was left midway (KeyboardInterrupt): reset() before stepping
+        self._histories: list[list[tuple[float, float, float]]] = (
+            [[] for _ in range(n)] if render_mode else []
+        )
+        self._interrupted = (
+            False  # a step or reset was left midway (KeyboardInterrupt): reset() before stepping
+        )
         # The first reset and step may load (or, with a cold cache, compile) the kernels: under the
         # compile notice (subenv.envs._compiling), as DivePlaneEnv's.
         self._first_calls = {"reset", "step"}
@@ -215,7 +231,9 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
             mask = self._everyone
         else:  # SyncVectorEnv's checks, with its exception types
             if not isinstance(mask, np.ndarray):
-                raise TypeError(f"options['reset_mask']={mask!r} is invalid: must be a numpy array, got {type(mask)}")
+                raise TypeError(
+                    f"options['reset_mask']={mask!r} is invalid: must be a numpy array, got {type(mask)}"
+                )
             if mask.shape != (n,):
                 raise ValueError(f"options['reset_mask'] has shape {mask.shape}: must have shape ({n},)")
             if mask.dtype != np.bool_:
@@ -223,7 +241,9 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
             if not mask.any():
                 raise ValueError("options['reset_mask'] is all False: must have at least one True value")
             if self._interrupted:
-                raise RuntimeError("a step or reset was interrupted: reset every sub-environment (no reset_mask)")
+                raise RuntimeError(
+                    "a step or reset was interrupted: reset every sub-environment (no reset_mask)"
+                )
         checked = check_options(self.config, options)
         indices = np.flatnonzero(mask)
         # A Ctrl-C arriving during the reset is delivered when it is complete (numba's typed list
@@ -240,8 +260,9 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
             self._interrupted = False
         return result
 
-    def _reset(self, indices: np.ndarray, seeds: list[int | None], options: dict[str, Any],
-               mask: np.ndarray) -> tuple[np.ndarray, dict[str, Any]]:
+    def _reset(
+        self, indices: np.ndarray, seeds: list[int | None], options: dict[str, Any], mask: np.ndarray
+    ) -> tuple[np.ndarray, dict[str, Any]]:
         seeded = [i for i in indices.tolist() if seeds[i] is not None or self._generators[i] is None]
         if seeded:
             for i in seeded:
@@ -251,15 +272,22 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         self._reset_envs(indices, options, report)
         self._done[indices] = False
         self._any_done = bool(self._done.any())
-        return self._obs.copy(), step_infos(report, None if mask is self._everyone else mask, self._no_reasons)
+        return self._obs.copy(), step_infos(
+            report, None if mask is self._everyone else mask, self._no_reasons
+        )
 
     def _saved(self) -> dict[str, Any]:
         """What a reset changes (kept while its options are checked against the episodes drawn)."""
-        return {"generators": list(self._generators), "seeds": list(self._seeds), "rngs": self._rngs,
-                "states": [g.bit_generator.state if g is not None else None for g in self._generators],
-                "records": (self._state.copy(), self._episode.copy(), self._seas.copy(), self._obs.copy()),
-                "flags": (self._done.copy(), self._any_done, self._started.copy(), self._unbuilt.copy()),
-                "lists": (list(self.vehicles), list(self._episodes)), "interrupted": self._interrupted}
+        return {
+            "generators": list(self._generators),
+            "seeds": list(self._seeds),
+            "rngs": self._rngs,
+            "states": [g.bit_generator.state if g is not None else None for g in self._generators],
+            "records": (self._state.copy(), self._episode.copy(), self._seas.copy(), self._obs.copy()),
+            "flags": (self._done.copy(), self._any_done, self._started.copy(), self._unbuilt.copy()),
+            "lists": (list(self.vehicles), list(self._episodes)),
+            "interrupted": self._interrupted,
+        }
 
     def _restore(self, saved: dict[str, Any]) -> None:
         self._generators, self._seeds, self._rngs = saved["generators"], saved["seeds"], saved["rngs"]
@@ -306,27 +334,39 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         bad = self._step_active(actions, active, report)
         if bad >= 0:
             self._interrupted = False  # (nothing was stepped)
-            raise ValueError(f"actions[{bad}]={actions[bad].tolist()!r} is invalid: must be finite (no NaN or inf)")
+            raise ValueError(
+                f"actions[{bad}]={actions[bad].tolist()!r} is invalid: must be finite (no NaN or inf)"
+            )
         if resetting is not None:
             self._reset_envs(resetting, {}, report)  # reported as reward 0, not terminated, not truncated
         if self.render_mode is not None:
             for i in np.flatnonzero(active).tolist():
                 self._histories[i].append((report[_TIME, i], report[_DEPTH, i], report[_COMMAND, i]))
         rewards = report[_REWARD].copy()
-        terminated, truncated = report[_TERMINATED:_TRUNCATED + 1] > 0.0
+        terminated, truncated = report[_TERMINATED : _TRUNCATED + 1] > 0.0
         done = terminated | truncated
         self._any_done = np.count_nonzero(done) > 0
         self._done = done
         if mode is not AutoresetMode.SAME_STEP or not self._any_done:
-            result = self._obs.copy(), rewards, terminated, truncated, step_infos(report, None, self._no_reasons)
+            result = (
+                self._obs.copy(),
+                rewards,
+                terminated,
+                truncated,
+                step_infos(report, None, self._no_reasons),
+            )
             self._interrupted = False
             return result
         final_obs = np.full(self.num_envs, None, dtype=object)
         ended = np.flatnonzero(done)
         for i in ended:
             final_obs[i] = self._obs[i].copy()
-        final = {"final_obs": final_obs, "_final_obs": done.copy(),
-                 "final_info": step_infos(report.copy(), done, self._no_reasons), "_final_info": done.copy()}
+        final = {
+            "final_obs": final_obs,
+            "_final_obs": done.copy(),
+            "final_info": step_infos(report.copy(), done, self._no_reasons),
+            "_final_info": done.copy(),
+        }
         self._reset_envs(ended, {}, report)
         self._done = np.zeros(self.num_envs, dtype=bool)
         self._any_done = False
@@ -349,8 +389,10 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         from subenv.envs.rendering import Frame, render_rgb
 
         vehicle = self.config.base_vehicle
-        return tuple(render_rgb(Frame.of(vehicle, self._state[i], self._episode[i], self._histories[i]))
-                     for i in range(self.num_envs))
+        return tuple(
+            render_rgb(Frame.of(vehicle, self._state[i], self._episode[i], self._histories[i]))
+            for i in range(self.num_envs)
+        )
 
     def set_scenario(self, scenario: str | Scenario) -> None:
         """Draw every sub-environment's following episodes from ``scenario``
@@ -381,7 +423,9 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
             for i in np.flatnonzero(self._unbuilt).tolist():
                 scenario = self._unbuilt_scenario[i]
                 uniforms = self._unbuilt_uniforms[i, : scenario.uniforms_per_episode]
-                self._episodes[i] = for_vehicle(self.config, scenario.episode_from_uniforms(uniforms, weight_N))
+                self._episodes[i] = for_vehicle(
+                    self.config, scenario.episode_from_uniforms(uniforms, weight_N)
+                )
             self._unbuilt[:] = False
         return list(self._episodes)
 
@@ -415,8 +459,18 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
     def _step_active(self, actions: np.ndarray, active: np.ndarray, report: np.ndarray) -> int:
         """The compiled step of the ``active`` sub-environments, on :attr:`threads` of numba's threads
         (:func:`subenv.envs.transition.step`: -1, or the first with a non-finite action)."""
-        args = (self._state, self._episode, self._seas, actions, active, self._obs, self._rngs, self._constants,
-                self.config.hull, report)
+        args = (
+            self._state,
+            self._episode,
+            self._seas,
+            actions,
+            active,
+            self._obs,
+            self._rngs,
+            self._constants,
+            self.config.hull,
+            report,
+        )
         if self.threads == 1:
             return int(tr.step(*args))
         before = numba.get_num_threads()
@@ -490,6 +544,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
 
 def _seeds(seed: Any, n: int) -> list[int | None]:
     """Each sub-environment's seed from ``reset(seed=...)``, checked before any is used."""
+
     def is_seed(value: Any) -> bool:
         return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)) and value >= 0
 
@@ -498,8 +553,9 @@ def _seeds(seed: Any, n: int) -> list[int | None]:
         return [None] * n
     if is_seed(seed):
         return [int(seed) + i for i in range(n)]
-    check.require("seed", seed, isinstance(seed, (Sequence, np.ndarray)) and not isinstance(seed, (str, bytes)),
-                  allowed)
+    check.require(
+        "seed", seed, isinstance(seed, (Sequence, np.ndarray)) and not isinstance(seed, (str, bytes)), allowed
+    )
     seeds = list(seed)
     if len(seeds) != n:
         raise ValueError(f"seed has {len(seeds)} entries: a sequence of seeds must have num_envs={n} entries")
@@ -511,4 +567,6 @@ def _seeds(seed: Any, n: int) -> list[int | None]:
 def _reset_needed(indices: np.ndarray) -> Exception:
     from gymnasium.error import ResetNeeded
 
-    return ResetNeeded(f"Cannot call step() before reset(): sub-environments {indices.tolist()[:10]} were never reset")
+    return ResetNeeded(
+        f"Cannot call step() before reset(): sub-environments {indices.tolist()[:10]} were never reset"
+    )

@@ -152,8 +152,11 @@ def run_comparison(
         require_matplotlib()
     # The results folder is created (in its temporary place) before the first episode, so that a
     # folder that cannot be written fails now, not after the rollouts.
-    folder_block = contextlib.nullcontext() if out_dir is None else atomic_output_dir(
-        out_dir, overwrite=overwrite, kind=RESULTS_KIND)
+    folder_block = (
+        contextlib.nullcontext()
+        if out_dir is None
+        else atomic_output_dir(out_dir, overwrite=overwrite, kind=RESULTS_KIND)
+    )
     with folder_block as folder:
         start = time.perf_counter()
         results = evaluate(ctrls, the_suite, n, seed, progress, vehicle=boat, keep_trajectories=1)
@@ -161,8 +164,14 @@ def run_comparison(
         summary = summarize(results)
         board = leaderboard_markdown(results, title=f"Leaderboard: suite '{the_suite.name}'")
         comparison = Comparison(
-            suite=the_suite, controllers=tuple(c.name for c in ctrls), episodes=n, seed=seed, results=results,
-            summary=summary, leaderboard=board, out_dir=None if out_dir is None else Path(out_dir),
+            suite=the_suite,
+            controllers=tuple(c.name for c in ctrls),
+            episodes=n,
+            seed=seed,
+            results=results,
+            summary=summary,
+            leaderboard=board,
+            out_dir=None if out_dir is None else Path(out_dir),
             elapsed_s=elapsed,
         )
         if folder is not None:
@@ -170,8 +179,9 @@ def run_comparison(
     return comparison
 
 
-def _run_record(comparison: Comparison, controllers: Sequence[Controller] | None,
-                vehicle: str | Vehicle) -> dict[str, Any]:
+def _run_record(
+    comparison: Comparison, controllers: Sequence[Controller] | None, vehicle: str | Vehicle
+) -> dict[str, Any]:
     try:
         version = metadata.version("subenv")
     except metadata.PackageNotFoundError:
@@ -188,7 +198,8 @@ def _run_record(comparison: Comparison, controllers: Sequence[Controller] | None
         "seeds": [comparison.seed, comparison.seed + comparison.episodes - 1],
         "controllers": [
             {"name": name, "control": by_name[name].control, "alpha": float(by_name[name].alpha)}
-            if name in by_name else {"name": name}
+            if name in by_name
+            else {"name": name}
             for name in comparison.controllers
         ],
         "depth_tolerance_m": m.DEPTH_TOLERANCE_M,
@@ -223,7 +234,11 @@ def write_comparison(
 
 
 def _write_files(
-    comparison: Comparison, folder: Path, *, plots: bool, controllers: Sequence[Controller] | None,
+    comparison: Comparison,
+    folder: Path,
+    *,
+    plots: bool,
+    controllers: Sequence[Controller] | None,
     vehicle: str | Vehicle,
 ) -> None:
     write_csv(folder / "results.csv", episode_table(comparison.results))
@@ -232,15 +247,18 @@ def _write_files(
     atomic_write_text(
         folder / "summary.md", summary_markdown(comparison.summary, title=f"Suite '{comparison.suite.name}'")
     )
-    atomic_write_text(folder / "run.json", json.dumps(_run_record(comparison, controllers, vehicle), indent=2) + "\n")
+    atomic_write_text(
+        folder / "run.json", json.dumps(_run_record(comparison, controllers, vehicle), indent=2) + "\n"
+    )
     if plots:
         from subenv.evaluation.plots import plot_metrics_vs_speed, plot_outcomes, replay_trajectory
 
         by_name = {c.name: c for c in controllers or resolve_controllers(list(comparison.controllers))}
 
         def trajectory_of(r: EpisodeResult) -> Trajectory:
-            return replay_trajectory(r, by_name[r.controller], vehicle=vehicle,
-                                     max_duration_s=comparison.suite.max_duration_s)
+            return replay_trajectory(
+                r, by_name[r.controller], vehicle=vehicle, max_duration_s=comparison.suite.max_duration_s
+            )
 
         for scenario in comparison.suite.scenarios:
             mine = [r for r in comparison.results if r.scenario == scenario]

@@ -104,7 +104,13 @@ settled, not drifted. Used by ``steady_offset`` only.
 
 
 OUTCOMES: Final = (
-    "success", "wrong_branch", "steady_offset", "broached", "left_depth_band", "pitch_limit", "diverged",
+    "success",
+    "wrong_branch",
+    "steady_offset",
+    "broached",
+    "left_depth_band",
+    "pitch_limit",
+    "diverged",
     "unsettled",
 )
 """The values of :attr:`EpisodeMetrics.outcome`, in order of precedence.
@@ -374,8 +380,13 @@ def episode_metrics(
     hold_max = float(abs_e[in_window].max())
     outside = np.flatnonzero(~within)
     last_outside_s = float(t[outside[-1]]) if outside.size else -math.inf
-    success = episode_success(terminated=terminated, start_s=start_s, end_s=end_s, last_outside_s=last_outside_s,
-                              hold_window_s=hold_window_s)
+    success = episode_success(
+        terminated=terminated,
+        start_s=start_s,
+        end_s=end_s,
+        last_outside_s=last_outside_s,
+        hold_window_s=hold_window_s,
+    )
 
     # Settling: the first sample after the last one outside the tolerance.
     if terminated or not within[-1]:
@@ -408,7 +419,8 @@ def episode_metrics(
         window_time = float(np.sum(dts[steps]))
         pinned = max(
             float(np.sum(dts[steps & (sign * planes[p] >= level)])) / window_time
-            for p in (0, 1) for sign in (1.0, -1.0)
+            for p in (0, 1)
+            for sign in (1.0, -1.0)
         )
         steady_pitch = float(np.abs(q[in_window]).max()) <= steady_rate
         off_depth = hold_max > depth_tolerance_m

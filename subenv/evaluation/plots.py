@@ -41,8 +41,14 @@ _HOLD_ALPHA: Final = 0.3
 """The final hold window on the depth-error axes: see-through, so the tolerance band shows within it."""
 
 _OUTCOME_COLORS: Final = {
-    "success": "tab:green", "wrong_branch": "tab:red", "steady_offset": "tab:orange", "broached": "tab:blue",
-    "left_depth_band": "tab:purple", "pitch_limit": "tab:brown", "diverged": "black", "unsettled": "tab:gray",
+    "success": "tab:green",
+    "wrong_branch": "tab:red",
+    "steady_offset": "tab:orange",
+    "broached": "tab:blue",
+    "left_depth_band": "tab:purple",
+    "pitch_limit": "tab:brown",
+    "diverged": "black",
+    "unsettled": "tab:gray",
 }
 """One colour per outcome, the same in every figure (an outcome not listed is drawn in magenta)."""
 
@@ -81,11 +87,20 @@ def replay_trajectory(
     if result.trajectory is not None:
         return result.trajectory
     if controller.name != result.controller:
-        raise ValueError(f"result of controller {result.controller!r} cannot be replayed with {controller.name!r}")
-    again = run_episode(controller, result.scenario, result.seed, episode=result.episode, vehicle=vehicle,
-                        max_duration_s=max_duration_s)
+        raise ValueError(
+            f"result of controller {result.controller!r} cannot be replayed with {controller.name!r}"
+        )
+    again = run_episode(
+        controller,
+        result.scenario,
+        result.seed,
+        episode=result.episode,
+        vehicle=vehicle,
+        max_duration_s=max_duration_s,
+    )
     if again.metrics.outcome != result.metrics.outcome or not math.isclose(
-            again.metrics.iae_m_s, result.metrics.iae_m_s, rel_tol=1e-6, abs_tol=1e-9):
+        again.metrics.iae_m_s, result.metrics.iae_m_s, rel_tol=1e-6, abs_tol=1e-9
+    ):
         raise ValueError(
             f"replaying {result.controller} on {result.scenario} seed {result.seed} gave outcome "
             f"{again.metrics.outcome!r}, IAE {again.metrics.iae_m_s:.6g} m s; the results say "
@@ -137,7 +152,9 @@ def outcomes_figure(
 
     def own(r: EpisodeResult) -> Trajectory:
         if r.trajectory is None:
-            raise ValueError(f"{r.controller} on {r.scenario} seed {r.seed} has no trajectory: pass trajectory_of")
+            raise ValueError(
+                f"{r.controller} on {r.scenario} seed {r.seed} has no trajectory: pass trajectory_of"
+            )
         return r.trajectory
 
     get = trajectory_of or own
@@ -158,8 +175,13 @@ def outcomes_figure(
         ax_p.plot(tr.time_s, np.degrees(tr.pitch_rad), color=color)
         ax_d.plot(tr.time_s[1:], np.degrees(tr.stern_plane_rad[1:]), color=color, drawstyle="steps-pre")
         if np.any(tr.bow_plane_rad[1:] != 0.0):
-            ax_d.plot(tr.time_s[1:], np.degrees(tr.bow_plane_rad[1:]), color=color, linestyle="--",
-                      drawstyle="steps-pre")
+            ax_d.plot(
+                tr.time_s[1:],
+                np.degrees(tr.bow_plane_rad[1:]),
+                color=color,
+                linestyle="--",
+                drawstyle="steps-pre",
+            )
         for sign in (1, -1):
             ax_d.axhline(sign * math.degrees(tr.plane_limit_rad), color="0.4", linewidth=0.8, linestyle=":")
         if tr.termination_reason:
@@ -176,15 +198,28 @@ def outcomes_figure(
             crossing_drawn = True
             for ax in axes[:, col]:
                 ax.axvline(crossing, color="crimson", linestyle="-.", linewidth=1)
-            axes[3, col].annotate(f"u = u_cr\nat {crossing:.0f} s", (crossing, tr.critical_speed_mps),
-                                  xytext=(6, 6), textcoords="offset points", fontsize="small", color="crimson")
+            axes[3, col].annotate(
+                f"u = u_cr\nat {crossing:.0f} s",
+                (crossing, tr.critical_speed_mps),
+                xytext=(6, 6),
+                textcoords="offset points",
+                fontsize="small",
+                color="crimson",
+            )
         count = sum(x.metrics.outcome == outcome for x in results)
         ratio0 = tr.speed_mps[0] / tr.critical_speed_mps
         ratio1 = r.final_speed_mps / r.critical_speed_mps
-        speed = f"u/u_cr {ratio1:.2f}" if math.isclose(ratio0, ratio1) else f"u/u_cr {ratio0:.2f} to {ratio1:.2f}"
-        ended = f", ended: {_label(tr.termination_reason)}" if tr.termination_reason not in ("", outcome) else ""
-        ax_e.set_title(f"{_label(outcome)}: {count} of {len(results)}\n{r.controller}, seed {r.seed}{ended}\n{speed}",
-                       fontsize="medium", color=color)
+        speed = (
+            f"u/u_cr {ratio1:.2f}" if math.isclose(ratio0, ratio1) else f"u/u_cr {ratio0:.2f} to {ratio1:.2f}"
+        )
+        ended = (
+            f", ended: {_label(tr.termination_reason)}" if tr.termination_reason not in ("", outcome) else ""
+        )
+        ax_e.set_title(
+            f"{_label(outcome)}: {count} of {len(results)}\n{r.controller}, seed {r.seed}{ended}\n{speed}",
+            fontsize="medium",
+            color=color,
+        )
         for ax in axes[:, col]:
             ax.grid(alpha=0.3)
     axes[0, 0].set_ylabel("depth error [m]\n(+ too deep)")
@@ -205,13 +240,21 @@ def outcomes_figure(
         handles.append(Line2D([], [], color="k", linestyle="--", label="critical speed u_cr"))
     if crossing_drawn:
         handles.append(Line2D([], [], color="crimson", linestyle="-.", label="u crosses u_cr"))
-    fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 4 if len(shown) > 1 else 2),
-               fontsize="small")
+    fig.legend(
+        handles=handles,
+        loc="outside lower center",
+        ncols=min(len(handles), 4 if len(shown) > 1 else 2),
+        fontsize="small",
+    )
     controllers = len({x.controller for x in results})
-    fig.suptitle(title or (
-        f"{scenarios[0]}: a typical episode of each outcome\n({len(results)} episodes, {controllers} "
-        f"controller{'s' if controllers > 1 else ''}; success is judged over the final {HOLD_WINDOW_S:g} s)"
-    ), fontsize="medium")
+    fig.suptitle(
+        title
+        or (
+            f"{scenarios[0]}: a typical episode of each outcome\n({len(results)} episodes, {controllers} "
+            f"controller{'s' if controllers > 1 else ''}; success is judged over the final {HOLD_WINDOW_S:g} s)"
+        ),
+        fontsize="medium",
+    )
     return fig
 
 
@@ -263,7 +306,9 @@ def plot_metrics_vs_speed(
 
     table = by_speed_ratio(results, bins)
     if not table:
-        raise ValueError("no episode has a finite speed ratio to plot against (results empty, or no critical speed?)")
+        raise ValueError(
+            "no episode has a finite speed ratio to plot against (results empty, or no critical speed?)"
+        )
     scenarios = list(dict.fromkeys(row["scenario"] for row in table))
     controllers = list(dict.fromkeys(row["controller"] for row in table))
     colors = _colors(controllers)
@@ -277,7 +322,9 @@ def plot_metrics_vs_speed(
         high = max(row["ratio_high"] for row in rows)
         n_bins = 1 + max(row["bin"] for row in rows)
         width = (high - low) / n_bins or 0.1 * low  # one speed: a band 10% wide around it
-        edges = np.linspace(low, high, n_bins + 1) if high > low else np.array([low - width / 2, low + width / 2])
+        edges = (
+            np.linspace(low, high, n_bins + 1) if high > low else np.array([low - width / 2, low + width / 2])
+        )
         for j, c in enumerate(controllers):
             mine = [row for row in rows if row["controller"] == c]
             if not mine:
@@ -289,8 +336,9 @@ def plot_metrics_vs_speed(
                 lo = np.array([row[f"{key}_ci_low"] for row in mine])
                 hi = np.array([row[f"{key}_ci_high"] for row in mine])
                 yerr = np.nan_to_num(np.vstack([centre - lo, hi - centre]))  # no interval: no bar
-                ax.errorbar(x, centre, yerr=yerr, color=colors[c], marker="o", markersize=4, linewidth=1,
-                            capsize=2)
+                ax.errorbar(
+                    x, centre, yerr=yerr, color=colors[c], marker="o", markersize=4, linewidth=1, capsize=2
+                )
         episodes = max(sum(row["episodes"] for row in rows if row["controller"] == c) for c in controllers)
         ax_s.set_title(f"{scenario}\n({episodes} episodes per controller)", fontsize="medium")
         # u = u_cr is brought into view when it is nearer the data than the data's own span.

@@ -31,8 +31,15 @@ class Progress:
     :meth:`describe` names what runs now, :meth:`update` counts, :meth:`close` ends the bar.
     """
 
-    def __init__(self, total: int, *, enabled: bool = True, stream: TextIO | None = None,
-                 label: str = "evaluate", unit: str = "episode") -> None:
+    def __init__(
+        self,
+        total: int,
+        *,
+        enabled: bool = True,
+        stream: TextIO | None = None,
+        label: str = "evaluate",
+        unit: str = "episode",
+    ) -> None:
         self.total, self.label, self.unit, self.done = total, label, unit, 0
         self.stream = sys.stderr if stream is None else stream
         self._what = ""
@@ -69,8 +76,10 @@ class Progress:
         fraction = self.done / self.total if self.total else 1.0
         left = elapsed_s * (1.0 - fraction) / fraction if fraction > 0 else math.nan
         what = f" ({self._what})" if self._what else ""
-        return (f"{self.label}: {self.done}/{self.total} {self.unit}s, {fraction:.0%}{what}; "
-                f"{_clock(elapsed_s)} elapsed, ETA {_clock(left)}")
+        return (
+            f"{self.label}: {self.done}/{self.total} {self.unit}s, {fraction:.0%}{what}; "
+            f"{_clock(elapsed_s)} elapsed, ETA {_clock(left)}"
+        )
 
     def close(self) -> None:
         if self._bar is not None:

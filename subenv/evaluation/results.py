@@ -157,8 +157,14 @@ def median_interval(
         return (median, median, median)
     from scipy import stats
 
-    ci = stats.bootstrap((x,), np.median, confidence_level=confidence, n_resamples=_BOOTSTRAP_RESAMPLES,
-                         method="percentile", rng=np.random.default_rng(_BOOTSTRAP_SEED)).confidence_interval
+    ci = stats.bootstrap(
+        (x,),
+        np.median,
+        confidence_level=confidence,
+        n_resamples=_BOOTSTRAP_RESAMPLES,
+        method="percentile",
+        rng=np.random.default_rng(_BOOTSTRAP_SEED),
+    ).confidence_interval
     return (median, float(ci.low), float(ci.high))
 
 
@@ -224,8 +230,13 @@ def summarize(results: Sequence[EpisodeResult], confidence: float = CONFIDENCE_L
         if all(r.winnable is not None for r in group):
             k, n = _winnable_successes(group)
             low, high = wilson_interval(k, n, confidence) if n else (math.nan, math.nan)
-            row |= {"winnable": n, "winnable_successes": k, "winnable_success_rate": k / n if n else math.nan,
-                    "winnable_ci_low": low, "winnable_ci_high": high}
+            row |= {
+                "winnable": n,
+                "winnable_successes": k,
+                "winnable_success_rate": k / n if n else math.nan,
+                "winnable_ci_low": low,
+                "winnable_ci_high": high,
+            }
         rows.append(row)
     return rows
 
@@ -295,13 +306,24 @@ def by_speed_ratio(
                 k_ok = sum(r.metrics.success for r, _ in group)
                 s_low, s_high = wilson_interval(k_ok, len(group), confidence)
                 median, i_low, i_high = median_interval([r.metrics.iae_m_s for r, _ in group], confidence)
-                rows.append({
-                    "scenario": scenario, "controller": c, "bin": b, "ratio_low": float(edges[b]),
-                    "ratio_high": float(edges[b + 1]), "ratio_mean": float(np.mean([u for _, u in group])),
-                    "episodes": len(group), "success": k_ok, "success_rate": k_ok / len(group),
-                    "success_ci_low": s_low, "success_ci_high": s_high,
-                    "iae_median": median, "iae_ci_low": i_low, "iae_ci_high": i_high,
-                })
+                rows.append(
+                    {
+                        "scenario": scenario,
+                        "controller": c,
+                        "bin": b,
+                        "ratio_low": float(edges[b]),
+                        "ratio_high": float(edges[b + 1]),
+                        "ratio_mean": float(np.mean([u for _, u in group])),
+                        "episodes": len(group),
+                        "success": k_ok,
+                        "success_rate": k_ok / len(group),
+                        "success_ci_low": s_low,
+                        "success_ci_high": s_high,
+                        "iae_median": median,
+                        "iae_ci_low": i_low,
+                        "iae_ci_high": i_high,
+                    }
+                )
     return rows
 
 
@@ -322,7 +344,9 @@ def representative_episodes(results: Sequence[EpisodeResult]) -> dict[str, dict[
             having = [r for r in mine if r.metrics.outcome == outcome]
             controllers = list(dict.fromkeys(r.controller for r in having))
             most = max(controllers, key=lambda c: sum(r.controller == c for r in having))  # first on a tie
-            ranked = sorted((r for r in having if r.controller == most), key=lambda r: (r.metrics.iae_m_s, r.episode))
+            ranked = sorted(
+                (r for r in having if r.controller == most), key=lambda r: (r.metrics.iae_m_s, r.episode)
+            )
             chosen[scenario][outcome] = ranked[(len(ranked) - 1) // 2]
     return chosen
 
@@ -409,15 +433,22 @@ def leaderboard_markdown(
         rows.append(cells)
     episodes = sorted({len(g) for g in groups.values()})
     per = str(episodes[0]) if len(episodes) == 1 else f"{episodes[0]}-{episodes[-1]}"
-    header = ["controller", "all scenarios", *(["winnable"] if judged else []), *scenarios,
-              *(o.replace("_", " ") for o in failure_outcomes)]
+    header = [
+        "controller",
+        "all scenarios",
+        *(["winnable"] if judged else []),
+        *scenarios,
+        *(o.replace("_", " ") for o in failure_outcomes),
+    ]
     first = controllers[0]
     n_winnable = sum(1 for r in results if r.controller == first and r.winnable)
     n_first = sum(1 for r in results if r.controller == first)
     ranking = (
         f"Ranked by the success over the winnable episodes ({n_winnable} of {n_first} here: those whose "
         "loading has a depth-holding trim within the plane and pitch limits at their final speed, with every "
-        "plane pair the vehicle has free; subenv.analysis.winnable), then over all. " if judged else ""
+        "plane pair the vehicle has free; subenv.analysis.winnable), then over all. "
+        if judged
+        else ""
     )
     note = (
         f"Success rate with {100 * confidence:.0f}% Wilson intervals, {per} episodes per scenario "
@@ -444,12 +475,22 @@ def summary_markdown(summary: Sequence[Mapping[str, Any]], *, title: str = "Per 
     any row, so each row's rates add up to 100% (up to rounding) and, times ``n``, summed over the
     scenarios, give the leaderboard's failure counts.
     """
-    outcomes = [key.removeprefix("outcome_") for key in dict.fromkeys(k for r in summary for k in r)
-                if key.startswith("outcome_")]
+    outcomes = [
+        key.removeprefix("outcome_")
+        for key in dict.fromkeys(k for r in summary for k in r)
+        if key.startswith("outcome_")
+    ]
     shown = [o for o in outcomes if o == "success" or any(r.get(f"outcome_{o}", 0) for r in summary)]
     judged = all("winnable" in r for r in summary)
-    header = ["scenario", "controller", "n", *(["winnable: success"] if judged else []), *(o.replace("_", " ") for o in shown),
-              *(label for label, _ in _SUMMARY_MEANS), "settled"]
+    header = [
+        "scenario",
+        "controller",
+        "n",
+        *(["winnable: success"] if judged else []),
+        *(o.replace("_", " ") for o in shown),
+        *(label for label, _ in _SUMMARY_MEANS),
+        "settled",
+    ]
     scenarios = list(dict.fromkeys(r["scenario"] for r in summary))
     ordered = sorted(summary, key=lambda r: scenarios.index(r["scenario"]))  # stable: controllers keep order
     rows = []
@@ -458,7 +499,9 @@ def summary_markdown(summary: Sequence[Mapping[str, Any]], *, title: str = "Per 
         if judged:
             cells.append(f"{r['winnable_successes']}/{r['winnable']}")
         cells += [_pct(r[f"{o}_rate"], r[f"{o}_ci_low"], r[f"{o}_ci_high"]) for o in shown]
-        cells += [_num(r[f"{name}_mean"], r[f"{name}_ci_low"], r[f"{name}_ci_high"]) for _, name in _SUMMARY_MEANS]
+        cells += [
+            _num(r[f"{name}_mean"], r[f"{name}_ci_low"], r[f"{name}_ci_high"]) for _, name in _SUMMARY_MEANS
+        ]
         cells.append(str(r["settled"]))
         rows.append(cells)
     note = (

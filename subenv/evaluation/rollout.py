@@ -65,8 +65,15 @@ MAX_BATCH: Final = 512
 about 50 MB."""
 
 _RECORDED = (
-    "time_s", "depth_error_m", "pitch_rad", "heave_mps", "pitch_rate_radps", "speed_mps",
-    "stern_plane_rad", "bow_plane_rad", "depth_m",
+    "time_s",
+    "depth_error_m",
+    "pitch_rad",
+    "heave_mps",
+    "pitch_rate_radps",
+    "speed_mps",
+    "stern_plane_rad",
+    "bow_plane_rad",
+    "depth_m",
 )  # info keys recorded at every sample, in Trajectory's field order
 
 
@@ -106,10 +113,17 @@ class Trajectory:
     def metrics(self, **kwargs: Any) -> EpisodeMetrics:
         """:func:`~subenv.evaluation.metrics.episode_metrics` of this trajectory (kwargs: its tolerances)."""
         return episode_metrics(
-            self.time_s, self.depth_error_m, self.pitch_rad, self.pitch_rate_radps,
-            self.stern_plane_rad, self.bow_plane_rad,
-            termination_reason=self.termination_reason, plane_limit_rad=self.plane_limit_rad,
-            episode_duration_s=self.episode_duration_s, length_ratio=self.length_ratio, **kwargs,
+            self.time_s,
+            self.depth_error_m,
+            self.pitch_rad,
+            self.pitch_rate_radps,
+            self.stern_plane_rad,
+            self.bow_plane_rad,
+            termination_reason=self.termination_reason,
+            plane_limit_rad=self.plane_limit_rad,
+            episode_duration_s=self.episode_duration_s,
+            length_ratio=self.length_ratio,
+            **kwargs,
         )
 
 
@@ -137,33 +151,55 @@ class TrajectoryRecorder:
         self._stacked = None
 
     def trajectory(
-        self, episode: int, steps: int, termination_reason: str, plane_limit_rad: float, episode_duration_s: float,
+        self,
+        episode: int,
+        steps: int,
+        termination_reason: str,
+        plane_limit_rad: float,
+        episode_duration_s: float,
         length_ratio: float = 1.0,
     ) -> Trajectory:
         """Episode ``episode``'s (its row) first ``steps`` steps."""
         if self._stacked is None:
             episodes = self._samples[0].shape[1]
-            actions = np.stack(self._actions) if self._actions else np.zeros((0, episodes, 1), dtype=np.float32)
+            actions = (
+                np.stack(self._actions) if self._actions else np.zeros((0, episodes, 1), dtype=np.float32)
+            )
             self._stacked = np.stack(self._samples), actions
         samples, actions = self._stacked
         time_s, error, pitch, heave, rate, speed, stern, bow, depth = (
             np.ascontiguousarray(column) for column in samples[: steps + 1, :, episode].T
         )
         return Trajectory(
-            time_s=time_s, depth_error_m=error, pitch_rad=pitch, heave_mps=heave, pitch_rate_radps=rate,
-            speed_mps=speed, stern_plane_rad=stern, bow_plane_rad=bow, depth_m=depth,
-            actions=np.ascontiguousarray(actions[:steps, episode]), termination_reason=termination_reason,
+            time_s=time_s,
+            depth_error_m=error,
+            pitch_rad=pitch,
+            heave_mps=heave,
+            pitch_rate_radps=rate,
+            speed_mps=speed,
+            stern_plane_rad=stern,
+            bow_plane_rad=bow,
+            depth_m=depth,
+            actions=np.ascontiguousarray(actions[:steps, episode]),
+            termination_reason=termination_reason,
             depth_command_m=float(self._depth_command_m[episode]),
             critical_speed_mps=float(self._critical_speed_mps[episode]),
-            plane_limit_rad=plane_limit_rad, episode_duration_s=episode_duration_s, length_ratio=length_ratio,
+            plane_limit_rad=plane_limit_rad,
+            episode_duration_s=episode_duration_s,
+            length_ratio=length_ratio,
         )
 
     def finish(
-        self, termination_reason: str, plane_limit_rad: float, episode_duration_s: float, length_ratio: float = 1.0
+        self,
+        termination_reason: str,
+        plane_limit_rad: float,
+        episode_duration_s: float,
+        length_ratio: float = 1.0,
     ) -> Trajectory:
         """The trajectory of one episode, recorded to its end."""
-        return self.trajectory(0, len(self._actions), termination_reason, plane_limit_rad, episode_duration_s,
-                               length_ratio)
+        return self.trajectory(
+            0, len(self._actions), termination_reason, plane_limit_rad, episode_duration_s, length_ratio
+        )
 
 
 @dataclass(frozen=True)
@@ -225,7 +261,9 @@ def _scenario_of(name: str) -> str:
         if found is None:
             parsed = re.fullmatch(r"subenv/(\w+)-v(\d+)", name)
             if parsed is None:
-                raise ValueError(f"env id {name!r} is not a subenv id: must be 'subenv/<Scenario>-v<version>'")
+                raise ValueError(
+                    f"env id {name!r} is not a subenv id: must be 'subenv/<Scenario>-v<version>'"
+                )
             base, version = parsed.groups()
             found = base if version == "0" else f"{base}-v{version}"  # (unknown: check_scenarios says so)
         scenario = found
@@ -253,7 +291,9 @@ def _env_args(
         boat = vehicle if isinstance(vehicle, Vehicle) else load_vehicle(vehicle)
         ratio = the_scenario.length_ratio(boat.length_m)
         if ratio != 1.0 and spec.max_episode_steps is not None:
-            kwargs["max_episode_steps"] = math.ceil(spec.max_episode_steps * froude_factor("time", ratio) - 1e-9)
+            kwargs["max_episode_steps"] = math.ceil(
+                spec.max_episode_steps * froude_factor("time", ratio) - 1e-9
+            )
     return env_id, kwargs
 
 
@@ -309,8 +349,16 @@ def run_episode(
     :class:`Trajectory` (memory: ~100 kB per 600 s episode); the other arguments are those of
     :func:`run_episodes`.
     """
-    (result,) = run_episodes(controller, scenario, [seed], first_episode=episode, vehicle=vehicle,
-                             max_duration_s=max_duration_s, keep_trajectories=int(keep_trajectory), options=options)
+    (result,) = run_episodes(
+        controller,
+        scenario,
+        [seed],
+        first_episode=episode,
+        vehicle=vehicle,
+        max_duration_s=max_duration_s,
+        keep_trajectories=int(keep_trajectory),
+        options=options,
+    )
     return result
 
 
@@ -367,12 +415,19 @@ def run_episodes(
         envs: dict[int, DivePlaneVectorEnv] = {}  # by number of sub-environments
         try:
             for start in range(0, len(seeds), MAX_BATCH):
-                wave = seeds[start:start + MAX_BATCH]
+                wave = seeds[start : start + MAX_BATCH]
                 if len(wave) not in envs:
-                    envs[len(wave)] = make_vector_env(controller, scenario, len(wave), vehicle=vehicle,
-                                                      max_duration_s=max_duration_s)
-                for result in _run_batch(controller, envs[len(wave)], wave, first_episode + start,
-                                         keep_trajectories - start, options):
+                    envs[len(wave)] = make_vector_env(
+                        controller, scenario, len(wave), vehicle=vehicle, max_duration_s=max_duration_s
+                    )
+                for result in _run_batch(
+                    controller,
+                    envs[len(wave)],
+                    wave,
+                    first_episode + start,
+                    keep_trajectories - start,
+                    options,
+                ):
                     produced(result)
         finally:
             for vector_env in envs.values():
@@ -408,10 +463,15 @@ def _run_single(
             break
     limit = env.spec.max_episode_steps if env.spec is not None else None
     duration_s = _scheduled(float(base.episode.duration_s), limit, float(base.dt))
-    trajectory = recorder.finish(info["termination_reason"] if terminated else "", float(base.plane_limit_rad),
-                                 duration_s, base.config.length_ratio)
-    can_win = _episode_winnable(base.vehicle, base.episode, trajectory.critical_speed_mps, base.config.max_pitch_rad,
-                                options)
+    trajectory = recorder.finish(
+        info["termination_reason"] if terminated else "",
+        float(base.plane_limit_rad),
+        duration_s,
+        base.config.length_ratio,
+    )
+    can_win = _episode_winnable(
+        base.vehicle, base.episode, trajectory.critical_speed_mps, base.config.max_pitch_rad, options
+    )
     return _result(controller, base.scenario.key, seed, episode, trajectory, keep, can_win)
 
 
@@ -430,8 +490,9 @@ def _run_batch(
     drawn = env.episodes  # (before an ended sub-environment resets to another episode)
     loadings = list(env.vehicles)
     columns = {key: value.tolist() for key, value in info.items() if not key.startswith("_")}
-    controller.reset_batch([{key: column[i] for key, column in columns.items()} for i in range(len(seeds))],
-                           config.base_vehicle)
+    controller.reset_batch(
+        [{key: column[i] for key, column in columns.items()} for i in range(len(seeds))], config.base_vehicle
+    )
     recorder = TrajectoryRecorder(info)
     running = np.ones(len(seeds), dtype=bool)
     steps = np.zeros(len(seeds), dtype=int)
@@ -451,10 +512,15 @@ def _run_batch(
     for i, (seed, draw) in enumerate(zip(seeds, drawn)):
         assert draw is not None
         duration_s = _scheduled(float(draw.duration_s), env.max_episode_steps, float(config.dt))
-        trajectory = recorder.trajectory(i, int(steps[i]), reasons[i], float(config.plane_limit_rad), duration_s,
-                                         config.length_ratio)
-        can_win = _episode_winnable(loadings[i], draw, trajectory.critical_speed_mps, config.max_pitch_rad, options)
-        results.append(_result(controller, env.scenario.key, seed, first_episode + i, trajectory, i < keep, can_win))
+        trajectory = recorder.trajectory(
+            i, int(steps[i]), reasons[i], float(config.plane_limit_rad), duration_s, config.length_ratio
+        )
+        can_win = _episode_winnable(
+            loadings[i], draw, trajectory.critical_speed_mps, config.max_pitch_rad, options
+        )
+        results.append(
+            _result(controller, env.scenario.key, seed, first_episode + i, trajectory, i < keep, can_win)
+        )
     return results
 
 
@@ -464,15 +530,26 @@ def _scheduled(duration_s: float, max_episode_steps: int | None, dt: float) -> f
 
 
 @lru_cache(maxsize=4096)
-def _winnable(loading: Vehicle, final_speed_mps: float, max_pitch_rad: float, depth_m: float = 0.0,
-              free_surface: FreeSurface = NO_FREE_SURFACE, sea_state: SeaState | None = None) -> bool:
+def _winnable(
+    loading: Vehicle,
+    final_speed_mps: float,
+    max_pitch_rad: float,
+    depth_m: float = 0.0,
+    free_surface: FreeSurface = NO_FREE_SURFACE,
+    sea_state: SeaState | None = None,
+) -> bool:
     """:func:`subenv.analysis.winnable` (about 4 ms), once per loading and speed (and ordered depth, near
     the surface): every controller of a comparison runs the same episodes."""
     return winnable(loading, (final_speed_mps,), max_pitch_rad, depth_m, free_surface, sea_state)
 
 
-def _episode_winnable(loading: Vehicle, draw: EpisodeConfig, critical_speed_mps: float, max_pitch_rad: float,
-                      options: Mapping[str, Any] | None) -> bool:
+def _episode_winnable(
+    loading: Vehicle,
+    draw: EpisodeConfig,
+    critical_speed_mps: float,
+    max_pitch_rad: float,
+    options: Mapping[str, Any] | None,
+) -> bool:
     """Whether the episode can be won at the speed it holds at its end (its profile's last knot)."""
     if options and "speed" in options:
         final = float(options["speed"])
@@ -481,12 +558,25 @@ def _episode_winnable(loading: Vehicle, draw: EpisodeConfig, critical_speed_mps:
         final = float(last) * (critical_speed_mps if draw.speed_relative else 1.0)
     if draw.free_surface is None and draw.sea_state is None:
         return _winnable(loading, final, max_pitch_rad)
-    depth = float(options["depth_command"]) if options and "depth_command" in options else float(draw.depth_command_m)
-    return _winnable(loading, final, max_pitch_rad, depth, draw.free_surface or NO_FREE_SURFACE, draw.sea_state)
+    depth = (
+        float(options["depth_command"])
+        if options and "depth_command" in options
+        else float(draw.depth_command_m)
+    )
+    return _winnable(
+        loading, final, max_pitch_rad, depth, draw.free_surface or NO_FREE_SURFACE, draw.sea_state
+    )
 
 
-def _result(controller: Controller, scenario: str, seed: int, episode: int, trajectory: Trajectory,
-            keep: bool, winnable_episode: bool | None = None) -> EpisodeResult:
+def _result(
+    controller: Controller,
+    scenario: str,
+    seed: int,
+    episode: int,
+    trajectory: Trajectory,
+    keep: bool,
+    winnable_episode: bool | None = None,
+) -> EpisodeResult:
     return EpisodeResult(
         controller=controller.name,
         scenario=scenario,
@@ -512,8 +602,9 @@ def needs_bow_planes(controller: Controller) -> bool:
     return controller.control == "independent" or float(controller.alpha) != 0.0
 
 
-def resolve_controllers(controllers: Sequence[Controller | str] | None,
-                        vehicle: Vehicle | None = None) -> list[Controller]:
+def resolve_controllers(
+    controllers: Sequence[Controller | str] | None, vehicle: Vehicle | None = None
+) -> list[Controller]:
     """Controllers from instances or registered names (None: every registered controller but those whose
     ``in_default_comparison`` attribute is False, and on a ``vehicle`` without bow planes those that move them,
     :func:`needs_bow_planes`).
@@ -553,8 +644,10 @@ def resolve_controllers(controllers: Sequence[Controller | str] | None,
     if vehicle is not None and not vehicle.planes.has_bow_planes:
         bow = [c.name for c in resolved if needs_bow_planes(c)]
         if bow and named:
-            raise ValueError(f"controllers {bow} move the bow planes (control='independent' or alpha != 0), and "
-                             f"vehicle {vehicle.name!r} has none: leave them out")
+            raise ValueError(
+                f"controllers {bow} move the bow planes (control='independent' or alpha != 0), and "
+                f"vehicle {vehicle.name!r} has none: leave them out"
+            )
         resolved = [c for c in resolved if not needs_bow_planes(c)] or resolved
     return resolved
 
@@ -647,9 +740,16 @@ def evaluate(
         for controller in ctrls:
             for scenario in the_suite.scenarios:
                 bar.describe(f"{controller.name} on {scenario}")
-                run_episodes(controller, scenario, range(seed, seed + n), vehicle=design_vehicle,
-                             max_duration_s=the_suite.max_duration_s, keep_trajectories=keep_trajectories,
-                             on_episode=done, batched=batched)
+                run_episodes(
+                    controller,
+                    scenario,
+                    range(seed, seed + n),
+                    vehicle=design_vehicle,
+                    max_duration_s=the_suite.max_duration_s,
+                    keep_trajectories=keep_trajectories,
+                    on_episode=done,
+                    batched=batched,
+                )
     finally:
         bar.close()
     return results

@@ -114,33 +114,48 @@ def get_suite(name: str) -> Suite:
     return suite
 
 
-register_suite(Suite(
-    name="default",
-    description=(
-        "The base scenarios: design speed, below, near and through critical, periscope depth (the free "
-        "surface's suction; calm, and in a head sea), ballast offset."
-    ),
-    scenarios=("Nominal", "LowSpeed", "NearCritical", "SpeedTransient", "PeriscopeDepth-v1", "PeriscopeDepthWaves",
-               "BallastOffset"),
-    episodes=100,
-))
-register_suite(Suite(
-    name="reversal",
-    description="Where dive-plane reversal bites: below, near and decelerating through the critical speed.",
-    scenarios=("LowSpeed", "NearCritical", "SpeedTransient"),
-    episodes=100,
-))
-register_suite(Suite(
-    name="randomized",
-    description=(
-        "The Randomized scenario: any base scenario with z_GB, C_D, sensor noise and a disturbance drawn."
-    ),
-    scenarios=("Randomized",),
-    episodes=200,
-))
-register_suite(Suite(
-    name="tiny",
-    description="For tests and smoke runs: design speed and below critical, 2 episodes each.",
-    scenarios=("Nominal", "LowSpeed"),
-    episodes=2,
-))
+register_suite(
+    Suite(
+        name="default",
+        description=(
+            "The base scenarios: design speed, below, near and through critical, periscope depth (the free "
+            "surface's suction; calm, and in a head sea), ballast offset."
+        ),
+        scenarios=(
+            "Nominal",
+            "LowSpeed",
+            "NearCritical",
+            "SpeedTransient",
+            "PeriscopeDepth-v1",
+            "PeriscopeDepthWaves",
+            "BallastOffset",
+        ),
+        episodes=100,
+    )
+)
+register_suite(
+    Suite(
+        name="reversal",
+        description="Where dive-plane reversal bites: below, near and decelerating through the critical speed.",
+        scenarios=("LowSpeed", "NearCritical", "SpeedTransient"),
+        episodes=100,
+    )
+)
+register_suite(
+    Suite(
+        name="randomized",
+        description=(
+            "The Randomized scenario: any base scenario with z_GB, C_D, sensor noise and a disturbance drawn."
+        ),
+        scenarios=("Randomized",),
+        episodes=200,
+    )
+)
+register_suite(
+    Suite(
+        name="tiny",
+        description="For tests and smoke runs: design speed and below critical, 2 episodes each.",
+        scenarios=("Nominal", "LowSpeed"),
+        episodes=2,
+    )
+)

@@ -38,5 +38,14 @@ from subenv.jax._trace import traced
 from subenv.jax.dynamics import control_period, derivatives
 from subenv.jax.env import N_NORMALS, DivePlaneJaxEnv, EnvParams, EnvState, Episode, make
 
-__all__ = ["N_NORMALS", "DivePlaneJaxEnv", "EnvParams", "EnvState", "Episode", "control_period", "derivatives",
-           "make", "traced"]
+__all__ = [
+    "N_NORMALS",
+    "DivePlaneJaxEnv",
+    "EnvParams",
+    "EnvState",
+    "Episode",
+    "control_period",
+    "derivatives",
+    "make",
+    "traced",
+]

@@ -15,15 +15,33 @@ from subenv.dynamics._jit import select
 
 __all__ = ["traced"]
 
-_MATH: Final = types.SimpleNamespace(sin=jnp.sin, cos=jnp.cos, exp=jnp.exp, sqrt=jnp.sqrt, isfinite=jnp.isfinite,
-                                     isnan=jnp.isnan, floor=jnp.floor, nan=math.nan, inf=math.inf, pi=math.pi)
+_MATH: Final = types.SimpleNamespace(
+    sin=jnp.sin,
+    cos=jnp.cos,
+    exp=jnp.exp,
+    sqrt=jnp.sqrt,
+    isfinite=jnp.isfinite,
+    isnan=jnp.isnan,
+    floor=jnp.floor,
+    nan=math.nan,
+    inf=math.inf,
+    pi=math.pi,
+)
 """What the physics takes from :mod:`math`, on JAX."""
-_NAMES: Final[dict[str, Any]] = {"math": _MATH, "np": jnp, "min": jnp.minimum, "max": jnp.maximum, "abs": jnp.abs}
+_NAMES: Final[dict[str, Any]] = {
+    "math": _MATH,
+    "np": jnp,
+    "min": jnp.minimum,
+    "max": jnp.maximum,
+    "abs": jnp.abs,
+}
 """Names re-bound in a twin's globals: the modules and the builtins the physics calls."""
 _twins: dict[tuple[Callable[..., Any], bool], Callable[..., Any]] = {}
 
 
-def _suction_point(theta: Any, depth: Any, u: Any, rho_suction: Any, hull: Any, first_row: int) -> tuple[Any, Any]:
+def _suction_point(
+    theta: Any, depth: Any, u: Any, rho_suction: Any, hull: Any, first_row: int
+) -> tuple[Any, Any]:
     """:func:`subenv.dynamics.free_surface.suction_point` for JAX: the same terms (its twins), summed
     over arrays of segments and pairs, not in loops (unrolled by the trace, the loops over the 276
     pairs of SUBOFF's segments took 7 s to compile per right-hand side); and no deep-water
@@ -40,7 +58,9 @@ def _suction_point(theta: Any, depth: Any, u: Any, rho_suction: Any, hull: Any, 
     return traced(surface.suction_from_sums)(force, moment, u, rho_suction, c)
 
 
-def _no_suction(theta: Any, depth: Any, u: Any, rho_suction: Any, hull: Any, first_row: int) -> tuple[float, float]:
+def _no_suction(
+    theta: Any, depth: Any, u: Any, rho_suction: Any, hull: Any, first_row: int
+) -> tuple[float, float]:
     """:func:`subenv.dynamics.free_surface.suction_point` in deep water (``rho_suction`` 0)."""
     return 0.0, 0.0
 
@@ -77,8 +97,9 @@ def traced(kernel: Callable[..., Any], free_surface: bool = True) -> Callable[..
     key = (function, bool(free_surface))
     if key not in _twins:
         namespace = dict(function.__globals__)
-        twin = types.FunctionType(function.__code__, namespace, function.__name__, function.__defaults__,
-                                  function.__closure__)
+        twin = types.FunctionType(
+            function.__code__, namespace, function.__name__, function.__defaults__, function.__closure__
+        )
         twin.__doc__, twin.__qualname__ = function.__doc__, function.__qualname__
         _twins[key] = twin  # (before its callees: a kernel may be reached twice)
         namespace.update(_NAMES)

@@ -19,8 +19,17 @@ rhs_point = traced(model.rhs_point)
 four scalars."""
 
 
-def derivatives(state: Any, speed: Any, stern: Any, bow: Any, prm: Any, hull: Any, force: Any = 0.0,
-                moment: Any = 0.0, free_surface: bool | None = None) -> Any:
+def derivatives(
+    state: Any,
+    speed: Any,
+    stern: Any,
+    bow: Any,
+    prm: Any,
+    hull: Any,
+    force: Any = 0.0,
+    moment: Any = 0.0,
+    free_surface: bool | None = None,
+) -> Any:
     """d/dt (theta, w, q, Z), shape ``state.shape``: :func:`subenv.dynamics.derivatives` on JAX.
 
     Parameters
@@ -47,12 +56,26 @@ def derivatives(state: Any, speed: Any, stern: Any, bow: Any, prm: Any, hull: An
         return jnp.stack(rhs(x[0], x[1], x[2], x[3], u, s, b, f, m, p, hull))
 
     return jnp.vectorize(one, signature="(4),(),(),(),(),(),(k)->(4)")(
-        jnp.asarray(state), speed, stern, bow, force, moment, jnp.asarray(prm))
+        jnp.asarray(state), speed, stern, bow, force, moment, jnp.asarray(prm)
+    )
 
 
-def control_period(state: Any, t0: Any, dt: float, speed0: Any, speed_slope: Any, stern: Any, bow: Any, prm: Any,
-                   hull: Any, force: Any = 0.0, substeps: int = integrate.SUBSTEPS,
-                   free_surface: bool | None = None, waves: Any = None, distance0: Any = 0.0) -> Any:
+def control_period(
+    state: Any,
+    t0: Any,
+    dt: float,
+    speed0: Any,
+    speed_slope: Any,
+    stern: Any,
+    bow: Any,
+    prm: Any,
+    hull: Any,
+    force: Any = 0.0,
+    substeps: int = integrate.SUBSTEPS,
+    free_surface: bool | None = None,
+    waves: Any = None,
+    distance0: Any = 0.0,
+) -> Any:
     """The state after one control period ``dt`` [s] from time ``t0`` [s]: the environments' integrator,
     :func:`subenv.dynamics.rk4` (``substeps`` RK4 steps, the reference's own code) over
     :func:`derivatives`, with the planes and the heave ``force`` held and the speed
@@ -108,6 +131,8 @@ def _free_surface(prm: Any, free_surface: bool | None) -> bool:
     if free_surface is None:
         return present
     if present and not free_surface:
-        raise ValueError(f"free_surface={free_surface!r} is invalid for these loadings: {np.count_nonzero(rho_suction)} "
-                         "of them have a free surface (rho_suction > 0); pass True or None")
+        raise ValueError(
+            f"free_surface={free_surface!r} is invalid for these loadings: {np.count_nonzero(rho_suction)} "
+            "of them have a free surface (rho_suction > 0); pass True or None"
+        )
     return bool(free_surface)

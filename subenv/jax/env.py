@@ -70,16 +70,24 @@ def _record(name: str, fields: Sequence[str], doc: str) -> type:
     return jax.tree_util.register_dataclass(cls, data_fields=list(fields), meta_fields=[])
 
 
-Episode = _record("Episode", (*tr.EPISODE_DTYPE.names, "waves"), """\
+Episode = _record(
+    "Episode",
+    (*tr.EPISODE_DTYPE.names, "waves"),
+    """\
 What a reset draws and a step only reads: the fields of :data:`subenv.envs.transition.EPISODE_DTYPE`,
 by name, and ``waves``, the episode's sea (shape (WAVE_FIELDS, MAX_WAVES): its
-:meth:`~subenv.dynamics.waves.SeaState.components`; shape (0,) in an environment without seas).""")
+:meth:`~subenv.dynamics.waves.SeaState.components`; shape (0,) in an environment without seas).""",
+)
 
-EnvState = _record("EnvState", (*tr.STATE_DTYPE.names, "obs", "episode"), """\
+EnvState = _record(
+    "EnvState",
+    (*tr.STATE_DTYPE.names, "obs", "episode"),
+    """\
 One environment's state: the fields of :data:`subenv.envs.transition.STATE_DTYPE`, by name (the
 vehicle's state, the applied planes, the time and steps since the reset, the heave force, the speed,
 the distance travelled), ``obs``, the last observation (float32, shape (8,)), and ``episode``, its
-:class:`Episode`.""")
+:class:`Episode`.""",
+)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -118,8 +126,9 @@ class DivePlaneJaxEnv:
     a NaN or infinite action counts as 0 (the Gymnasium environment raises ``ValueError``).
     """
 
-    def __init__(self, config: DivePlaneConfig, max_episode_steps: int | None, free_surface: bool,
-                 sea: bool) -> None:
+    def __init__(
+        self, config: DivePlaneConfig, max_episode_steps: int | None, free_surface: bool, sea: bool
+    ) -> None:
         self.config = config
         """The environment's configuration."""
         self.max_episode_steps = max_episode_steps
@@ -172,8 +181,9 @@ class DivePlaneJaxEnv:
         """An episode drawn at random from the table: (observation, state)."""
         return self.reset_env(key, self.default_params if params is None else params)
 
-    def step(self, key: jax.Array, state: Any, action: jax.Array,
-             params: EnvParams | None = None) -> tuple[jax.Array, Any, jax.Array, jax.Array, dict[str, jax.Array]]:
+    def step(
+        self, key: jax.Array, state: Any, action: jax.Array, params: EnvParams | None = None
+    ) -> tuple[jax.Array, Any, jax.Array, jax.Array, dict[str, jax.Array]]:
         """One control period; an ended episode is followed by a new one at once (see the class)."""
         params = self.default_params if params is None else params
         key, key_reset = jax.random.split(key)
@@ -189,8 +199,9 @@ class DivePlaneJaxEnv:
         state = self.reset_to(row, params, jax.random.normal(key_noise, (tr.N_OBS,)))
         return state.obs, state
 
-    def step_env(self, key: jax.Array, state: Any, action: jax.Array,
-                 params: EnvParams) -> tuple[jax.Array, Any, jax.Array, jax.Array, dict[str, jax.Array]]:
+    def step_env(
+        self, key: jax.Array, state: Any, action: jax.Array, params: EnvParams
+    ) -> tuple[jax.Array, Any, jax.Array, jax.Array, dict[str, jax.Array]]:
         """One control period without the reset (:meth:`transition` with normals from ``key``)."""
         state, info = self.transition(state, action, jax.random.normal(key, (N_NORMALS,)))
         terminated, truncated = info["terminated"] > 0.0, info["truncated"] > 0.0
@@ -203,8 +214,9 @@ class DivePlaneJaxEnv:
     def is_terminal(self, state: Any, params: EnvParams | None = None) -> jax.Array:
         """Whether the episode has ended at ``state`` (terminated or truncated)."""
         cfg, e = self._cfg, state.episode
-        reason = self._episode_end(state.pitch_rad, state.heave_mps, state.pitch_rate_radps, state.depth_m,
-                                   e.depth_command_m, cfg)
+        reason = self._episode_end(
+            state.pitch_rad, state.heave_mps, state.pitch_rate_radps, state.depth_m, e.depth_command_m, cfg
+        )
         terminated, truncated = self._episode_outcome(reason, state.time_s, state.steps, e.duration_s, cfg)
         return terminated | truncated
 
@@ -214,18 +226,24 @@ class DivePlaneJaxEnv:
         ``gym.make(id).reset(seed=seeds[k])`` (:func:`subenv.envs.episodes.episode_table`)."""
         return self._table(*episode_table(self.config, seeds), seeds)
 
-    def _table(self, episodes: np.ndarray, states: np.ndarray, seas: np.ndarray, seeds: Sequence[int]) -> EnvParams:
+    def _table(
+        self, episodes: np.ndarray, states: np.ndarray, seas: np.ndarray, seeds: Sequence[int]
+    ) -> EnvParams:
         """:meth:`params` of the records of :func:`~subenv.envs.episodes.episode_table`."""
         suction, waves = _needs(episodes)
         if (suction and not self.free_surface) or (waves and not self.sea):
             raise ValueError(
                 f"seeds={_short(seeds)} draw episodes with a {'free surface' if suction else 'sea'} that this "
-                f"environment was made without (free_surface={self.free_surface}, sea={self.sea})")
-        episode = Episode(**{name: jnp.asarray(episodes[name]) for name in tr.EPISODE_DTYPE.names},
-                          waves=jnp.asarray(seas) if self.sea else jnp.zeros((len(episodes), 0)))
+                f"environment was made without (free_surface={self.free_surface}, sea={self.sea})"
+            )
+        episode = Episode(
+            **{name: jnp.asarray(episodes[name]) for name in tr.EPISODE_DTYPE.names},
+            waves=jnp.asarray(seas) if self.sea else jnp.zeros((len(episodes), 0)),
+        )
         fields = {name: jnp.asarray(states[name]) for name in tr.STATE_DTYPE.names}
-        return EnvParams(EnvState(**fields, obs=jnp.zeros((len(states), tr.N_OBS), dtype=jnp.float32),
-                                  episode=episode))
+        return EnvParams(
+            EnvState(**fields, obs=jnp.zeros((len(states), tr.N_OBS), dtype=jnp.float32), episode=episode)
+        )
 
     def reset_to(self, row: Any, params: EnvParams, normals: Any) -> Any:
         """The state at the reset of episode ``row`` of the table, observed with the sensor noise of
@@ -234,8 +252,9 @@ class DivePlaneJaxEnv:
         cfg = self._cfg
         state = jax.tree_util.tree_map(lambda leaf: leaf[row], params.table)
         e = state.episode
-        state = dataclasses.replace(state, speed_mps=self._speed_at(state.time_s, e.n_knots, e.knot_time_s,
-                                                                    e.knot_speed_mps))
+        state = dataclasses.replace(
+            state, speed_mps=self._speed_at(state.time_s, e.n_knots, e.knot_time_s, e.knot_speed_mps)
+        )
         noise = self._noise_values(*(normals[k] for k in range(tr.N_OBS)), cfg)
         return dataclasses.replace(state, obs=_float32(self._observation_values(state, e, noise, cfg)))
 
@@ -251,17 +270,41 @@ class DivePlaneJaxEnv:
         a = jnp.reshape(jnp.asarray(action, dtype=jnp.float64), (-1,))
         a = jnp.where(jnp.isfinite(a), a, 0.0)
         stern, bow, effort, u0, u1, slope = self._period_start(s, e, a[0], a[-1], cfg)
-        x = control_period(jnp.stack([s.pitch_rad, s.heave_mps, s.pitch_rate_radps, s.depth_m]), s.time_s,
-                           cfg.dt_s, u0, slope, stern, bow, e.params, self._hull, s.disturbance_N, cfg.substeps,
-                           free_surface=self.free_surface, waves=e.waves if self.sea else None,
-                           distance0=s.distance_m)
+        x = control_period(
+            jnp.stack([s.pitch_rad, s.heave_mps, s.pitch_rate_radps, s.depth_m]),
+            s.time_s,
+            cfg.dt_s,
+            u0,
+            slope,
+            stern,
+            bow,
+            e.params,
+            self._hull,
+            s.disturbance_N,
+            cfg.substeps,
+            free_surface=self.free_surface,
+            waves=e.waves if self.sea else None,
+            distance0=s.distance_m,
+        )
         x0, x1, x2, x3 = x[0], x[1], x[2], x[3]
         reason = self._episode_end(x0, x1, x2, x3, e.depth_command_m, cfg)
-        (pitch, heave, rate, depth, time, steps, distance, speed, disturbance, terminated,
-         truncated) = self._period_end(s, e, x0, x1, x2, x3, u0, u1, reason, e.disturbance_std_N * normals[0], cfg)
-        new = dataclasses.replace(s, pitch_rad=pitch, heave_mps=heave, pitch_rate_radps=rate, depth_m=depth,
-                                  stern_plane_rad=stern, bow_plane_rad=bow, time_s=time, steps=steps,
-                                  disturbance_N=disturbance, speed_mps=speed, distance_m=distance)
+        (pitch, heave, rate, depth, time, steps, distance, speed, disturbance, terminated, truncated) = (
+            self._period_end(s, e, x0, x1, x2, x3, u0, u1, reason, e.disturbance_std_N * normals[0], cfg)
+        )
+        new = dataclasses.replace(
+            s,
+            pitch_rad=pitch,
+            heave_mps=heave,
+            pitch_rate_radps=rate,
+            depth_m=depth,
+            stern_plane_rad=stern,
+            bow_plane_rad=bow,
+            time_s=time,
+            steps=steps,
+            disturbance_N=disturbance,
+            speed_mps=speed,
+            distance_m=distance,
+        )
         rewards = self._reward_terms(pitch, depth - e.depth_command_m, effort, terminated, cfg)
         noise = self._noise_values(*(normals[k] for k in range(1, N_NORMALS)), cfg)
         obs = jnp.where(reason == _DIVERGED, s.obs, _float32(self._observation_values(new, e, noise, cfg)))
@@ -271,9 +314,16 @@ class DivePlaneJaxEnv:
         return new, info
 
 
-def make(env_id: str = "subenv/DivePlane-v0", *, episodes: int = 1024, seed: int = 0, free_surface: bool | None = None,
-         sea: bool | None = None, max_episode_steps: int | None = None,
-         **kwargs: Any) -> tuple[DivePlaneJaxEnv, EnvParams]:
+def make(
+    env_id: str = "subenv/DivePlane-v0",
+    *,
+    episodes: int = 1024,
+    seed: int = 0,
+    free_surface: bool | None = None,
+    sea: bool | None = None,
+    max_episode_steps: int | None = None,
+    **kwargs: Any,
+) -> tuple[DivePlaneJaxEnv, EnvParams]:
     """A registered subenv id as a functional JAX environment, and its episodes: ``(env, params)``, as
     ``gymnax.make``.
 
@@ -292,20 +342,32 @@ def make(env_id: str = "subenv/DivePlane-v0", *, episodes: int = 1024, seed: int
     **kwargs
         :class:`~subenv.envs.DivePlaneEnv`'s arguments (``vehicle``, ``control``, ``alpha``, ...).
     """
-    check.require("env_id", env_id, isinstance(env_id, str) and env_id in gym.registry
-                  and gym.registry[env_id].entry_point == "subenv.envs.dive_plane:DivePlaneEnv",
-                  "a registered subenv id (subenv.envs.env_ids())")
+    check.require(
+        "env_id",
+        env_id,
+        isinstance(env_id, str)
+        and env_id in gym.registry
+        and gym.registry[env_id].entry_point == "subenv.envs.dive_plane:DivePlaneEnv",
+        "a registered subenv id (subenv.envs.env_ids())",
+    )
     n = check.integer("episodes", episodes, 1, 10**7)
     first = check.integer("seed", seed, 0)
     spec = gym.registry[env_id]
-    steps = spec.max_episode_steps if max_episode_steps is None else check.integer("max_episode_steps",
-                                                                                      max_episode_steps, 1)
+    steps = (
+        spec.max_episode_steps
+        if max_episode_steps is None
+        else check.integer("max_episode_steps", max_episode_steps, 1)
+    )
     config = DivePlaneConfig(**{**spec.kwargs, **kwargs})
     seeds = range(first, first + n)
     episodes_, states, seas = episode_table(config, seeds)
     suction, waves = _needs(episodes_)
-    env = DivePlaneJaxEnv(config, steps, suction if free_surface is None else bool(free_surface),
-                          waves if sea is None else bool(sea))
+    env = DivePlaneJaxEnv(
+        config,
+        steps,
+        suction if free_surface is None else bool(free_surface),
+        waves if sea is None else bool(sea),
+    )
     env._default_params = env._table(episodes_, states, seas, seeds)
     return env, env._default_params
 

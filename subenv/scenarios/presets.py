@@ -117,8 +117,17 @@ MIXED = Scenario(
         "often as the others, mildly randomized (z_GB scaled by 0.9-1.1, C_D in 0.2-0.4, sensor noise, a 0.3 N "
         "heave-force disturbance): for training agents where the planes reverse."
     ),
-    components=("Nominal", "LowSpeed", "LowSpeed", "NearCritical", "NearCritical", "SpeedTransient",
-                "SpeedTransient", "PeriscopeDepth", "BallastOffset"),
+    components=(
+        "Nominal",
+        "LowSpeed",
+        "LowSpeed",
+        "NearCritical",
+        "NearCritical",
+        "SpeedTransient",
+        "SpeedTransient",
+        "PeriscopeDepth",
+        "BallastOffset",
+    ),
     z_GB_scale=(0.9, 1.1),
     crossflow_drag=(0.2, 0.4),
     sensor_noise=True,

@@ -21,7 +21,9 @@ def register_scenario(scenario: Scenario, *, overwrite: bool = False) -> Scenari
     :func:`subenv.envs.register_envs` afterwards.
     """
     if scenario.key in _REGISTRY and not overwrite:
-        raise ValueError(f"scenario {scenario.key!r} is already registered; pass overwrite=True to replace it")
+        raise ValueError(
+            f"scenario {scenario.key!r} is already registered; pass overwrite=True to replace it"
+        )
     for component in scenario.components:
         if component not in _REGISTRY:
             raise ValueError(

@@ -51,8 +51,9 @@ class _Draws:
     @classmethod
     def of(cls, intervals: Sequence[Interval]) -> _Draws:
         fixed = tuple(float(low) for low, _ in intervals)
-        drawn = tuple((j, float(low), float(high - low))
-                      for j, (low, high) in enumerate(intervals) if low != high)
+        drawn = tuple(
+            (j, float(low), float(high - low)) for j, (low, high) in enumerate(intervals) if low != high
+        )
         return cls(fixed, drawn)
 
     def draw(self, rng: np.random.Generator) -> list[float]:
@@ -90,8 +91,11 @@ class SpeedRamp:
                 f"final_speed_mps={self.final_speed_mps!r}, final_speed_ratio={self.final_speed_ratio!r} are "
                 "invalid: give exactly one of them"
             )
-        check.interval("final_speed_mps" if self.final_speed_mps is not None else "final_speed_ratio",
-                        self.final_speed, 0.0)
+        check.interval(
+            "final_speed_mps" if self.final_speed_mps is not None else "final_speed_ratio",
+            self.final_speed,
+            0.0,
+        )
         check.interval("start_s", self.start_s, 0.0)
         check.interval("duration_s", self.duration_s, 0.0)
 
@@ -150,9 +154,13 @@ class EpisodeConfig:
             x_GB_m=self.x_GB_m * length,
             disturbance_std_N=self.disturbance_std_N * force,
             duration_s=self.duration_s * time,
-            sea_state=None if self.sea_state is None else dataclasses.replace(
-                self.sea_state, significant_height_m=self.sea_state.significant_height_m * length,
-                peak_period_s=self.sea_state.peak_period_s * time),
+            sea_state=None
+            if self.sea_state is None
+            else dataclasses.replace(
+                self.sea_state,
+                significant_height_m=self.sea_state.significant_height_m * length,
+                peak_period_s=self.sea_state.peak_period_s * time,
+            ),
         )
 
 
@@ -292,8 +300,10 @@ class Scenario:
             check.positive("reference_length_m", self.reference_length_m)
         check.integer("version", self.version, 0)
         if self.components and (self.free_surface is not None or self.sea_state is not None):
-            raise ValueError(f"scenario {self.name!r}: a mixture takes its free surface and sea from its components; "
-                             "give free_surface and sea_state on those")
+            raise ValueError(
+                f"scenario {self.name!r}: a mixture takes its free surface and sea from its components; "
+                "give free_surface and sea_state on those"
+            )
 
     @property
     def key(self) -> str:
@@ -316,7 +326,7 @@ class Scenario:
         return self.speed_ratio if self.speed_ratio is not None else self.speed_mps  # type: ignore[return-value]
 
     def length_ratio(self, length_m: float) -> float:
-        """lambda = ``length_m`` / :attr:`reference_length_m`, by which an environment Froude-scales the
+        """Lambda = ``length_m`` / :attr:`reference_length_m`, by which an environment Froude-scales the
         episodes on a vehicle of that length (1.0 without a reference length)."""
         return 1.0 if self.reference_length_m is None else length_m / self.reference_length_m
 
@@ -375,8 +385,10 @@ class Scenario:
             ``i``'s numbers; the others, the loading among them, are the scenario's values.
         """
         if not self.samples_in_batches:
-            raise ValueError(f"scenario {self.name!r} cannot draw in batches: its loading changes from "
-                             "episode to episode (or it is a mixture)")
+            raise ValueError(
+                f"scenario {self.name!r} cannot draw in batches: its loading changes from "
+                "episode to episode (or it is a mixture)"
+            )
         uniforms = np.asarray(uniforms, dtype=float)
         if uniforms.ndim != 2 or uniforms.shape[1] != self.uniforms_per_episode:
             raise ValueError(f"uniforms has shape {uniforms.shape}: must be (n, {self.uniforms_per_episode})")
@@ -398,8 +410,13 @@ class Scenario:
     @cached_property
     def samples_in_batches(self) -> bool:
         """Every episode has the same loading and no mixture is drawn: :meth:`sample_batch` applies."""
-        loading = (self.z_GB_m or (0.0, 0.0), self.z_GB_scale, self.x_GB_m, self.excess_buoyancy_fraction,
-                   self.crossflow_drag or (0.0, 0.0))
+        loading = (
+            self.z_GB_m or (0.0, 0.0),
+            self.z_GB_scale,
+            self.x_GB_m,
+            self.excess_buoyancy_fraction,
+            self.crossflow_drag or (0.0, 0.0),
+        )
         return not self.components and not self.x_GB_sign_random and all(low == high for low, high in loading)
 
     def _episode(self, values: Sequence[Any], weight_N: float) -> EpisodeConfig:
@@ -439,18 +456,25 @@ class Scenario:
     def _draws(self) -> _Draws:
         """The intervals :meth:`sample` draws, in the order it uses them."""
         if self.components:  # then this scenario's own randomisation, on top of the component's draw
-            return _Draws.of((self.z_GB_scale,) if self.crossflow_drag is None
-                             else (self.z_GB_scale, self.crossflow_drag))
+            return _Draws.of(
+                (self.z_GB_scale,) if self.crossflow_drag is None else (self.z_GB_scale, self.crossflow_drag)
+            )
         ramp = self.speed_ramp
-        return _Draws.of((
-            self.initial_speed,
-            *((ramp.start_s, ramp.duration_s, ramp.final_speed) if ramp is not None else ()),
-            self.depth_command_m, self.initial_depth_offset_m,
-            self.initial_pitch_rad, self.initial_heave_mps, self.initial_pitch_rate_radps,
-            *((self.z_GB_m,) if self.z_GB_m is not None else ()),
-            self.x_GB_m,
-            *((_UNIT,) if self.x_GB_sign_random else ()),
-            self.z_GB_scale, self.excess_buoyancy_fraction,
-            *((self.crossflow_drag,) if self.crossflow_drag is not None else ()),
-            *((_UNIT,) * (2 * self.sea_state.waves) if self.sea_state is not None else ()),
-        ))
+        return _Draws.of(
+            (
+                self.initial_speed,
+                *((ramp.start_s, ramp.duration_s, ramp.final_speed) if ramp is not None else ()),
+                self.depth_command_m,
+                self.initial_depth_offset_m,
+                self.initial_pitch_rad,
+                self.initial_heave_mps,
+                self.initial_pitch_rate_radps,
+                *((self.z_GB_m,) if self.z_GB_m is not None else ()),
+                self.x_GB_m,
+                *((_UNIT,) if self.x_GB_sign_random else ()),
+                self.z_GB_scale,
+                self.excess_buoyancy_fraction,
+                *((self.crossflow_drag,) if self.crossflow_drag is not None else ()),
+                *((_UNIT,) * (2 * self.sea_state.waves) if self.sea_state is not None else ()),
+            )
+        )

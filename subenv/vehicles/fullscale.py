@@ -18,7 +18,12 @@ from subenv.vehicles.loader import load_vehicle, vehicle_to_toml, write_shipped_
 from subenv.vehicles.scaling import froude_scaled
 from subenv.vehicles.vehicle import Vehicle
 
-__all__ = ["SUBOFF_FULLSCALE_LENGTH_RATIO", "SUBOFF_FULLSCALE_NAME", "suboff_fullscale", "suboff_fullscale_toml"]
+__all__ = [
+    "SUBOFF_FULLSCALE_LENGTH_RATIO",
+    "SUBOFF_FULLSCALE_NAME",
+    "suboff_fullscale",
+    "suboff_fullscale_toml",
+]
 
 SUBOFF_FULLSCALE_LENGTH_RATIO: Final = 24.0
 """Full-scale length over model length: a choice. SUBOFF is a generic hull, not the model of one boat,
@@ -53,9 +58,9 @@ def suboff_fullscale() -> Vehicle:
     return dataclasses.replace(
         vehicle,
         description=f"DARPA SUBOFF shape at full scale: the model Froude-scaled by {ratio:g} "
-                    f"(L = {vehicle.length_m:.2f} m)",
+        f"(L = {vehicle.length_m:.2f} m)",
         source="Riedel (1993), NPS thesis, Appendices A and B (the model), Froude-scaled by "
-               "subenv.vehicles.froude_scaled (Ch. VI)",
+        "subenv.vehicles.froude_scaled (Ch. VI)",
     )
 
 
@@ -68,7 +73,9 @@ def suboff_fullscale_toml() -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    return write_shipped_file(SUBOFF_FULLSCALE_NAME, suboff_fullscale_toml(), "subenv.vehicles.fullscale", argv)
+    return write_shipped_file(
+        SUBOFF_FULLSCALE_NAME, suboff_fullscale_toml(), "subenv.vehicles.fullscale", argv
+    )
 
 
 if __name__ == "__main__":

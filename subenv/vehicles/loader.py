@@ -42,8 +42,7 @@ _SCHEMA: dict[str, dict[str, str]] = {
     },
     "hydrodynamics": {
         name: "-"
-        for name in ("Z_wdot", "Z_qdot", "Z_w", "Z_q", "M_wdot", "M_qdot", "M_w", "M_q",
-                     "crossflow_drag")
+        for name in ("Z_wdot", "Z_qdot", "Z_w", "Z_q", "M_wdot", "M_qdot", "M_w", "M_q", "crossflow_drag")
     },
     "planes": {
         "Z_delta_s": "-",
@@ -136,8 +135,10 @@ def _read(name_or_path: str | os.PathLike[str]) -> tuple[str, str]:
         if not path.exists():
             raise FileNotFoundError(f"vehicle file {str(path)!r} does not exist")
         if not path.is_file():
-            raise ValueError(f"vehicle file {str(path)!r} is not a regular file (a directory or a device): "
-                             "must be a TOML file")
+            raise ValueError(
+                f"vehicle file {str(path)!r} is not a regular file (a directory or a device): "
+                "must be a TOML file"
+            )
         raw = path.read_bytes()
         try:
             return raw.decode("utf-8"), str(path)
@@ -185,7 +186,9 @@ def vehicle_from_dict(data: Mapping[str, Any], origin: str = "<dict>") -> Vehicl
             value = table.get(key, _OPTIONAL.get((section, key)))
             if dimension == "list":
                 if not isinstance(value, list) or not all(check.is_number(v) for v in value):
-                    raise ValueError(f"{where}: {section}.{key}={value!r} is invalid: must be a list of numbers")
+                    raise ValueError(
+                        f"{where}: {section}.{key}={value!r} is invalid: must be a list of numbers"
+                    )
                 si[section][key] = [float(v) for v in value]
             else:
                 if not check.is_number(value):
@@ -200,7 +203,9 @@ def vehicle_from_dict(data: Mapping[str, Any], origin: str = "<dict>") -> Vehicl
     length = body["length"]
     breadth_m = tuple(hull["max_diameter"] * r for r in hull["radius_ratio"])
     try:
-        check.number("length_m", length, *LENGTH_RANGE_M)  # (before the stations: a huge length overflows them)
+        check.number(
+            "length_m", length, *LENGTH_RANGE_M
+        )  # (before the stations: a huge length overflows them)
         # Station convention of the thesis's offsets: x = (10 - station) L / 20, forward positive.
         x_m = tuple((10.0 - s) * length / 20.0 for s in hull["stations"])
         return Vehicle(
@@ -232,8 +237,6 @@ def vehicle_from_dict(data: Mapping[str, Any], origin: str = "<dict>") -> Vehicl
         raise ValueError(f"{where}: {exc}") from exc
 
 
-
-
 # Significant digits of the hull's stations and radius ratios in a written file: they are recovered
 # from x and b by a division, so their last bits are rounding noise (station 0.1 would read
 # 0.09999999999999964); 12 digits keep the file readable and the hull within 1e-12 of the vehicle's.
@@ -252,6 +255,7 @@ def vehicle_to_toml(vehicle: Vehicle, header: str = "") -> str:
     header : str
         Comment lines for the top of the file (each line gets a ``# ``): where the numbers come from.
     """
+
     def number(value: float) -> str:
         return repr(float(value))
 
@@ -289,8 +293,10 @@ def vehicle_to_toml(vehicle: Vehicle, header: str = "") -> str:
         f"crossflow_drag = {number(vehicle.crossflow_drag)}",
         "",
         "[planes]",
-        *(f"{name} = {number(getattr(p, name))}"
-          for name in ("Z_delta_s", "M_delta_s", *(("Z_delta_b", "M_delta_b") if p.has_bow_planes else ()))),
+        *(
+            f"{name} = {number(getattr(p, name))}"
+            for name in ("Z_delta_s", "M_delta_s", *(("Z_delta_b", "M_delta_b") if p.has_bow_planes else ()))
+        ),
         *(() if p.has_bow_planes else ("# No bow planes: Z_delta_b and M_delta_b left out (0).",)),
         f"limit = {number(p.limit_rad)}  # rad",
         "",

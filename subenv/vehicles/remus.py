@@ -42,8 +42,15 @@ import numpy as np
 from subenv.vehicles.loader import vehicle_to_toml, write_shipped_file
 from subenv.vehicles.vehicle import HullOffsets, HydroCoefficients, PlaneCoefficients, Vehicle
 
-__all__ = ["PRESTERO_2001", "REMUS100_NAME", "PresteroRemus100", "crossflow_check", "myring_radius", "remus100",
-           "remus100_toml"]
+__all__ = [
+    "PRESTERO_2001",
+    "REMUS100_NAME",
+    "PresteroRemus100",
+    "crossflow_check",
+    "myring_radius",
+    "remus100",
+    "remus100_toml",
+]
 
 REMUS100_NAME: Final = "remus100"
 
@@ -53,39 +60,39 @@ class PresteroRemus100:
     """The REMUS 100's published data, as Prestero (2001) tabulates them (SI; about the centre of buoyancy)."""
 
     # Hull profile: Myring's equations and their parameters [m, -, rad].
-    nose_length_m: float            # a
-    nose_offset_m: float            # a_offset
-    midbody_length_m: float         # b
-    tail_length_m: float            # c
-    tail_offset_m: float            # c_offset
-    nose_exponent: float            # n
-    tail_angle_rad: float           # theta, the included tail angle
-    diameter_m: float               # d
+    nose_length_m: float  # a
+    nose_offset_m: float  # a_offset
+    midbody_length_m: float  # b
+    tail_length_m: float  # c
+    tail_offset_m: float  # c_offset
+    nose_exponent: float  # n
+    tail_angle_rad: float  # theta, the included tail angle
+    diameter_m: float  # d
     # Mass properties and the water.
-    weight_N: float                 # W
-    buoyancy_N: float               # B, as measured (light)
-    inertia_y_kg_m2: float          # I_yy
-    z_G_m: float                    # z_g, below the centre of buoyancy
-    x_B_from_nose_m: float          # the centre of buoyancy (the body origin) behind the nose
-    water_density_kg_m3: float      # rho
-    gravity_m_s2: float             # g
+    weight_N: float  # W
+    buoyancy_N: float  # B, as measured (light)
+    inertia_y_kg_m2: float  # I_yy
+    z_G_m: float  # z_g, below the centre of buoyancy
+    x_B_from_nose_m: float  # the centre of buoyancy (the body origin) behind the nose
+    water_density_kg_m3: float  # rho
+    gravity_m_s2: float  # g
     # Combined vertical-plane coefficients.
-    Z_wdot: float                   # [kg]
-    Z_qdot: float                   # [kg m]
-    M_wdot: float                   # [kg m]
-    M_qdot: float                   # [kg m^2]
-    Z_uw: float                     # [kg/m]   body lift and fin lift
-    Z_uq: float                     # [kg]     added-mass cross term and fin lift
-    M_uw: float                     # [kg]     body and fin lift, Munk moment
-    M_uq: float                     # [kg m]   added-mass cross term and fin lift
-    Z_uuds: float                   # [kg/m/rad] stern-plane lift
-    M_uuds: float                   # [kg/rad]   stern-plane moment
+    Z_wdot: float  # [kg]
+    Z_qdot: float  # [kg m]
+    M_wdot: float  # [kg m]
+    M_qdot: float  # [kg m^2]
+    Z_uw: float  # [kg/m]   body lift and fin lift
+    Z_uq: float  # [kg]     added-mass cross term and fin lift
+    M_uw: float  # [kg]     body and fin lift, Munk moment
+    M_uq: float  # [kg m]   added-mass cross term and fin lift
+    Z_uuds: float  # [kg/m/rad] stern-plane lift
+    M_uuds: float  # [kg/rad]   stern-plane moment
     # Cross-flow drag: the coefficients of the cylinder and the fins, the fins, and his Z_ww (for the check).
-    crossflow_drag: float           # c_dc (Hoerner's cylinder)
-    fin_crossflow_drag: float       # c_df
-    fin_area_m2: float              # S_fin, one fin's planform
-    fin_x_m: float                  # x_fin, the fins' position (behind the centre of buoyancy: negative)
-    Z_ww: float                     # [kg/m]
+    crossflow_drag: float  # c_dc (Hoerner's cylinder)
+    fin_crossflow_drag: float  # c_df
+    fin_area_m2: float  # S_fin, one fin's planform
+    fin_x_m: float  # x_fin, the fins' position (behind the centre of buoyancy: negative)
+    Z_ww: float  # [kg/m]
 
     @property
     def forward_length_m(self) -> float:
@@ -94,18 +101,41 @@ class PresteroRemus100:
 
     @property
     def length_m(self) -> float:
-        """l = l_f + c - c_offset: the hull's length [m] (his 1.33 m, rounded)."""
+        """L = l_f + c - c_offset: the hull's length [m] (his 1.33 m, rounded)."""
         return self.forward_length_m + self.tail_length_m - self.tail_offset_m
 
 
 PRESTERO_2001: Final = PresteroRemus100(
-    nose_length_m=0.191, nose_offset_m=0.0165, midbody_length_m=0.654, tail_length_m=0.541, tail_offset_m=0.0368,
-    nose_exponent=2.0, tail_angle_rad=0.436, diameter_m=0.191,
-    weight_N=299.0, buoyancy_N=306.0, inertia_y_kg_m2=3.45, z_G_m=0.0196, x_B_from_nose_m=0.611,
-    water_density_kg_m3=1030.0, gravity_m_s2=9.81,
-    Z_wdot=-35.5, Z_qdot=-1.93, M_wdot=-1.93, M_qdot=-4.88,
-    Z_uw=-28.6, Z_uq=-5.22, M_uw=24.0, M_uq=-2.0, Z_uuds=-9.64, M_uuds=-6.15,
-    crossflow_drag=1.1, fin_crossflow_drag=0.56, fin_area_m2=6.65e-3, fin_x_m=-0.638, Z_ww=-131.0,
+    nose_length_m=0.191,
+    nose_offset_m=0.0165,
+    midbody_length_m=0.654,
+    tail_length_m=0.541,
+    tail_offset_m=0.0368,
+    nose_exponent=2.0,
+    tail_angle_rad=0.436,
+    diameter_m=0.191,
+    weight_N=299.0,
+    buoyancy_N=306.0,
+    inertia_y_kg_m2=3.45,
+    z_G_m=0.0196,
+    x_B_from_nose_m=0.611,
+    water_density_kg_m3=1030.0,
+    gravity_m_s2=9.81,
+    Z_wdot=-35.5,
+    Z_qdot=-1.93,
+    M_wdot=-1.93,
+    M_qdot=-4.88,
+    Z_uw=-28.6,
+    Z_uq=-5.22,
+    M_uw=24.0,
+    M_uq=-2.0,
+    Z_uuds=-9.64,
+    M_uuds=-6.15,
+    crossflow_drag=1.1,
+    fin_crossflow_drag=0.56,
+    fin_area_m2=6.65e-3,
+    fin_x_m=-0.638,
+    Z_ww=-131.0,
 )
 """Prestero (2001)'s REMUS 100, as he tabulates it."""
 
@@ -123,7 +153,13 @@ def myring_radius(data: PresteroRemus100, s_m: np.ndarray) -> np.ndarray:
     """The hull radius [m] at ``s_m`` behind the nose: Myring's nose, midbody and tail, as Prestero (2001) writes them,
     with the nose and tail truncated by their offsets (a blunt nose; a tail cone ending at the propeller)."""
     s = np.asarray(s_m, dtype=float)
-    a, a0, c, d, n = data.nose_length_m, data.nose_offset_m, data.tail_length_m, data.diameter_m, data.nose_exponent
+    a, a0, c, d, n = (
+        data.nose_length_m,
+        data.nose_offset_m,
+        data.tail_length_m,
+        data.diameter_m,
+        data.nose_exponent,
+    )
     lf, tan = data.forward_length_m, math.tan(data.tail_angle_rad)
     nose = 0.5 * d * np.clip(1.0 - ((s + a0 - a) / a) ** 2, 0.0, None) ** (1.0 / n)
     t = s - lf
@@ -137,8 +173,10 @@ def _hull(data: PresteroRemus100) -> HullOffsets:
     nose = nose_end * np.sin(0.5 * np.pi * np.linspace(0.0, 1.0, _NOSE_POINTS))
     tail = np.linspace(lf, length, _TAIL_POINTS)
     s = np.concatenate([nose, tail])
-    return HullOffsets(x_m=tuple(float(v) for v in data.x_B_from_nose_m - s),
-                       breadth_m=tuple(float(v) for v in 2.0 * myring_radius(data, s)))
+    return HullOffsets(
+        x_m=tuple(float(v) for v in data.x_B_from_nose_m - s),
+        breadth_m=tuple(float(v) for v in 2.0 * myring_radius(data, s)),
+    )
 
 
 def remus100(data: PresteroRemus100 = PRESTERO_2001) -> Vehicle:
@@ -149,7 +187,7 @@ def remus100(data: PresteroRemus100 = PRESTERO_2001) -> Vehicle:
         name=REMUS100_NAME,
         description=f"REMUS 100 AUV (Prestero 2001), stern planes only, L = {L:.4f} m, neutrally buoyant",
         source="T. Prestero, Verification of a Six-Degree of Freedom Simulation Model for the REMUS Autonomous "
-               "Underwater Vehicle, MS thesis, MIT/WHOI, 2001 (subenv.vehicles.remus)",
+        "Underwater Vehicle, MS thesis, MIT/WHOI, 2001 (subenv.vehicles.remus)",
         length_m=L,
         weight_N=data.weight_N,
         buoyancy_N=data.weight_N,
@@ -161,10 +199,18 @@ def remus100(data: PresteroRemus100 = PRESTERO_2001) -> Vehicle:
         water_density_kg_m3=data.water_density_kg_m3,
         gravity_m_s2=data.gravity_m_s2,
         hydro=HydroCoefficients(
-            Z_wdot=data.Z_wdot / nd2, Z_qdot=data.Z_qdot / nd3, Z_w=data.Z_uw / nd1, Z_q=data.Z_uq / nd2,
-            M_wdot=data.M_wdot / nd3, M_qdot=data.M_qdot / nd4, M_w=data.M_uw / nd2, M_q=data.M_uq / nd3,
+            Z_wdot=data.Z_wdot / nd2,
+            Z_qdot=data.Z_qdot / nd3,
+            Z_w=data.Z_uw / nd1,
+            Z_q=data.Z_uq / nd2,
+            M_wdot=data.M_wdot / nd3,
+            M_qdot=data.M_qdot / nd4,
+            M_w=data.M_uw / nd2,
+            M_q=data.M_uq / nd3,
         ),
-        planes=PlaneCoefficients(Z_delta_s=data.Z_uuds / nd1, M_delta_s=data.M_uuds / nd2, limit_rad=PLANE_LIMIT_RAD),
+        planes=PlaneCoefficients(
+            Z_delta_s=data.Z_uuds / nd1, M_delta_s=data.M_uuds / nd2, limit_rad=PLANE_LIMIT_RAD
+        ),
         hull=_hull(data),
         crossflow_drag=data.crossflow_drag,
     )
@@ -175,8 +221,11 @@ def crossflow_check(data: PresteroRemus100 = PRESTERO_2001) -> tuple[float, floa
     -(rho/2) c_dc int 2R dx - 2 (rho/2) S_fin c_df, his formula, over the hull this module ships."""
     hull = remus100(data).hull
     half_rho = 0.5 * data.water_density_kg_m3
-    return (-half_rho * data.crossflow_drag * hull.area_m2 - 2.0 * half_rho * data.fin_area_m2 * data.fin_crossflow_drag,
-            data.Z_ww)
+    return (
+        -half_rho * data.crossflow_drag * hull.area_m2
+        - 2.0 * half_rho * data.fin_area_m2 * data.fin_crossflow_drag,
+        data.Z_ww,
+    )
 
 
 _HEADER = """\
@@ -199,9 +248,14 @@ Neutrally buoyant: he measured B - W = {excess:g} N; the scenarios set each epis
 def remus100_toml() -> str:
     """The text of ``remus100.toml``."""
     data, vehicle = PRESTERO_2001, remus100()
-    header = _HEADER.format(length=vehicle.length_m, rho=data.water_density_kg_m3, x_cb=data.x_B_from_nose_m,
-                            nose_station=10.0 - 20.0 * vehicle.hull.x_m[0] / vehicle.length_m,
-                            cdc=data.crossflow_drag, excess=data.buoyancy_N - data.weight_N)
+    header = _HEADER.format(
+        length=vehicle.length_m,
+        rho=data.water_density_kg_m3,
+        x_cb=data.x_B_from_nose_m,
+        nose_station=10.0 - 20.0 * vehicle.hull.x_m[0] / vehicle.length_m,
+        cdc=data.crossflow_drag,
+        excess=data.buoyancy_N - data.weight_N,
+    )
     return vehicle_to_toml(vehicle, header)
 
 

@@ -122,14 +122,20 @@ def froude_scaled(vehicle: Vehicle, length_ratio: float, name: str | None = None
     ratio = _check_ratio(length_ratio)
     low, high = LENGTH_RANGE_M
     new_length = vehicle.length_m * ratio
-    check.require("length_ratio", length_ratio, low <= new_length <= high,
-                  f"a number giving a length in [{low}, {high}] m (LENGTH_RANGE_M): "
-                  f"{vehicle.name!r} is {vehicle.length_m!r} m long, so in "
-                  f"[{low / vehicle.length_m:.6g}, {high / vehicle.length_m:.6g}]; it gives {new_length!r} m")
+    check.require(
+        "length_ratio",
+        length_ratio,
+        low <= new_length <= high,
+        f"a number giving a length in [{low}, {high}] m (LENGTH_RANGE_M): "
+        f"{vehicle.name!r} is {vehicle.length_m!r} m long, so in "
+        f"[{low / vehicle.length_m:.6g}, {high / vehicle.length_m:.6g}]; it gives {new_length!r} m",
+    )
     length = froude_factor("length", ratio)
     force = froude_factor("force", ratio)
-    hull = HullOffsets(x_m=tuple(x * length for x in vehicle.hull.x_m),
-                       breadth_m=tuple(b * length for b in vehicle.hull.breadth_m))
+    hull = HullOffsets(
+        x_m=tuple(x * length for x in vehicle.hull.x_m),
+        breadth_m=tuple(b * length for b in vehicle.hull.breadth_m),
+    )
     note = f"Froude-scaled by length ratio {ratio!r} from {vehicle.name!r} (subenv.vehicles.froude_scaled)."
     # dataclasses.replace runs every admissibility check again (ranges, the mass matrix).
     return dataclasses.replace(
@@ -147,4 +153,3 @@ def froude_scaled(vehicle: Vehicle, length_ratio: float, name: str | None = None
         z_B_m=vehicle.z_B_m * length,
         hull=hull,
     )
-

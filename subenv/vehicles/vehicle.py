@@ -74,12 +74,17 @@ class PlaneCoefficients:
         bow = [check.number(f"planes.{name}", getattr(self, name)) for name in ("Z_delta_b", "M_delta_b")]
         if (bow[0] == 0) != (bow[1] == 0):  # bow planes with effect, or none at all
             name, value = ("Z_delta_b", bow[0]) if bow[0] == 0 else ("M_delta_b", bow[1])
-            check.require(f"planes.{name}", value, False,
-                          "a non-zero number (a plane with effect), or 0 for both Z_delta_b and M_delta_b "
-                          "(no bow planes)")
+            check.require(
+                f"planes.{name}",
+                value,
+                False,
+                "a non-zero number (a plane with effect), or 0 for both Z_delta_b and M_delta_b "
+                "(no bow planes)",
+            )
         limit = self.limit_rad
-        check.require("planes.limit_rad", limit, check.is_number(limit) and 0 < limit <= math.pi / 2,
-                      "in (0, pi/2] rad")
+        check.require(
+            "planes.limit_rad", limit, check.is_number(limit) and 0 < limit <= math.pi / 2, "in (0, pi/2] rad"
+        )
 
     @property
     def has_bow_planes(self) -> bool:
@@ -112,8 +117,7 @@ class HullOffsets:
             raise ValueError("hull offsets: stations and breadths must be finite numbers")
         if np.any(np.diff(x) >= 0):
             raise ValueError(
-                "hull offsets: x_m must decrease strictly from nose to tail "
-                "(stations must increase strictly)"
+                "hull offsets: x_m must decrease strictly from nose to tail (stations must increase strictly)"
             )
         if np.any(b < 0):
             raise ValueError(f"hull offsets: breadth_m has a negative value {b.min()!r}; must be >= 0")
@@ -125,7 +129,9 @@ class HullOffsets:
     def area_m2(self) -> float:
         """Planform area int b(x) dx, exact for the piecewise-linear hull [m^2]."""
         x = np.asarray(self.x_m)
-        return float(-np.trapezoid(self.breadth_m, x)) + 0.0  # (+ 0.0: an all-zero hull has area 0.0, not -0.0)
+        return (
+            float(-np.trapezoid(self.breadth_m, x)) + 0.0
+        )  # (+ 0.0: an all-zero hull has area 0.0, not -0.0)
 
     @property
     def centroid_x_m(self) -> float:
@@ -287,8 +293,10 @@ class Vehicle:
         in ``[[kg, kg m], [kg m, kg m^2]]``. Positive definite for every vehicle (checked when made).
         """
         c, m = self.coefficients, self.mass_kg
-        return ((m - c.Z_wdot, -(c.Z_qdot + m * self.x_G_m)),
-                (-(c.M_wdot + m * self.x_G_m), self.inertia_y_kg_m2 - c.M_qdot))
+        return (
+            (m - c.Z_wdot, -(c.Z_qdot + m * self.x_G_m)),
+            (-(c.M_wdot + m * self.x_G_m), self.inertia_y_kg_m2 - c.M_qdot),
+        )
 
     @property
     def hull_area_m2(self) -> float:

@@ -20,19 +20,42 @@ from subenv_agents.evaluate import main as evaluate_main
 from subenv_agents.policy import RUN_ID_ATTRIBUTE, load_agent
 from subenv_agents.train import main as train_main
 
-_SMALL = ["-n", "512", "--eval-freq", "0", "--save-freq", "0", "-q", "--no-progress",
-          "-params", "n_envs:2", "n_steps:256", "batch_size:128", "n_epochs:1", "depth_integral:false"]
+_SMALL = [
+    "-n",
+    "512",
+    "--eval-freq",
+    "0",
+    "--save-freq",
+    "0",
+    "-q",
+    "--no-progress",
+    "-params",
+    "n_envs:2",
+    "n_steps:256",
+    "batch_size:128",
+    "n_epochs:1",
+    "depth_integral:false",
+]
 
 
 def test_subenv_train_then_agents_evaluate(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
     run = tmp_path / "run"
-    assert subenv_main(["train", "--algo", "ppo", "--env", "subenv/LowSpeed-v0", "--run-dir", str(run), *_SMALL]) == 0
+    assert (
+        subenv_main(["train", "--algo", "ppo", "--env", "subenv/LowSpeed-v0", "--run-dir", str(run), *_SMALL])
+        == 0
+    )
     assert (run / "model.zip").is_file() and (run / "vecnormalize.pkl").is_file()
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # the model and its statistics carry the run's id
-        assert vars(load_agent(run).model)[RUN_ID_ATTRIBUTE] == vars(pickle.loads((run / "vecnormalize.pkl").read_bytes()))[RUN_ID_ATTRIBUTE]
+        assert (
+            vars(load_agent(run).model)[RUN_ID_ATTRIBUTE]
+            == vars(pickle.loads((run / "vecnormalize.pkl").read_bytes()))[RUN_ID_ATTRIBUTE]
+        )
     out = tmp_path / "eval"
-    assert evaluate_main([f"mine={run}", "--suite", "tiny", "--episodes", "1", "--out", str(out), "--no-plots"]) == 0
+    assert (
+        evaluate_main([f"mine={run}", "--suite", "tiny", "--episodes", "1", "--out", str(out), "--no-plots"])
+        == 0
+    )
     printed = capsys.readouterr().out
     assert "| mine |" in printed and "| reversal_aware |" in printed  # the agent next to the baseline
     assert (out / "leaderboard.md").is_file() and (out / "results.csv").read_text().count("\n") == 1 + 2 * 2
@@ -60,6 +83,7 @@ def test_n_is_rounded_up_to_whole_rollouts_and_progress_shows_in_a_log(tmp_path,
 
 # --- broken folders and bad input: one-line errors naming the file (issue 18, finding 7) -----------
 
+
 def _copy_of_shipped(tmp_path: Path, name: str = "ppo") -> Path:
     folder = tmp_path / f"copy_of_{name}"
     shutil.copytree(shipped_models()[name], folder)
@@ -72,18 +96,31 @@ def _truncate(path: Path, fraction: float) -> None:
 
 
 _BREAKAGES = {
-    "sac model in a ppo folder": (lambda f: shutil.copy(shipped_models()["sac"] / "model.zip", f / "model.zip"),
-                                  r"model\.zip' cannot be loaded \(TypeError: .*\): must be a complete PPO model"),
-    "model cut at 30%": (lambda f: _truncate(f / "model.zip", 0.3), r"model\.zip' cannot be loaded \(AssertionError"),
+    "sac model in a ppo folder": (
+        lambda f: shutil.copy(shipped_models()["sac"] / "model.zip", f / "model.zip"),
+        r"model\.zip' cannot be loaded \(TypeError: .*\): must be a complete PPO model",
+    ),
+    "model cut at 30%": (
+        lambda f: _truncate(f / "model.zip", 0.3),
+        r"model\.zip' cannot be loaded \(AssertionError",
+    ),
     "model cut at 90%": (lambda f: _truncate(f / "model.zip", 0.9), r"model\.zip' cannot be loaded"),
-    "config not YAML": (lambda f: (f / "config.yml").write_text("algo: ppo\nenv_id: [\n"),
-                        r"config\.yml' is not valid YAML: .* at line 3, column 1"),
-    "config in latin-1": (lambda f: (f / "config.yml").write_bytes(b"algo: ppo  # \xe9\n"),
-                          r"config\.yml' is not UTF-8 text \(byte 0xe9"),
-    "statistics cut": (lambda f: _truncate(f / "vecnormalize.pkl", 0.5),
-                       r"vecnormalize\.pkl' cannot be read \(UnpicklingError"),
-    "statistics of another model": (lambda f: shutil.copy(shipped_models()["sac"] / "vecnormalize.pkl", f / "vecnormalize.pkl"),
-                                    r"vecnormalize\.pkl' holds the statistics of run [0-9a-f]+: must be those of the run"),
+    "config not YAML": (
+        lambda f: (f / "config.yml").write_text("algo: ppo\nenv_id: [\n"),
+        r"config\.yml' is not valid YAML: .* at line 3, column 1",
+    ),
+    "config in latin-1": (
+        lambda f: (f / "config.yml").write_bytes(b"algo: ppo  # \xe9\n"),
+        r"config\.yml' is not UTF-8 text \(byte 0xe9",
+    ),
+    "statistics cut": (
+        lambda f: _truncate(f / "vecnormalize.pkl", 0.5),
+        r"vecnormalize\.pkl' cannot be read \(UnpicklingError",
+    ),
+    "statistics of another model": (
+        lambda f: shutil.copy(shipped_models()["sac"] / "vecnormalize.pkl", f / "vecnormalize.pkl"),
+        r"vecnormalize\.pkl' holds the statistics of run [0-9a-f]+: must be those of the run",
+    ),
 }
 
 
@@ -91,11 +128,15 @@ _BREAKAGES = {
 def test_a_broken_model_folder_is_named_in_one_line(tmp_path, breakage) -> None:  # type: ignore[no-untyped-def]
     folder = _copy_of_shipped(tmp_path)
     sac = shipped_models()["sac"]
-    assert np.shape(load_agent(sac).obs_mean) == np.shape(load_agent(folder).obs_mean)  # the same shape: not enough
+    assert np.shape(load_agent(sac).obs_mean) == np.shape(
+        load_agent(folder).obs_mean
+    )  # the same shape: not enough
     damage, message = _BREAKAGES[breakage]
     damage(folder)
     with pytest.raises(SystemExit) as exc:
-        evaluate_main([str(folder), "--suite", "tiny", "--episodes", "1", "--out", str(tmp_path / "e"), "--no-plots"])
+        evaluate_main(
+            [str(folder), "--suite", "tiny", "--episodes", "1", "--out", str(tmp_path / "e"), "--no-plots"]
+        )
     text = str(exc.value)
     assert re.search(r"subenv_agents\.evaluate: '" + re.escape(str(folder)) + "/" + message, text), text
     assert "\n" not in text
@@ -128,8 +169,14 @@ def test_shipped_models_and_statistics_carry_one_run_id(name) -> None:  # type: 
     [
         (["-conf", "BAD_YAML"], r"'.*bad\.yml' is not valid YAML: .* at line 2, column 1"),
         (["-params", "n_steps:["], r"--hyperparams 'n_steps:\[' is invalid: the value must be YAML \(.*\)"),
-        (["-params", "n_envs:2", "n_steps:-5"], r"PPO refused the hyperparameters \{.*'n_steps': -5.*\}: .*n_steps=-5"),
-        (["--env", "CartPole-v1"], r"env_id='CartPole-v1' is not registered by subenv: must be one of \['subenv/"),
+        (
+            ["-params", "n_envs:2", "n_steps:-5"],
+            r"PPO refused the hyperparameters \{.*'n_steps': -5.*\}: .*n_steps=-5",
+        ),
+        (
+            ["--env", "CartPole-v1"],
+            r"env_id='CartPole-v1' is not registered by subenv: must be one of \['subenv/",
+        ),
     ],
 )
 def test_train_refuses_bad_input_in_one_line_and_leaves_no_folder(tmp_path, args, message) -> None:  # type: ignore[no-untyped-def]
@@ -138,8 +185,23 @@ def test_train_refuses_bad_input_in_one_line_and_leaves_no_folder(tmp_path, args
     logs = tmp_path / "logs"
     args = [str(bad) if a == "BAD_YAML" else a for a in args]
     with pytest.raises(SystemExit) as exc:
-        train_main(["--algo", "ppo", "-f", str(logs), "-n", "512", "--eval-freq", "0", "--save-freq", "0", "-q",
-                    "--no-progress", *args])
+        train_main(
+            [
+                "--algo",
+                "ppo",
+                "-f",
+                str(logs),
+                "-n",
+                "512",
+                "--eval-freq",
+                "0",
+                "--save-freq",
+                "0",
+                "-q",
+                "--no-progress",
+                *args,
+            ]
+        )
     text = str(exc.value)
     assert re.search(r"^subenv_agents\.train: " + message, text), text
     assert "\n" not in text

@@ -33,8 +33,8 @@ def test_shipped_file_loads_for_every_registered_id(algo: str) -> None:
 @pytest.mark.parametrize(
     ("override", "named"),
     [
-        ({"n_step": 128}, "n_step"),                                  # a typo of an algorithm argument
-        ({"env_kwargs": {"controll": "dual"}}, "controll"),            # an unknown environment argument
+        ({"n_step": 128}, "n_step"),  # a typo of an algorithm argument
+        ({"env_kwargs": {"controll": "dual"}}, "controll"),  # an unknown environment argument
         ({"normalize": {"norm_obss": True}}, "norm_obss"),
         ({"curriculum": {"treshold": 0.5}}, "treshold"),
         ({"depth_integral": {"time_constant": 5.0}}, "time_constant"),
@@ -107,8 +107,9 @@ def test_config_round_trips_through_its_yaml_entry(tmp_path) -> None:
 
 
 def test_overrides_are_parsed_as_yaml() -> None:
-    assert parse_overrides(["learning_rate:1.0e-4", "policy_kwargs:{net_arch: [32, 32]}", "curriculum:false"]) == {
-        "learning_rate": 1e-4, "policy_kwargs": {"net_arch": [32, 32]}, "curriculum": False}
+    assert parse_overrides(
+        ["learning_rate:1.0e-4", "policy_kwargs:{net_arch: [32, 32]}", "curriculum:false"]
+    ) == {"learning_rate": 1e-4, "policy_kwargs": {"net_arch": [32, 32]}, "curriculum": False}
     with pytest.raises(ValueError, match="key:value"):
         parse_overrides(["learning_rate"])
 

@@ -65,7 +65,9 @@ def test_stages_are_placed_relative_to_the_critical_speed(suboff) -> None:
     # The loadings grow to the configured maxima; the base's randomisation applies throughout.
     assert scenarios[0].x_GB_m == (0.0, 0.0) and scenarios[-2].x_GB_m == (0.0, config.max_x_GB_m)
     assert scenarios[-2].excess_buoyancy_fraction[1] == config.max_excess_buoyancy_fraction
-    assert all(s.sensor_noise == base.sensor_noise and s.z_GB_scale == base.z_GB_scale for s in scenarios[:-1])
+    assert all(
+        s.sensor_noise == base.sensor_noise and s.z_GB_scale == base.z_GB_scale for s in scenarios[:-1]
+    )
 
 
 def test_stage_episodes_fly_at_the_stage_speeds(suboff) -> None:
@@ -95,8 +97,13 @@ class _FakeVecEnv:
         return [None] * self.num_envs
 
 
-def _run(callback: CurriculumCallback, env: _FakeVecEnv, episodes: list[tuple[int, bool]], length: int = 240,
-         truncated: bool = True) -> None:
+def _run(
+    callback: CurriculumCallback,
+    env: _FakeVecEnv,
+    episodes: list[tuple[int, bool]],
+    length: int = 240,
+    truncated: bool = True,
+) -> None:
     """Feed ``episodes`` (env index, success) one step-stream at a time: ``length`` steps of 0.5 s each."""
     from stable_baselines3.common.logger import Logger
 

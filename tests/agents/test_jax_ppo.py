@@ -27,8 +27,17 @@ from subenv_agents.jax_ppo import (
 )
 from subenv_agents.records import REVERSAL_SCENARIOS, evaluation_record
 
-TINY = PPOConfig(env_id="subenv/Nominal-v0", total_timesteps=2 * 32 * 16, num_envs=32, num_steps=16,
-                 num_minibatches=4, update_epochs=2, hidden=(16, 16), episodes=8, env_kwargs={"control": "independent"})
+TINY = PPOConfig(
+    env_id="subenv/Nominal-v0",
+    total_timesteps=2 * 32 * 16,
+    num_envs=32,
+    num_steps=16,
+    num_minibatches=4,
+    update_epochs=2,
+    hidden=(16, 16),
+    episodes=8,
+    env_kwargs={"control": "independent"},
+)
 
 
 @pytest.fixture(scope="module")
@@ -47,8 +56,10 @@ def test_training_runs_as_one_program_and_reports_every_update(trained):
     leaves = jax.tree_util.tree_leaves(state.network)
     assert all(np.all(np.isfinite(np.asarray(leaf))) for leaf in leaves)
     first = jax_ppo.init_network(jax.random.split(jax.random.key(0), 3)[1], 8, 2, TINY.hidden)
-    assert any(not np.array_equal(np.asarray(a), np.asarray(b))  # (the updates changed the network)
-               for a, b in zip(jax.tree_util.tree_leaves(first), leaves))
+    assert any(
+        not np.array_equal(np.asarray(a), np.asarray(b))  # (the updates changed the network)
+        for a, b in zip(jax.tree_util.tree_leaves(first), leaves)
+    )
     # The observation statistics are those of everything observed: the resets, then every step.
     assert float(state.obs_stats.count) == pytest.approx(32 * (1 + 2 * 16), rel=1e-6)
     assert env.num_actions == 2
@@ -86,17 +97,20 @@ def test_save_never_replaces_what_it_did_not_write(trained, tmp_path):
         load(tmp_path / "taken")
 
 
-@pytest.mark.parametrize("change, match", [
-    ({"num_envs": 0}, "num_envs"),
-    ({"gamma": 1.5}, "gamma"),
-    ({"num_minibatches": 7}, "num_minibatches"),
-    ({"total_timesteps": 10}, "total_timesteps"),
-    ({"hidden": ()}, "hidden"),
-    ({"lr": -1.0}, "lr"),
-    ({"env_id": "CartPole-v1"}, "env_id"),
-    ({"env_kwargs": {"control": "sideways"}}, "control"),
-    ({"env_kwargs": {"colour": "red"}}, "env_kwargs"),
-])
+@pytest.mark.parametrize(
+    "change, match",
+    [
+        ({"num_envs": 0}, "num_envs"),
+        ({"gamma": 1.5}, "gamma"),
+        ({"num_minibatches": 7}, "num_minibatches"),
+        ({"total_timesteps": 10}, "total_timesteps"),
+        ({"hidden": ()}, "hidden"),
+        ({"lr": -1.0}, "lr"),
+        ({"env_id": "CartPole-v1"}, "env_id"),
+        ({"env_kwargs": {"control": "sideways"}}, "control"),
+        ({"env_kwargs": {"colour": "red"}}, "env_kwargs"),
+    ],
+)
 def test_bad_settings_are_refused_by_name(change, match):
     with pytest.raises(ValueError, match=match):
         PPOConfig(**{**TINY.__dict__, **change})
@@ -126,8 +140,14 @@ def test_the_shipped_models_card_is_its_record_and_its_numbers_reproduce():
     card = (folder / "MODEL_CARD.md").read_text()
     assert record["env_steps"] > 0 and record["wall_time_s"] > 0 and f"`{record['command']}`" in card
     assert f"**{'met' if stored['target_met'] else 'not met'}**" in card and stored["target"] in card
-    again = evaluation_record(evaluate([make_controller("ppo_jax")], list(REVERSAL_SCENARIOS),
-                                       episodes=stored["episodes"], progress=False))
+    again = evaluation_record(
+        evaluate(
+            [make_controller("ppo_jax")],
+            list(REVERSAL_SCENARIOS),
+            episodes=stored["episodes"],
+            progress=False,
+        )
+    )
     for scenario in REVERSAL_SCENARIOS:
         ours, theirs = again["ppo_jax"][scenario], stored["suite"]["ppo_jax"][scenario]
         assert ours["success_rate"] == theirs["success_rate"], scenario

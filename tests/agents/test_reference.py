@@ -21,12 +21,22 @@ from subenv_agents.controller import AgentController
 from subenv_agents.policy import load_agent
 from subenv_agents.reference import Plan, run_reference
 
-_SMALL = {"n_envs": 2, "n_steps": 128, "batch_size": 128, "n_epochs": 1, "depth_integral": False,
-          "policy_kwargs": {"net_arch": [16, 16]}}
-PLAN = Plan(timesteps={"ppo": 256}, seeds=2, episodes=2, curve_points=2, curve_episodes=1, reps=200, overrides=_SMALL)
+_SMALL = {
+    "n_envs": 2,
+    "n_steps": 128,
+    "batch_size": 128,
+    "n_epochs": 1,
+    "depth_integral": False,
+    "policy_kwargs": {"net_arch": [16, 16]},
+}
+PLAN = Plan(
+    timesteps={"ppo": 256}, seeds=2, episodes=2, curve_points=2, curve_episodes=1, reps=200, overrides=_SMALL
+)
 
 
-def test_a_tiny_reference_run_gives_rliable_estimates_of_what_it_evaluated_and_resumes(local_ray, tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_a_tiny_reference_run_gives_rliable_estimates_of_what_it_evaluated_and_resumes(
+    local_ray, tmp_path
+) -> None:  # type: ignore[no-untyped-def]
     out = tmp_path / "reference"
     summary = run_reference(out, PLAN, progress=False, baselines=["thesis"])
     scenarios = list(get_suite(DEFAULT_SUITE).scenarios)
@@ -34,8 +44,13 @@ def test_a_tiny_reference_run_gives_rliable_estimates_of_what_it_evaluated_and_r
 
     # A trial's scores are its final policy's on the default suite's episodes: evaluated again here.
     trial = json.loads((out / "trials" / "ppo-seed1" / "evaluation.json").read_text())
-    again = evaluate([AgentController(load_agent(out / "trials" / "ppo-seed1"), name="again")], DEFAULT_SUITE, 2,
-                     progress=False, keep_trajectories=0)
+    again = evaluate(
+        [AgentController(load_agent(out / "trials" / "ppo-seed1"), name="again")],
+        DEFAULT_SUITE,
+        2,
+        progress=False,
+        keep_trajectories=0,
+    )
     for s in scenarios:
         rows = [r for r in again if r.scenario == s and r.winnable is not False]
         assert trial["scenarios"][s]["winnable"] == len(rows)
@@ -45,8 +60,21 @@ def test_a_tiny_reference_run_gives_rliable_estimates_of_what_it_evaluated_and_r
     with open(out / "scores.csv", newline="") as f:
         rows = list(csv.DictReader(f))
     assert len(rows) == 3 * len(scenarios)
-    ppo = np.array([[float(next(r["score"] for r in rows if r["name"] == "PPO" and r["seed"] == str(k)
-                                and r["scenario"] == s)) for s in scenarios] for k in range(2)])
+    ppo = np.array(
+        [
+            [
+                float(
+                    next(
+                        r["score"]
+                        for r in rows
+                        if r["name"] == "PPO" and r["seed"] == str(k) and r["scenario"] == s
+                    )
+                )
+                for s in scenarios
+            ]
+            for k in range(2)
+        ]
+    )
     assert ppo[1].tolist() == [trial["scenarios"][s]["score"] for s in scenarios]
     aggregate = summary["aggregate"]["PPO"]
     assert math.isclose(aggregate["iqm"], metrics.aggregate_iqm(ppo))
@@ -56,7 +84,10 @@ def test_a_tiny_reference_run_gives_rliable_estimates_of_what_it_evaluated_and_r
         point, low, high = summary["per_scenario"][s]["PPO"]
         assert math.isclose(point, ppo[:, j].mean()) and low <= point <= high
     curve = summary["learning_curves"]["PPO"]
-    history = [json.loads((out / "trials" / f"ppo-seed{k}" / "selection.json").read_text())["history"] for k in range(2)]
+    history = [
+        json.loads((out / "trials" / f"ppo-seed{k}" / "selection.json").read_text())["history"]
+        for k in range(2)
+    ]
     assert curve["timesteps"] == [h["timestep"] for h in history[0]]
     assert np.allclose(curve["mean"], np.mean([[h["success_rate"] for h in hs] for hs in history], axis=0))
     assert "| **PPO** | 2 |" in (out / "reference.md").read_text()
@@ -72,16 +103,25 @@ def test_a_tiny_reference_run_gives_rliable_estimates_of_what_it_evaluated_and_r
     (out / "trials" / "ppo-seed0" / "evaluation.json").write_text(json.dumps(stale))
     run_reference(out, PLAN, progress=False, baselines=["thesis"])
     assert (out / "trials" / "ppo-seed0" / "model.zip").stat().st_mtime_ns == kept
-    assert json.loads((out / "trials" / "ppo-seed0" / "evaluation.json").read_text())["scenarios"] == first["scenarios"]
-    assert json.loads((out / "trials" / "ppo-seed1" / "evaluation.json").read_text())["scenarios"] == trial["scenarios"]
+    assert (
+        json.loads((out / "trials" / "ppo-seed0" / "evaluation.json").read_text())["scenarios"]
+        == first["scenarios"]
+    )
+    assert (
+        json.loads((out / "trials" / "ppo-seed1" / "evaluation.json").read_text())["scenarios"]
+        == trial["scenarios"]
+    )
 
 
-@pytest.mark.parametrize(("kwargs", "match"), [
-    ({"timesteps": {"a2c": 100}}, r"timesteps\['a2c'\] is invalid: the algorithm must be one of"),
-    ({"timesteps": {"ppo": 0}}, r"timesteps\['ppo'\]=0 is invalid: must be an integer >= 1"),
-    ({"seeds": 0}, r"seeds=0 is invalid: must be an integer >= 1"),
-    ({"reps": 10}, r"reps=10 is invalid: must be an integer >= 100"),
-])
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"timesteps": {"a2c": 100}}, r"timesteps\['a2c'\] is invalid: the algorithm must be one of"),
+        ({"timesteps": {"ppo": 0}}, r"timesteps\['ppo'\]=0 is invalid: must be an integer >= 1"),
+        ({"seeds": 0}, r"seeds=0 is invalid: must be an integer >= 1"),
+        ({"reps": 10}, r"reps=10 is invalid: must be an integer >= 100"),
+    ],
+)
 def test_a_bad_plan_is_refused(kwargs, match) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(ValueError, match=match):
         Plan(**kwargs)
@@ -89,7 +129,9 @@ def test_a_bad_plan_is_refused(kwargs, match) -> None:  # type: ignore[no-untype
 
 def test_a_bad_hyperparameter_is_refused_before_anything_runs(tmp_path) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(ValueError, match="learning_rat"):
-        run_reference(tmp_path / "bad", Plan(timesteps={"ppo": 256}, overrides={"learning_rat": 1e-3}), progress=False)
+        run_reference(
+            tmp_path / "bad", Plan(timesteps={"ppo": 256}, overrides={"learning_rat": 1e-3}), progress=False
+        )
     assert not (tmp_path / "bad").exists()
 
 
@@ -99,6 +141,8 @@ def test_without_an_extra_the_command_says_which_in_one_line_and_makes_nothing(m
 
     real = subenv.extras.find_spec
     monkeypatch.setattr(subenv.extras, "find_spec", lambda name: None if name == "rliable" else real(name))
-    with pytest.raises(SystemExit, match=r"^subenv_agents.reference: the 'stats' extra is needed .*subenv\[stats\]"):
+    with pytest.raises(
+        SystemExit, match=r"^subenv_agents.reference: the 'stats' extra is needed .*subenv\[stats\]"
+    ):
         main(["--out", str(tmp_path / "out")])
     assert not (tmp_path / "out").exists()

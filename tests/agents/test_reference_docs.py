@@ -32,8 +32,15 @@ def test_the_reference_statistics_are_those_of_the_scores() -> None:
         mine = [r for r in rows if r["name"] == name]
         seeds = list(dict.fromkeys(r["seed"] for r in mine))
         assert len(seeds) == runs and len(mine) == runs * len(scenarios)
-        score = np.array([[float(next(r["score"] for r in mine if r["seed"] == k and r["scenario"] == s))
-                           for s in scenarios] for k in seeds])
+        score = np.array(
+            [
+                [
+                    float(next(r["score"] for r in mine if r["seed"] == k and r["scenario"] == s))
+                    for s in scenarios
+                ]
+                for k in seeds
+            ]
+        )
         aggregate = summary["aggregate"][name]
         assert math.isclose(aggregate["iqm"], metrics.aggregate_iqm(score), abs_tol=1e-12)
         assert math.isclose(aggregate["mean"], float(score.mean()), abs_tol=1e-12)

@@ -40,8 +40,13 @@ ALGOS = {"ppo": PPO, "sac": SAC}
 # Minimal hyperparameters in rl_zoo3's layout (top-level key: the env id), small enough for seconds.
 HYPERPARAMS = {
     "ppo": {"n_timesteps": 2048, "policy": "MlpPolicy", "n_steps": 512, "batch_size": 64, "n_epochs": 2},
-    "sac": {"n_timesteps": 1500, "policy": "MlpPolicy", "learning_starts": 500, "batch_size": 64,
-            "policy_kwargs": "dict(net_arch=[64, 64])"},
+    "sac": {
+        "n_timesteps": 1500,
+        "policy": "MlpPolicy",
+        "learning_starts": 500,
+        "batch_size": 64,
+        "policy_kwargs": "dict(net_arch=[64, 64])",
+    },
 }
 
 
@@ -50,15 +55,35 @@ def _run_zoo(module: str, args: list[str], cwd: Path) -> subprocess.CompletedPro
     # The subprocess imports subenv from the same place as this process, whatever its working directory.
     repo_root = str(Path(subenv.__file__).resolve().parents[1])
     env["PYTHONPATH"] = os.pathsep.join(p for p in (repo_root, env.get("PYTHONPATH")) if p)
-    proc = subprocess.run([sys.executable, "-m", module, *args], cwd=cwd, env=env,
-                          capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 0, f"{module} exited {proc.returncode}\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
+    proc = subprocess.run(
+        [sys.executable, "-m", module, *args], cwd=cwd, env=env, capture_output=True, text=True, timeout=300
+    )
+    assert proc.returncode == 0, (
+        f"{module} exited {proc.returncode}\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
+    )
     return proc
 
 
 def _train(algo: str, log_folder: Path, cwd: Path, extra: list[str]) -> subprocess.CompletedProcess[str]:
-    return _run_zoo("rl_zoo3.train", ["--algo", algo, "--env", ENV_ID, "--gym-packages", "subenv",
-                                      "-f", str(log_folder), "--seed", "0", "--num-threads", "1", *extra], cwd)
+    return _run_zoo(
+        "rl_zoo3.train",
+        [
+            "--algo",
+            algo,
+            "--env",
+            ENV_ID,
+            "--gym-packages",
+            "subenv",
+            "-f",
+            str(log_folder),
+            "--seed",
+            "0",
+            "--num-threads",
+            "1",
+            *extra,
+        ],
+        cwd,
+    )
 
 
 def _check_model(algo: str, log_folder: Path) -> None:
@@ -118,9 +143,28 @@ def test_rl_zoo_enjoy_loads_the_trained_agent(tmp_path, conf_file_run):
     # rl_zoo3 2.9.2's enjoy imports `requests` (rl_zoo3/load_from_hub.py) without declaring it.
     pytest.importorskip("requests", reason="rl_zoo3.enjoy imports requests, which rl_zoo3 does not install")
     logs, _ = conf_file_run("ppo")  # enjoy writes nothing into the log folder (no --reward-log)
-    proc = _run_zoo("rl_zoo3.enjoy", ["--algo", "ppo", "--env", ENV_ID, "--gym-packages", "subenv",
-                                      "-f", str(logs), "--exp-id", "0", "-n", str(gym.spec(ENV_ID).max_episode_steps + 100), "--no-render",
-                                      "--deterministic", "--num-threads", "1"], tmp_path)
+    proc = _run_zoo(
+        "rl_zoo3.enjoy",
+        [
+            "--algo",
+            "ppo",
+            "--env",
+            ENV_ID,
+            "--gym-packages",
+            "subenv",
+            "-f",
+            str(logs),
+            "--exp-id",
+            "0",
+            "-n",
+            str(gym.spec(ENV_ID).max_episode_steps + 100),
+            "--no-render",
+            "--deterministic",
+            "--num-threads",
+            "1",
+        ],
+        tmp_path,
+    )
     assert f"Loading {logs / 'ppo' / f'{ENV_NAME}_1' / f'{ENV_NAME}.zip'}" in proc.stdout
     # At least one whole episode (truncated at the id's max_episode_steps at the latest) was played.
     assert "Episode Length" in proc.stdout, proc.stdout[-2000:]

@@ -20,8 +20,15 @@ from subenv_agents.selection import (
 )
 from subenv_agents.train import train
 
-_SMALL = {"n_timesteps": 2048, "n_envs": 4, "n_steps": 128, "batch_size": 128, "n_epochs": 2,
-          "policy_kwargs": {"net_arch": [8]}, "depth_integral": {"time_constant_s": 50.0}}
+_SMALL = {
+    "n_timesteps": 2048,
+    "n_envs": 4,
+    "n_steps": 128,
+    "batch_size": 128,
+    "n_epochs": 2,
+    "policy_kwargs": {"net_arch": [8]},
+    "depth_integral": {"time_constant_s": 50.0},
+}
 
 
 def test_validation_seeds_are_not_the_evaluation_seeds() -> None:
@@ -31,8 +38,16 @@ def test_validation_seeds_are_not_the_evaluation_seeds() -> None:
 
 def test_selected_policy_is_the_best_validated_one_and_reloads_to_its_score(tmp_path) -> None:  # type: ignore[no-untyped-def]
     config = load_config("ppo", "subenv/LowSpeed-v0", overrides=_SMALL)
-    run = train(config, seed=5, run_dir=tmp_path / "run", eval_freq=0, save_freq=0, verbose=0,
-                select_freq=512, select_episodes=2)
+    run = train(
+        config,
+        seed=5,
+        run_dir=tmp_path / "run",
+        eval_freq=0,
+        save_freq=0,
+        verbose=0,
+        select_freq=512,
+        select_episodes=2,
+    )
     record = json.loads((run.run_dir / "selection.json").read_text())
     history = record["history"]
     # Every 512 steps (one check per 4-env step that crosses a multiple), and the final policy.
@@ -49,8 +64,17 @@ def test_selected_policy_is_the_best_validated_one_and_reloads_to_its_score(tmp_
     assert again["plane_rms_rad"] == pytest.approx(best["plane_rms_rad"], rel=1e-12)
 
     # A continued run validates the policy it starts from, then every 512 steps from there on.
-    more = train(load_config("ppo", "subenv/LowSpeed-v0", overrides={**_SMALL, "n_timesteps": 1024}), seed=6, run_dir=tmp_path / "more", trained_agent=run.run_dir, eval_freq=0, save_freq=0, verbose=0,
-                 select_freq=512, select_episodes=2)
+    more = train(
+        load_config("ppo", "subenv/LowSpeed-v0", overrides={**_SMALL, "n_timesteps": 1024}),
+        seed=6,
+        run_dir=tmp_path / "more",
+        trained_agent=run.run_dir,
+        eval_freq=0,
+        save_freq=0,
+        verbose=0,
+        select_freq=512,
+        select_episodes=2,
+    )
     steps = [h["timestep"] for h in json.loads((more.run_dir / "selection.json").read_text())["history"]]
     assert steps == [2048, 2560, 3072]
 

@@ -18,8 +18,9 @@ def test_penalty_is_weight_times_mean_absolute_command(reference_speed: float | 
     # SpeedTransient: the speed changes within episodes, and short (50-step) episodes reset on the way.
     kwargs = {"control": "independent", "max_episode_steps": 50}
     plain = make_sb3_vec_env("subenv/SpeedTransient-v0", n_envs=3, seed=7, **kwargs)
-    shaped = PlaneEffortL1VecEnv(make_sb3_vec_env("subenv/SpeedTransient-v0", n_envs=3, seed=7, **kwargs), 0.5,
-                                 reference_speed)
+    shaped = PlaneEffortL1VecEnv(
+        make_sb3_vec_env("subenv/SpeedTransient-v0", n_envs=3, seed=7, **kwargs), 0.5, reference_speed
+    )
     obs = plain.reset()
     np.testing.assert_array_equal(obs, shaped.reset())
     rng = np.random.default_rng(0)
@@ -50,7 +51,10 @@ def test_band_bonus_is_added_exactly_where_the_true_depth_error_is_inside() -> N
     kwargs = {"control": "independent", "max_episode_steps": 40}
     plain = make_sb3_vec_env("subenv/DivePlane-v0", n_envs=4, seed=3, info_keys=(DEPTH_ERROR_KEY,), **kwargs)
     shaped = DepthBandBonusVecEnv(
-        make_sb3_vec_env("subenv/DivePlane-v0", n_envs=4, seed=3, info_keys=(DEPTH_ERROR_KEY,), **kwargs), 0.3, 0.5)
+        make_sb3_vec_env("subenv/DivePlane-v0", n_envs=4, seed=3, info_keys=(DEPTH_ERROR_KEY,), **kwargs),
+        0.3,
+        0.5,
+    )
     np.testing.assert_array_equal(plain.reset(), shaped.reset())
     rng = np.random.default_rng(1)
     inside_steps = outside_steps = ends = 0
@@ -70,15 +74,23 @@ def test_band_bonus_is_added_exactly_where_the_true_depth_error_is_inside() -> N
 
 
 def test_band_bonus_needs_the_depth_error_in_info() -> None:
-    shaped = DepthBandBonusVecEnv(make_sb3_vec_env("subenv/LowSpeed-v0", n_envs=2, seed=0, info_keys=()), 0.3, 0.5)
+    shaped = DepthBandBonusVecEnv(
+        make_sb3_vec_env("subenv/LowSpeed-v0", n_envs=2, seed=0, info_keys=()), 0.3, 0.5
+    )
     shaped.reset()
     with pytest.raises(ValueError, match=DEPTH_ERROR_KEY):
         shaped.step(np.zeros((2, 1), dtype=np.float32))
 
 
-@pytest.mark.parametrize(("half_width", "bonus", "named"), [
-    (0.0, 0.5, "half_width_m"), (float("inf"), 0.5, "half_width_m"), (0.3, -1.0, "bonus"), (0.3, float("nan"), "bonus"),
-])
+@pytest.mark.parametrize(
+    ("half_width", "bonus", "named"),
+    [
+        (0.0, 0.5, "half_width_m"),
+        (float("inf"), 0.5, "half_width_m"),
+        (0.3, -1.0, "bonus"),
+        (0.3, float("nan"), "bonus"),
+    ],
+)
 def test_bad_band_is_refused(half_width: float, bonus: float, named: str) -> None:
     with pytest.raises(ValueError, match=f"depth_band_bonus {named}="):
         DepthBandBonusVecEnv(make_sb3_vec_env("subenv/LowSpeed-v0", n_envs=1), half_width, bonus)

@@ -32,10 +32,22 @@ from subenv_agents.train import main, train
 # Small enough for the default suite: a few thousand steps, small networks.
 _SMALL = {
     "ppo": {"n_timesteps": 2048, "n_envs": 4, "n_steps": 256, "batch_size": 256, "n_epochs": 2},
-    "sac": {"n_timesteps": 1500, "n_envs": 2, "learning_starts": 500, "buffer_size": 5000, "gradient_steps": 1,
-            "train_freq": 1},
-    "td3": {"n_timesteps": 1500, "n_envs": 2, "learning_starts": 500, "buffer_size": 5000, "gradient_steps": 1,
-            "train_freq": 1},
+    "sac": {
+        "n_timesteps": 1500,
+        "n_envs": 2,
+        "learning_starts": 500,
+        "buffer_size": 5000,
+        "gradient_steps": 1,
+        "train_freq": 1,
+    },
+    "td3": {
+        "n_timesteps": 1500,
+        "n_envs": 2,
+        "learning_starts": 500,
+        "buffer_size": 5000,
+        "gradient_steps": 1,
+        "train_freq": 1,
+    },
 }
 _ENV_ID = "subenv/LowSpeed-v0"
 
@@ -56,18 +68,32 @@ def trained(request, tmp_path_factory):  # type: ignore[no-untyped-def]
     """Two runs of the same algorithm and seed, and one with another seed."""
     algo = request.param
     root = tmp_path_factory.mktemp(algo)
-    runs = [train(_config(algo), seed=seed, run_dir=root / f"run{k}", eval_freq=1000, eval_episodes=2,
-                  save_freq=1000, verbose=0) for k, seed in enumerate((3, 3, 4))]
+    runs = [
+        train(
+            _config(algo),
+            seed=seed,
+            run_dir=root / f"run{k}",
+            eval_freq=1000,
+            eval_episodes=2,
+            save_freq=1000,
+            verbose=0,
+        )
+        for k, seed in enumerate((3, 3, 4))
+    ]
     return algo, runs
 
 
 def _readme_run_folder() -> set[str]:
     """The names the README's run-folder list gives (``checkpoints/`` as ``checkpoints``)."""
     text = (Path(__file__).resolve().parents[2] / "README.md").read_text("utf-8")
-    block = text[text.index("- **A run folder**"):].split("```text\n", 1)[1].split("```", 1)[0]
+    block = text[text.index("- **A run folder**") :].split("```text\n", 1)[1].split("```", 1)[0]
     columns = [re.split(r" {2,}", line.strip())[0] for line in block.splitlines()]
-    names = {name.rstrip("/") for column in columns if column and not column.startswith("(")
-             for name in column.split(", ")}
+    names = {
+        name.rstrip("/")
+        for column in columns
+        if column and not column.startswith("(")
+        for name in column.split(", ")
+    }
     return names | {"tensorboard"}  # (named in progress.csv's line: made when TensorBoard is installed)
 
 
@@ -78,7 +104,9 @@ def test_run_folder_holds_what_the_readme_lists(trained) -> None:  # type: ignor
     documented = _readme_run_folder()
     # Everything a run with evaluations and checkpoints makes is listed; the listed ones it makes are there.
     assert names <= documented, names - documented
-    assert documented - {"curriculum.json", "selected", "selection.json", "tensorboard"} == names - {"tensorboard"}
+    assert documented - {"curriculum.json", "selected", "selection.json", "tensorboard"} == names - {
+        "tensorboard"
+    }
     assert any(p.name.startswith("rl_model_vecnormalize_") for p in (run.run_dir / "checkpoints").iterdir())
     record = json.loads((run.run_dir / "train.json").read_text())
     assert record["algo"] == algo and record["seed"] == 3 and record["timesteps"] == run.timesteps
@@ -136,21 +164,38 @@ def test_resume_continues_from_a_checkpoint(trained, tmp_path) -> None:  # type:
     checkpoint = sorted((runs[0].run_dir / "checkpoints").glob("rl_model_*_steps.zip"))[0]
     start = int(checkpoint.name.split("_")[-2])
     config = _config(algo, learning_rate=1.25e-5)  # a new learning rate for the continuation
-    result = train(config, seed=3, run_dir=tmp_path / "resumed", trained_agent=checkpoint, eval_freq=0,
-                   save_freq=0, verbose=0)
+    result = train(
+        config,
+        seed=3,
+        run_dir=tmp_path / "resumed",
+        trained_agent=checkpoint,
+        eval_freq=0,
+        save_freq=0,
+        verbose=0,
+    )
     assert result.timesteps >= start + config.n_timesteps  # the step count goes on
     resumed = algorithm_class(algo).load(result.run_dir / "model.zip", device="cpu")
     assert resumed.learning_rate == 1.25e-5 and resumed.lr_schedule(0.5) == 1.25e-5
     with pytest.raises(ValueError, match="cannot change the network"):
-        train(_config(algo, policy_kwargs={"net_arch": [8, 8]}), seed=3, run_dir=tmp_path / "other_net",
-              trained_agent=checkpoint, eval_freq=0, save_freq=0, verbose=0)
+        train(
+            _config(algo, policy_kwargs={"net_arch": [8, 8]}),
+            seed=3,
+            run_dir=tmp_path / "other_net",
+            trained_agent=checkpoint,
+            eval_freq=0,
+            save_freq=0,
+            verbose=0,
+        )
     assert not (tmp_path / "other_net").exists()  # no half-made run folder left behind
     record = json.loads((result.run_dir / "train.json").read_text())
     assert record["trained_agent"] == str(checkpoint)
     # The run it continued is its lineage: a shipped model's training time counts both.
     parent = json.loads((runs[0].run_dir / "train.json").read_text())
     assert lineage(result.run_dir) == [parent]
-    assert total_training_time_s({**record, "continued_from": [parent]}) == record["wall_time_s"] + parent["wall_time_s"]
+    assert (
+        total_training_time_s({**record, "continued_from": [parent]})
+        == record["wall_time_s"] + parent["wall_time_s"]
+    )
     assert load_agent(result.run_dir).predict(_observations()).shape == (32, 2)
 
 
@@ -162,29 +207,49 @@ def test_a_model_path_names_its_config_folder_and_the_run_that_trained_it(tmp_pa
     (run / CHECKPOINT_DIR).mkdir()
     checkpoint = run / CHECKPOINT_DIR / "rl_model_1024_steps.zip"
     cases = {  # path: (the folder with its config.yml, the run that trained it)
-        run / MODEL_FILE: (run, run), run / "best_model.zip": (run, run), checkpoint: (run, run),
+        run / MODEL_FILE: (run, run),
+        run / "best_model.zip": (run, run),
+        checkpoint: (run, run),
         run / SELECTED_DIR / MODEL_FILE: (run / SELECTED_DIR, run),
     }
     for path, (config_folder, trained_by) in cases.items():
         assert (model_folder(path), training_run(path)) == (config_folder, trained_by), path
-    assert training_run(run) == training_run(run / SELECTED_DIR) == training_run(str(run / SELECTED_DIR)) == run
+    assert (
+        training_run(run) == training_run(run / SELECTED_DIR) == training_run(str(run / SELECTED_DIR)) == run
+    )
 
 
 def test_resume_takes_the_curriculum_stage_of_the_models_step(tmp_path) -> None:  # type: ignore[no-untyped-def]
     """A checkpoint or the selected policy resumes at the stage training was at when it was saved."""
     config = _config("ppo", n_timesteps=2048, curriculum=True)
-    first = train(config, seed=0, run_dir=tmp_path / "first", eval_freq=0, save_freq=256, select_freq=1024,
-                  select_episodes=1, verbose=0)
+    first = train(
+        config,
+        seed=0,
+        run_dir=tmp_path / "first",
+        eval_freq=0,
+        save_freq=256,
+        select_freq=1024,
+        select_episodes=1,
+        verbose=0,
+    )
     assert json.loads((first.run_dir / "curriculum.json").read_text())["start_stage"] == 0
     # As if the curriculum had advanced to stage 2 at step 1500 (too few steps here to earn it).
     write_state(first.run_dir, 2, [(1500, 2)], start_stage=0)
     checkpoint = first.run_dir / "checkpoints" / "rl_model_1024_steps.zip"
     selected = first.run_dir / "selected" / "model.zip"
     selected_step = algorithm_class("ppo").load(selected, device="cpu").num_timesteps
-    for k, (model, expected) in enumerate([(checkpoint, 0), (first.run_dir, 2),
-                                           (selected, 2 if selected_step >= 1500 else 0)]):
-        resumed = train(_config("ppo", n_timesteps=1024, curriculum=True), seed=1, run_dir=tmp_path / f"resumed{k}",
-                        trained_agent=model, eval_freq=0, save_freq=0, verbose=0)
+    for k, (model, expected) in enumerate(
+        [(checkpoint, 0), (first.run_dir, 2), (selected, 2 if selected_step >= 1500 else 0)]
+    ):
+        resumed = train(
+            _config("ppo", n_timesteps=1024, curriculum=True),
+            seed=1,
+            run_dir=tmp_path / f"resumed{k}",
+            trained_agent=model,
+            eval_freq=0,
+            save_freq=0,
+            verbose=0,
+        )
         state = json.loads((resumed.run_dir / "curriculum.json").read_text())
         assert state["start_stage"] == expected, model
 
@@ -193,13 +258,27 @@ def test_resume_with_the_depth_integral_observation(tmp_path) -> None:  # type: 
     """The training env appends the integral; the continued run sees the space the model was trained on."""
     config = _config("ppo", n_timesteps=512, depth_integral={"time_constant_s": 100.0})
     first = train(config, seed=0, run_dir=tmp_path / "first", eval_freq=0, save_freq=0, verbose=0)
-    second = train(config, seed=1, run_dir=tmp_path / "second", trained_agent=first.run_dir, eval_freq=0,
-                   save_freq=0, verbose=0)
+    second = train(
+        config,
+        seed=1,
+        run_dir=tmp_path / "second",
+        trained_agent=first.run_dir,
+        eval_freq=0,
+        save_freq=0,
+        verbose=0,
+    )
     assert second.timesteps >= first.timesteps + 512
     assert load_agent(second.run_dir).observation_space.shape == (9,)
     with pytest.raises(ValueError, match="trained on the observation space"):  # an 8-dimensional run cannot
-        train(_config("ppo", n_timesteps=512), seed=1, run_dir=tmp_path / "third", trained_agent=first.run_dir,
-              eval_freq=0, save_freq=0, verbose=0)
+        train(
+            _config("ppo", n_timesteps=512),
+            seed=1,
+            run_dir=tmp_path / "third",
+            trained_agent=first.run_dir,
+            eval_freq=0,
+            save_freq=0,
+            verbose=0,
+        )
 
 
 def test_model_for_another_observation_space_is_refused(trained) -> None:  # type: ignore[no-untyped-def]
@@ -214,9 +293,29 @@ def test_model_for_another_observation_space_is_refused(trained) -> None:  # typ
 
 
 def test_command_line_trains_and_rejects_bad_input(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
-    args = ["--algo", "ppo", "--env", _ENV_ID, "-n", "512", "--seed", "1", "--run-dir", str(tmp_path / "cli"),
-            "--eval-freq", "0", "--save-freq", "0", "-q", "--no-progress",
-            "-params", "n_envs:2", "n_steps:256", "batch_size:128", "n_epochs:1"]
+    args = [
+        "--algo",
+        "ppo",
+        "--env",
+        _ENV_ID,
+        "-n",
+        "512",
+        "--seed",
+        "1",
+        "--run-dir",
+        str(tmp_path / "cli"),
+        "--eval-freq",
+        "0",
+        "--save-freq",
+        "0",
+        "-q",
+        "--no-progress",
+        "-params",
+        "n_envs:2",
+        "n_steps:256",
+        "batch_size:128",
+        "n_epochs:1",
+    ]
     assert main(args) == 0
     assert "trained ppo on subenv/LowSpeed-v0" in capsys.readouterr().out
     assert load_agent(tmp_path / "cli").config.n_envs == 2
@@ -278,8 +377,10 @@ def test_training_stack_adds_the_band_bonus_on_the_true_depth_error() -> None:
     from subenv_agents.train import make_vec_env
 
     config = replace(_config("ppo", n_timesteps=1024), normalize=None)
-    banded_config = replace(_config("ppo", n_timesteps=1024, depth_band_bonus={"half_width_m": 1.0, "bonus": 0.25}),
-                            normalize=None)
+    banded_config = replace(
+        _config("ppo", n_timesteps=1024, depth_band_bonus={"half_width_m": 1.0, "bonus": 0.25}),
+        normalize=None,
+    )
     plain, banded = make_vec_env(config, 2, seed=4), make_vec_env(banded_config, 2, seed=4)
     np.testing.assert_array_equal(plain.reset(), banded.reset())
     rng = np.random.default_rng(0)

@@ -14,15 +14,22 @@ pytest.importorskip("optuna")
 
 from subenv_agents.tune import search
 
-_SMALL = {"n_envs": 2, "n_steps": 256, "batch_size": 128, "n_epochs": 1, "depth_integral": False,
-          "policy_kwargs": {"net_arch": [16, 16]}}
+_SMALL = {
+    "n_envs": 2,
+    "n_steps": 256,
+    "batch_size": 128,
+    "n_epochs": 1,
+    "depth_integral": False,
+    "policy_kwargs": {"net_arch": [16, 16]},
+}
 SPACE = {"learning_rate": ("log", 1e-4, 1e-3), "gamma": ("choice", [0.99, 0.999])}
 
 
 def test_a_tiny_search_trains_scores_and_keeps_every_trial(local_ray, tmp_path) -> None:  # type: ignore[no-untyped-def]
     out = tmp_path / "search"
-    best = search("ppo", "subenv/LowSpeed-v0", out, space=SPACE, samples=2, timesteps=512, episodes=2,
-                  overrides=_SMALL)
+    best = search(
+        "ppo", "subenv/LowSpeed-v0", out, space=SPACE, samples=2, timesteps=512, episodes=2, overrides=_SMALL
+    )
     record = json.loads((out / "best.json").read_text())
     trials = record["trials"]
     assert len(trials) == 2 and record["best"] == best
@@ -35,11 +42,17 @@ def test_a_tiny_search_trains_scores_and_keeps_every_trial(local_ray, tmp_path) 
         search("ppo", "subenv/LowSpeed-v0", out, space=SPACE, samples=1, timesteps=512, overrides=_SMALL)
 
 
-@pytest.mark.parametrize(("space", "match"), [
-    ({"learning_rate": ("log", 0.0, 1e-3)}, r"space\['learning_rate'\]=.* must be \('log', low, high\) with 0 < low"),
-    ({"gamma": ("pick", [0.9])}, r"must start with one of \['log', 'uniform', 'choice'\]"),
-    ({"gamma": ("choice", [])}, r"must be \('choice', \[values\]\)"),
-])
+@pytest.mark.parametrize(
+    ("space", "match"),
+    [
+        (
+            {"learning_rate": ("log", 0.0, 1e-3)},
+            r"space\['learning_rate'\]=.* must be \('log', low, high\) with 0 < low",
+        ),
+        ({"gamma": ("pick", [0.9])}, r"must start with one of \['log', 'uniform', 'choice'\]"),
+        ({"gamma": ("choice", [])}, r"must be \('choice', \[values\]\)"),
+    ],
+)
 def test_a_bad_space_is_refused_before_anything_runs(space, match, tmp_path) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(ValueError, match=match):
         search("ppo", "subenv/LowSpeed-v0", tmp_path / "bad", space=space, samples=1, timesteps=512)

@@ -79,7 +79,9 @@ def test_published_numbers_are_reproduced(suboff):
 def test_critical_froude_range_and_bad_input(suboff):
     fns = [critical_froude(suboff, a) for a in np.linspace(-1, 1, 21)]
     assert np.all(np.diff(fns) > 0)  # more bow planes (alpha up) raises the critical speed (Fig. 3-9)
-    with pytest.raises(ValueError, match=r"z_GB=-0\.01 m gives restoring moment .*; a critical speed exists only"):
+    with pytest.raises(
+        ValueError, match=r"z_GB=-0\.01 m gives restoring moment .*; a critical speed exists only"
+    ):
         critical_speed(suboff.variant(z_GB_m=-0.01))
     with pytest.raises(ValueError, match=r"alpha=1\.5 is invalid: must be a number in \[-1, 1\]"):
         critical_speed(suboff, 1.5)
@@ -125,7 +127,8 @@ def test_symmetric_pitchfork_closed_form_matches_the_exact_solver(thesis_boat):
     assert len(above) == 1 and above[0].stable
     assert [e.stable for e in below] == [True, False, True]
     assert not below[0].saturated and below[0].pitch_rad == pytest.approx(
-        -math.acos((0.999) ** 2), rel=1e-9)  # eq. 3.17: cos(theta) = (u/u_cr)^2
+        -math.acos((0.999) ** 2), rel=1e-9
+    )  # eq. 3.17: cos(theta) = (u/u_cr)^2
     with pytest.raises(ValueError, match="symmetric pitchfork needs all three 0"):
         symmetric_pitchfork(thesis_boat.variant(x_GB_m=0.001), 0.5)
 
@@ -133,7 +136,9 @@ def test_symmetric_pitchfork_closed_form_matches_the_exact_solver(thesis_boat):
 def test_continuation_over_ballast_finds_the_folds_of_the_exact_equation(thesis_boat):
     L = thesis_boat.length_m
     u = _fn_speed(thesis_boat, 1.0)
-    branch = continue_equilibria(thesis_boat, "x_GB", -5e-4 * L, 5e-4 * L, speed_mps=u, initial_pitch_rad=-0.5)
+    branch = continue_equilibria(
+        thesis_boat, "x_GB", -5e-4 * L, 5e-4 * L, speed_mps=u, initial_pitch_rad=-0.5
+    )
     assert branch.residual_max < 1e-9
     # Eq. 4.3's terms are of order |Z_delta| W z_GB (about 1e4 in SI); its residual is ~1e-9 of that.
     scale = abs(thesis_boat.coefficients.Z_delta_s) * thesis_boat.weight_N * thesis_boat.z_GB_m
@@ -145,7 +150,9 @@ def test_continuation_over_ballast_finds_the_folds_of_the_exact_equation(thesis_
     folds = np.sort(branch.values[branch.folds])
     np.testing.assert_allclose(folds, [low[0], high[0]], rtol=0.02)  # within one continuation step
     # Path B (Fn 1.1) is outside the cusp: a single-valued branch.
-    branch_b = continue_equilibria(thesis_boat, "x_GB", -5e-4 * L, 5e-4 * L, speed_mps=_fn_speed(thesis_boat, 1.1))
+    branch_b = continue_equilibria(
+        thesis_boat, "x_GB", -5e-4 * L, 5e-4 * L, speed_mps=_fn_speed(thesis_boat, 1.1)
+    )
     assert len(branch_b.folds) == 0
 
 
@@ -162,8 +169,10 @@ def _roots_of_eq_4_3(vehicle, u):
     values = steady_state_residual(vehicle, u, grid)
     from scipy.optimize import brentq
 
-    return [brentq(lambda t: steady_state_residual(vehicle, u, t), grid[i], grid[i + 1], xtol=1e-14)
-            for i in np.flatnonzero(np.sign(values[:-1]) != np.sign(values[1:]))]
+    return [
+        brentq(lambda t: steady_state_residual(vehicle, u, t), grid[i], grid[i + 1], xtol=1e-14)
+        for i in np.flatnonzero(np.sign(values[:-1]) != np.sign(values[1:]))
+    ]
 
 
 def test_consistent_cusp_matches_the_exact_folds_and_the_printed_one_does_not(thesis_boat):
@@ -197,9 +206,13 @@ def test_level_flight_trim_reverses_through_the_critical_speed(thesis_boat):
     for u, theta, delta in zip(trim.speeds_mps, trim.pitch_rad, trim.plane_rad):
         lm = linear_model(light, float(u))
         x = np.array([theta, u * theta, 0.0, 0.0])
-        bias = np.linalg.solve([[light.mass_kg - light.coefficients.Z_wdot, -light.coefficients.Z_qdot],
-                                [-light.coefficients.M_wdot, light.inertia_y_kg_m2 - light.coefficients.M_qdot]],
-                               [light.weight_N - light.buoyancy_N, 0.0])
+        bias = np.linalg.solve(
+            [
+                [light.mass_kg - light.coefficients.Z_wdot, -light.coefficients.Z_qdot],
+                [-light.coefficients.M_wdot, light.inertia_y_kg_m2 - light.coefficients.M_qdot],
+            ],
+            [light.weight_N - light.buoyancy_N, 0.0],
+        )
         xdot = lm.A @ x + lm.B * delta + np.array([0.0, bias[0], bias[1], 0.0])
         np.testing.assert_allclose(xdot, 0.0, atol=1e-12)
     neutral = level_flight_trim(thesis_boat, np.array([0.3, 1.0]))
@@ -263,7 +276,9 @@ def test_the_buoyancy_bifurcation_set_is_where_the_number_of_steady_states_chang
     W = suboff.weight_N
 
     def count(fraction: float) -> int:
-        return len(np.unique(np.round(_roots_of_eq_4_3(suboff.variant(excess_buoyancy_N=fraction * W), u), 6)))
+        return len(
+            np.unique(np.round(_roots_of_eq_4_3(suboff.variant(excess_buoyancy_N=fraction * W), u), 6))
+        )
 
     for edge in (low[0], high[0]):  # two steady states merge at the edge and are gone beyond it
         assert count(0.99 * edge) - count(1.01 * edge) == 2

@@ -30,7 +30,9 @@ def test_the_open_loop_pair_crosses_the_imaginary_axis_at_the_hopf_speed(hopf) -
     assert np.max(np.abs(pair.real)) < 1e-9 and np.isclose(np.abs(pair.imag).max(), hopf.frequency_radps)
     below, above = (level_flight_eigenvalues(SUBOFF, hopf.speed_mps * f) for f in (0.98, 1.02))
     assert np.all(below.real < 0.0) and np.max(above.real) > 0.0 and hopf.growth_slope > 0.0
-    assert 0.0 < hopf.frequency_radps and hopf.speed_mps > 1.4 * 0.5785  # well above u_cr: another instability
+    assert (
+        0.0 < hopf.frequency_radps and hopf.speed_mps > 1.4 * 0.5785
+    )  # well above u_cr: another instability
 
 
 def test_the_environment_grows_and_decays_at_the_eigenvalues_rate_and_crosses_at_the_hopf_speed(hopf) -> None:  # type: ignore[no-untyped-def]
@@ -54,8 +56,9 @@ def test_the_bifurcation_is_supercritical_with_amplitude_linear_in_the_speed_exc
     orbits = [periodic_orbit(SUBOFF, u) for u in speeds]
     for orbit in orbits:
         assert orbit.stable and orbit.period_s == pytest.approx(hopf.period_s, rel=0.03)
-        assert orbit.pitch_amplitude_rad == pytest.approx(hopf.predicted_amplitude_rad(SUBOFF, orbit.speed_mps),
-                                                          rel=0.05)
+        assert orbit.pitch_amplitude_rad == pytest.approx(
+            hopf.predicted_amplitude_rad(SUBOFF, orbit.speed_mps), rel=0.05
+        )
     ratio = orbits[1].pitch_amplitude_rad / orbits[0].pitch_amplitude_rad
     assert ratio == pytest.approx(2.0, rel=0.05)  # (a square-root law would give 1.41)
 
@@ -69,22 +72,30 @@ def test_a_closed_loop_with_a_zero_gain_has_the_open_loops_hopf_point_and_the_th
 
 def test_the_env_docstring_states_what_the_analysis_computes(analysis_report) -> None:  # type: ignore[no-untyped-def]
     doc = " ".join((DivePlaneEnv.__doc__ or "").split())
-    found = analysis_report.hopf  # hopf_findings(SUBOFF), as the session's report computed it (tens of seconds)
+    found = (
+        analysis_report.hopf
+    )  # hopf_findings(SUBOFF), as the session's report computed it (tens of seconds)
     stated = re.search(r"Below u_H = ([\d.]+) m/s \(([\d.]+) u_cr\)", doc)
     assert stated is not None
     assert float(stated.group(1)) == round(found.point.speed_mps, 3)
-    assert float(re.search(r"pitch limit at ([\d.]+) m/s", doc).group(1)) == round(found.pitch_limit_speed_mps, 2)  # type: ignore[union-attr]
+    assert float(re.search(r"pitch limit at ([\d.]+) m/s", doc).group(1)) == round(
+        found.pitch_limit_speed_mps, 2
+    )  # type: ignore[union-attr]
     assert float(re.search(r"above ([\d.]+) m/s the motion diverges", doc).group(1)) == round(
-        found.splitting_speed_mps, 2)  # type: ignore[union-attr]
+        found.splitting_speed_mps, 2
+    )  # type: ignore[union-attr]
     assert math.isclose(found.env_hopf_speed_mps, found.point.speed_mps, rel_tol=5e-3) and found.orbits_stable
 
 
-@pytest.mark.parametrize(("kwargs", "match"), [
-    ({"gain": [1.0, 2.0]}, r"gain=.* must be 4 finite numbers"),
-    ({"gain": [1.0, 2.0, math.nan, 0.0]}, r"gain=.* must be 4 finite numbers"),
-    ({"alpha": 2.0}, r"alpha=2.0 is invalid: must be a number in \[-1, 1\]"),
-    ({"speeds_mps": [1.0, 0.5]}, r"speeds_mps=.* must be an increasing array"),
-])
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"gain": [1.0, 2.0]}, r"gain=.* must be 4 finite numbers"),
+        ({"gain": [1.0, 2.0, math.nan, 0.0]}, r"gain=.* must be 4 finite numbers"),
+        ({"alpha": 2.0}, r"alpha=2.0 is invalid: must be a number in \[-1, 1\]"),
+        ({"speeds_mps": [1.0, 0.5]}, r"speeds_mps=.* must be an increasing array"),
+    ],
+)
 def test_bad_arguments_are_refused(kwargs, match) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(ValueError, match=match):
         hopf_points(SUBOFF, **kwargs)
@@ -104,4 +115,6 @@ def test_the_hopf_point_of_the_full_scale_boat_is_the_models_froude_scaled(hopf)
     (point,) = hopf_points(full)
     assert point.speed_mps == pytest.approx(hopf.speed_mps * math.sqrt(ratio), rel=1e-9)
     assert point.frequency_radps == pytest.approx(hopf.frequency_radps / math.sqrt(ratio), rel=1e-9)
-    assert point.amplitude_coefficient == pytest.approx(hopf.amplitude_coefficient / math.sqrt(ratio), rel=1e-6)
+    assert point.amplitude_coefficient == pytest.approx(
+        hopf.amplitude_coefficient / math.sqrt(ratio), rel=1e-6
+    )

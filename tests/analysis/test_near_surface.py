@@ -61,8 +61,10 @@ def test_with_the_planes_held_level_flight_near_the_surface_is_unstable_in_depth
     def slope(i: int) -> float:
         step = np.zeros(4)
         step[i] = 1e-6
-        return (derivatives(x + step, trim.speed_mps, trim.plane_rad, 0.0, params)[1]
-                - derivatives(x - step, trim.speed_mps, trim.plane_rad, 0.0, params)[1]) / 2e-6
+        return (
+            derivatives(x + step, trim.speed_mps, trim.plane_rad, 0.0, params)[1]
+            - derivatives(x - step, trim.speed_mps, trim.plane_rad, 0.0, params)[1]
+        ) / 2e-6
 
     a, c = slope(3), slope(1)
     assert a > 0 > c
@@ -84,7 +86,9 @@ def test_well_below_critical_the_shallowest_depth_held_is_where_the_trim_reaches
     assert found.limited_by == "planes" and found.min_depth_m > RADIUS
     held = surface_trim(SUBOFF, ratio * U_CR, found.min_depth_m)
     assert held.within_limits and abs(held.plane_rad) == pytest.approx(SUBOFF.planes.limit_rad, abs=2e-3)
-    above = surface_trim(SUBOFF, ratio * U_CR, found.min_depth_m - 2e-3, start=(held.pitch_rad, held.plane_rad))
+    above = surface_trim(
+        SUBOFF, ratio * U_CR, found.min_depth_m - 2e-3, start=(held.pitch_rad, held.plane_rad)
+    )
     assert not above.within_limits
 
 
@@ -97,8 +101,10 @@ def _balance_determinant(trim, alpha: float) -> float:
         return derivatives(x, trim.speed_mps, delta, alpha * delta, params)[1:3]
 
     e = 1e-7
-    columns = [(balance(trim.pitch_rad + e, trim.plane_rad) - balance(trim.pitch_rad - e, trim.plane_rad)) / (2 * e),
-               (balance(trim.pitch_rad, trim.plane_rad + e) - balance(trim.pitch_rad, trim.plane_rad - e)) / (2 * e)]
+    columns = [
+        (balance(trim.pitch_rad + e, trim.plane_rad) - balance(trim.pitch_rad - e, trim.plane_rad)) / (2 * e),
+        (balance(trim.pitch_rad, trim.plane_rad + e) - balance(trim.pitch_rad, trim.plane_rad - e)) / (2 * e),
+    ]
     return float(np.linalg.det(np.column_stack(columns)))
 
 

@@ -21,18 +21,23 @@ def _residual(vehicle, trim) -> np.ndarray:
 def test_a_neutral_boat_trims_level_with_the_planes_at_zero(suboff):
     for u in (0.2, 0.578, 1.5):
         trim = depth_holding_trim(suboff, u, MAX_PITCH_RAD)
-        assert trim.exists and abs(trim.pitch_rad) < 1e-9 and max(abs(trim.stern_rad), abs(trim.bow_rad)) < 1e-9
+        assert (
+            trim.exists and abs(trim.pitch_rad) < 1e-9 and max(abs(trim.stern_rad), abs(trim.bow_rad)) < 1e-9
+        )
         assert trim.plane_margin_rad == pytest.approx(suboff.planes.limit_rad)
 
 
-@pytest.mark.parametrize("loading, speed, expected", [
-    ({"excess_buoyancy_N": 50.0}, 0.3, False),  # suction far beyond what the planes lift at 0.3 m/s
-    ({"excess_buoyancy_N": 2.0}, 1.0, True),
-    ({"x_GB_m": 3e-3}, 0.45, False),            # the largest ballast offset of BallastOffset, near u_cr
-    ({"x_GB_m": -3e-3}, 0.45, False),
-    ({"x_GB_m": 3e-3}, 0.9, True),
-    ({"x_GB_m": 0.5e-3}, 0.45, True),
-])
+@pytest.mark.parametrize(
+    "loading, speed, expected",
+    [
+        ({"excess_buoyancy_N": 50.0}, 0.3, False),  # suction far beyond what the planes lift at 0.3 m/s
+        ({"excess_buoyancy_N": 2.0}, 1.0, True),
+        ({"x_GB_m": 3e-3}, 0.45, False),  # the largest ballast offset of BallastOffset, near u_cr
+        ({"x_GB_m": -3e-3}, 0.45, False),
+        ({"x_GB_m": 3e-3}, 0.9, True),
+        ({"x_GB_m": 0.5e-3}, 0.45, True),
+    ],
+)
 def test_loadings_with_and_without_a_trim(suboff, loading, speed, expected):
     vehicle = suboff.variant(**loading)
     trim = depth_holding_trim(vehicle, speed, MAX_PITCH_RAD)
@@ -59,10 +64,13 @@ def test_winnable_needs_a_trim_at_every_speed(suboff):
     assert winnable(vehicle, [0.9], MAX_PITCH_RAD) and not winnable(vehicle, [0.9, 0.45], MAX_PITCH_RAD)
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    ({"speed_mps": 0.0}, r"speed_mps=0.0 is invalid: must be a finite number > 0"),
-    ({"max_pitch_rad": 2.0}, r"max_pitch_rad=2.0 is invalid: must be a number in \(0, pi/2\)"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"speed_mps": 0.0}, r"speed_mps=0.0 is invalid: must be a finite number > 0"),
+        ({"max_pitch_rad": 2.0}, r"max_pitch_rad=2.0 is invalid: must be a number in \(0, pi/2\)"),
+    ],
+)
 def test_invalid_arguments_name_the_parameter(suboff, kwargs, match):
     with pytest.raises(ValueError, match=match):
         depth_holding_trim(suboff, **({"speed_mps": 1.0, "max_pitch_rad": MAX_PITCH_RAD} | kwargs))

@@ -54,8 +54,9 @@ def test_thesis_controller_designs_the_published_gains(suboff):
     controller = ThesisPolePlacement()
     controller.reset({"speed_mps": 1.524}, suboff)
     published_ft = np.array([-0.9917, -0.8333, -0.6026, 0.0351])  # eq. 2.98
-    np.testing.assert_allclose(controller.gain, published_ft / np.array([1, FOOT_M, 1, FOOT_M]),
-                               rtol=1e-3, atol=1e-4 / FOOT_M)
+    np.testing.assert_allclose(
+        controller.gain, published_ft / np.array([1, FOOT_M, 1, FOOT_M]), rtol=1e-3, atol=1e-4 / FOOT_M
+    )
 
 
 def test_gain_schedule_interpolates_the_designs(suboff):
@@ -78,7 +79,9 @@ def test_gain_schedule_near_the_critical_speed(suboff):
     design = place_gain(suboff, 1.524)[3]
     assert below < 0 < above and min(abs(below), abs(above)) > 20 * abs(design)
     # Between the two straddling points the interpolated depth gain passes through zero.
-    speeds = np.linspace(schedule.points[schedule.points < ucr][-1], schedule.points[schedule.points > ucr][0], 101)
+    speeds = np.linspace(
+        schedule.points[schedule.points < ucr][-1], schedule.points[schedule.points > ucr][0], 101
+    )
     k4 = np.array([schedule.at(u)[3] for u in speeds])
     assert k4[0] < 0 < k4[-1] and np.all(np.diff(k4) > 0)  # crosses zero once: no depth feedback there
 
@@ -108,8 +111,12 @@ def test_reversal_aware_allocation_keeps_a_controllability_margin(suboff):
 @pytest.mark.parametrize("speed", [0.3, 0.45, 0.55, 0.6, 0.7, 1.0, 1.8])
 @pytest.mark.parametrize("offset", [-2.0, 2.0])
 def test_reversal_aware_changes_and_holds_depth_across_the_speed_range(speed, offset):
-    success, info, errors, _ = _episode(ReversalAware(), "LowSpeed", 0, {
-        "speed": speed, "depth_command": 10.0, "initial_state": (0.0, 0.0, 0.0, 10.0 + offset)})
+    success, info, errors, _ = _episode(
+        ReversalAware(),
+        "LowSpeed",
+        0,
+        {"speed": speed, "depth_command": 10.0, "initial_state": (0.0, 0.0, 0.0, 10.0 + offset)},
+    )
     assert success, (speed, offset, errors[-1], info["termination_reason"])
 
 

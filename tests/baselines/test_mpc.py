@@ -82,9 +82,12 @@ def test_commands_stay_within_the_plane_limit_and_the_rate_limit():
     (so the environment's rate limiter never has to cut one)."""
     rate = 0.01  # rad/s: 0.005 rad per control period
     controller = DepthMPC(plane_rate_limit_radps=rate)
-    env, commands, infos = _run(controller, "LowSpeed", {"speed": 0.4, "depth_command": 10.0,
-                                                          "initial_state": (0.0, 0.0, 0.0, 14.0)},
-                                plane_rate_limit_radps=rate)
+    env, commands, infos = _run(
+        controller,
+        "LowSpeed",
+        {"speed": 0.4, "depth_command": 10.0, "initial_state": (0.0, 0.0, 0.0, 14.0)},
+        plane_rate_limit_radps=rate,
+    )
     limit, move = env.unwrapped.plane_limit_rad, rate * env.unwrapped.dt
     assert np.all(np.abs(commands) <= limit)
     moves = np.abs(np.diff(np.vstack([np.zeros(2), commands]), axis=0))
@@ -97,8 +100,11 @@ def test_commands_stay_within_the_plane_limit_and_the_rate_limit():
 
 def test_commands_stay_within_the_plane_limit_when_saturated():
     controller = DepthMPC()
-    env, commands, _infos = _run(controller, "NearCritical", {"speed": 0.6, "depth_command": 10.0,
-                                                              "initial_state": (0.0, 0.0, 0.0, 12.0)})
+    env, commands, _infos = _run(
+        controller,
+        "NearCritical",
+        {"speed": 0.6, "depth_command": 10.0, "initial_state": (0.0, 0.0, 0.0, 12.0)},
+    )
     limit = env.unwrapped.plane_limit_rad
     assert np.all(np.abs(commands) <= limit)
     assert np.max(np.abs(commands)) > 0.99 * limit  # the limit was active
@@ -109,10 +115,16 @@ def test_a_ballast_offset_is_trimmed_out(estimate: bool):
     """A centre of gravity 2 mm aft of the centre of buoyancy (a constant pitch moment, Riedel 1993 Ch. IV) that
     the design model does not have: with the disturbance estimated the depth error goes to 0 and the estimate
     is the moment -x_GB W cos(theta) (eq. 2.39); without it the boat settles off depth."""
-    noise = ObserverNoise() if estimate else ObserverNoise(disturbance=(0.0, 0.0), initial_disturbance=(0.0, 0.0))
+    noise = (
+        ObserverNoise() if estimate else ObserverNoise(disturbance=(0.0, 0.0), initial_disturbance=(0.0, 0.0))
+    )
     controller = DepthMPC(noise=noise)
-    env, _, infos = _run(controller, "BallastOffset", {"speed": 0.9, "depth_command": 10.0,
-                                                        "initial_state": (0.0, 0.0, 0.0, 11.0)}, seed=1)
+    env, _, infos = _run(
+        controller,
+        "BallastOffset",
+        {"speed": 0.9, "depth_command": 10.0, "initial_state": (0.0, 0.0, 0.0, 11.0)},
+        seed=1,
+    )
     vehicle = env.unwrapped.vehicle
     x_GB = vehicle.x_G_m - vehicle.x_B_m
     assert abs(x_GB) >= 0.5e-3
@@ -131,8 +143,12 @@ def test_surface_suction_is_trimmed_out():
     """Excess buoyancy B - W near the surface (Riedel 1993 Ch. V.C): estimated as the heave force W - B, and
     held at periscope depth without broaching."""
     controller = DepthMPC()
-    env, _, infos = _run(controller, "PeriscopeDepth", {"speed": 0.7, "depth_command": 1.0,
-                                                         "initial_state": (0.0, 0.0, 0.0, 1.4)}, seed=2)
+    env, _, infos = _run(
+        controller,
+        "PeriscopeDepth",
+        {"speed": 0.7, "depth_command": 1.0, "initial_state": (0.0, 0.0, 0.0, 1.4)},
+        seed=2,
+    )
     vehicle = env.unwrapped.vehicle
     assert vehicle.buoyancy_N > vehicle.weight_N
     assert infos[-1]["termination_reason"] == ""
@@ -141,12 +157,18 @@ def test_surface_suction_is_trimmed_out():
     np.testing.assert_allclose(controller.disturbance[0], [force, 0.0], rtol=1e-3, atol=1e-3)
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    ({"blocks": (1,)}, r"blocks=\(1,\) is invalid: must be integers >= 1 \(control periods\), the first 1, at least 2"),
-    ({"blocks": (2, 4)}, r"blocks=\(2, 4\) is invalid"),
-    ({"blocks": (1, 0)}, r"blocks=\(1, 0\) is invalid"),
-    ({"plane_rate_limit_radps": 0.0}, r"plane_rate_limit_radps=0.0 is invalid: must be None or > 0"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (
+            {"blocks": (1,)},
+            r"blocks=\(1,\) is invalid: must be integers >= 1 \(control periods\), the first 1, at least 2",
+        ),
+        ({"blocks": (2, 4)}, r"blocks=\(2, 4\) is invalid"),
+        ({"blocks": (1, 0)}, r"blocks=\(1, 0\) is invalid"),
+        ({"plane_rate_limit_radps": 0.0}, r"plane_rate_limit_radps=0.0 is invalid: must be None or > 0"),
+    ],
+)
 def test_invalid_settings_name_the_parameter(kwargs, match):
     with pytest.raises(ValueError, match=match):
         DepthMPC(**kwargs)
@@ -156,14 +178,18 @@ def test_without_daqp_the_module_names_the_extra(monkeypatch):
     """The entry point's import fails with the one-line advice, so the harness skips ``mpc`` with a note."""
     monkeypatch.setitem(sys.modules, "daqp", None)  # as if not installed
     monkeypatch.delitem(sys.modules, "subenv_baselines.mpc")
-    with pytest.raises(MissingExtra, match=r"^the 'mpc' extra is needed for the MPC baseline .*subenv\[mpc\]"):
+    with pytest.raises(
+        MissingExtra, match=r"^the 'mpc' extra is needed for the MPC baseline .*subenv\[mpc\]"
+    ):
         importlib.import_module("subenv_baselines.mpc")
 
 
 def test_a_batch_gets_the_one_at_a_time_results_bit_for_bit():
     """Each episode's controller state is its own row (the harness's contract for batch controllers)."""
     seeds = [10_005, 10_010, 10_000]
-    one = run_episodes(DepthMPC(), "BallastOffset", seeds, batched=False, max_duration_s=60.0, keep_trajectories=3)
+    one = run_episodes(
+        DepthMPC(), "BallastOffset", seeds, batched=False, max_duration_s=60.0, keep_trajectories=3
+    )
     batch = run_episodes(DepthMPC(), "BallastOffset", seeds, max_duration_s=60.0, keep_trajectories=3)
     for a, b in zip(one, batch):
         assert a.trajectory is not None and b.trajectory is not None
@@ -171,15 +197,20 @@ def test_a_batch_gets_the_one_at_a_time_results_bit_for_bit():
         np.testing.assert_array_equal(a.trajectory.depth_error_m, b.trajectory.depth_error_m)
 
 
-@pytest.mark.parametrize("scenario", ["Nominal", "LowSpeed", "NearCritical", "SpeedTransient", "PeriscopeDepth",
-                                      "BallastOffset"])
+@pytest.mark.parametrize(
+    "scenario", ["Nominal", "LowSpeed", "NearCritical", "SpeedTransient", "PeriscopeDepth", "BallastOffset"]
+)
 def test_it_wins_exactly_the_winnable_episodes(scenario):
     """Every scenario class: each episode with a depth-holding trim inside the plane limits is won, and the one
     without (BallastOffset seed 2: x_GB = 2.0 mm at 0.56 m/s) is lost, as it must be by any controller."""
     results = run_episodes(DepthMPC(), scenario, [0, 1, 2])
     for result in results:  # (the harness records subenv.analysis.winnable for every episode)
         assert (result.metrics.outcome == "success") == result.winnable, (result.seed, result.metrics.outcome)
-    assert scenario != "BallastOffset" or [r.metrics.outcome == "success" for r in results] == [True, True, False]
+    assert scenario != "BallastOffset" or [r.metrics.outcome == "success" for r in results] == [
+        True,
+        True,
+        False,
+    ]
 
 
 def test_the_condensed_qp_is_the_linear_model_stepped_and_its_cost():
@@ -196,7 +227,9 @@ def test_the_condensed_qp_is_the_linear_model_stepped_and_its_cost():
     y, x_s, u_s = rng.normal(size=(n, 4)), rng.normal(size=(n, 4)), 0.1 * rng.normal(size=(n, 2))
     planes = 0.1 * rng.normal(size=(n, 2))
     high, low, pitch_bound, move = np.full(n, 30.0), np.full(n, 2.0), 0.1, 0.01
-    rows = qp.build(A, B, c, y, x_s, u_s, planes, 0.4, planes - move, planes + move, move, pitch_bound, high, low)
+    rows = qp.build(
+        A, B, c, y, x_s, u_s, planes, 0.4, planes - move, planes + move, move, pitch_bound, high, low
+    )
     K, nv, M = len(qp.stages), qp.nv, len(BLOCKS)
     assert rows.H.shape == (n, nv, nv) and rows.C.shape == (n, 4 * K + 2 * (M - 1), nv)
     np.testing.assert_array_equal(rows.H, np.swapaxes(rows.H, 1, 2))
@@ -213,15 +246,18 @@ def test_the_condensed_qp_is_the_linear_model_stepped_and_its_cost():
         xs, u = stepped(i, U)
         e = xs[qp.stages - 1] - x_s[i]
         moves = np.diff(np.vstack([planes[i], U.reshape(M, 2)]), axis=0)
-        return (np.sum(qp.sqrt_state_weights**2 * e**2) + weights.plane * np.sum((u - u_s[i]) ** 2)
-                + weights.move * np.sum(moves**2))
+        return (
+            np.sum(qp.sqrt_state_weights**2 * e**2)
+            + weights.plane * np.sum((u - u_s[i]) ** 2)
+            + weights.move * np.sum(moves**2)
+        )
 
     for i in range(n):
         U0, U1 = 0.2 * rng.normal(size=2 * M), 0.2 * rng.normal(size=2 * M)
         xs, _ = stepped(i, U1)
         v = np.r_[U1, 0.0, 0.0]
-        pitch = rows.C[i, :K] @ v + (pitch_bound - rows.upper[i, nv:nv + K])
-        depth = rows.C[i, 2 * K:3 * K] @ v + (high[i] - rows.upper[i, nv + 2 * K:nv + 3 * K])
+        pitch = rows.C[i, :K] @ v + (pitch_bound - rows.upper[i, nv : nv + K])
+        depth = rows.C[i, 2 * K : 3 * K] @ v + (high[i] - rows.upper[i, nv + 2 * K : nv + 3 * K])
         np.testing.assert_allclose(pitch, xs[qp.stages - 1, 0], rtol=1e-12, atol=1e-12)
         np.testing.assert_allclose(depth, xs[qp.stages - 1, 3], rtol=1e-12, atol=1e-12)
 

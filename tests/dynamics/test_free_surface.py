@@ -59,19 +59,26 @@ def test_a_fore_aft_symmetric_hull_level_feels_no_moment_and_pitching_the_bow_up
     assert abs(float(M0)) < 1e-12 * abs(float(Z0))
     _, M_up = suction(hull, 0.05, 0.8, 1.0, RHO)
     _, M_down = suction(hull, -0.05, 0.8, 1.0, RHO)
-    assert M_up > 0 > M_down and float(M_up) == pytest.approx(-float(M_down), rel=1e-12)  # bow nearer: nose-up
+    assert M_up > 0 > M_down and float(M_up) == pytest.approx(
+        -float(M_down), rel=1e-12
+    )  # bow nearer: nose-up
 
 
 def test_deep_water_is_riedels_model_bit_for_bit_and_the_suction_fades_with_depth():
     rng = np.random.default_rng(0)
-    states = np.column_stack([rng.normal(0, 0.1, 50), rng.normal(0, 0.05, 50), rng.normal(0, 0.02, 50),
-                              rng.uniform(0.5, 20, 50)])
+    states = np.column_stack(
+        [rng.normal(0, 0.1, 50), rng.normal(0, 0.05, 50), rng.normal(0, 0.02, 50), rng.uniform(0.5, 20, 50)]
+    )
     deep = derivatives(states, 0.6, 0.1, 0.0, model_params(SUBOFF))
     assert np.array_equal(derivatives(states, 0.6, 0.1, 0.0, model_params(SUBOFF, NO_FREE_SURFACE)), deep)
     far = states.copy()
     far[:, 3] = 1e4
-    np.testing.assert_allclose(derivatives(far, 0.6, 0.1, 0.0, model_params(SUBOFF, FreeSurface())),
-                               derivatives(far, 0.6, 0.1, 0.0, model_params(SUBOFF)), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(
+        derivatives(far, 0.6, 0.1, 0.0, model_params(SUBOFF, FreeSurface())),
+        derivatives(far, 0.6, 0.1, 0.0, model_params(SUBOFF)),
+        rtol=0,
+        atol=1e-15,
+    )
     near = derivatives(states, 0.6, 0.1, 0.0, model_params(SUBOFF, FreeSurface()))
     assert np.all(near[:, 0] == deep[:, 0]) and np.all(near[:, 3] == deep[:, 3])  # kinematics untouched
     assert np.all(near[:, 1] < deep[:, 1])  # the heave acceleration is upward-shifted everywhere
@@ -98,13 +105,13 @@ def test_the_seeded_waves_carry_the_spectrums_variance():
     variances = [np.sum(SEA.amplitudes(SEA.frequencies(rng.random(SEA.waves))) ** 2) / 2 for _ in range(2000)]
     band = SEA.band_variance_m2()
     assert np.mean(variances) == pytest.approx(band, rel=3e-3)
-    assert 0.97 * SEA.significant_height_m ** 2 / 16 < band < SEA.significant_height_m ** 2 / 16
+    assert 0.97 * SEA.significant_height_m**2 / 16 < band < SEA.significant_height_m**2 / 16
     # One seeded sea's elevation, sampled over a long time, has its own sum A_i^2 / 2 as variance.
     jitter, phase = rng.random(SEA.waves), rng.uniform(0, 2 * math.pi, SEA.waves)
     omega, amplitude = SEA.frequencies(jitter), SEA.amplitudes(SEA.frequencies(jitter))
     t = np.arange(0.0, 20_000.0, 0.1)
     eta = (amplitude[:, None] * np.cos(omega[:, None] * t + phase[:, None])).sum(0)
-    assert np.var(eta) == pytest.approx(np.sum(amplitude ** 2) / 2, rel=0.02)
+    assert np.var(eta) == pytest.approx(np.sum(amplitude**2) / 2, rel=0.02)
 
 
 @numba.njit
@@ -117,8 +124,14 @@ def _force_series(times, speed, depth, waves, n):
 
 def test_first_order_wave_force_has_zero_mean_and_the_mean_is_the_second_order_suction():
     rng = np.random.default_rng(3)
-    waves = SEA.components(rng.random(SEA.waves), rng.uniform(0, 2 * math.pi, SEA.waves), SUBOFF.hull.x_m,
-                           SUBOFF.hull.breadth_m, RHO, SUBOFF.gravity_m_s2)
+    waves = SEA.components(
+        rng.random(SEA.waves),
+        rng.uniform(0, 2 * math.pi, SEA.waves),
+        SUBOFF.hull.x_m,
+        SUBOFF.hull.breadth_m,
+        RHO,
+        SUBOFF.gravity_m_s2,
+    )
     t = np.arange(0.0, 40_000.0, 0.05)
     depth, speed = 1.1, 0.6
     force, _ = _force_series(t, speed, depth, waves, SEA.waves)
@@ -127,31 +140,35 @@ def test_first_order_wave_force_has_zero_mean_and_the_mean_is_the_second_order_s
     f1, m1 = _force_series(t, speed, depth, first, SEA.waves)
     assert abs(f1.mean()) < 0.01 * f1.std() and abs(m1.mean()) < 0.01 * m1.std()
     # The first-order force's variance is sum |F_i|^2 / 2 of the waves' complex amplitudes.
-    k = waves[0, :SEA.waves]
-    amp2 = (waves[3, :SEA.waves] ** 2 + waves[4, :SEA.waves] ** 2) * np.exp(-2 * k * depth)
+    k = waves[0, : SEA.waves]
+    amp2 = (waves[3, : SEA.waves] ** 2 + waves[4, : SEA.waves] ** 2) * np.exp(-2 * k * depth)
     assert f1.var() == pytest.approx(amp2.sum() / 2, rel=0.03)
     # What is left when the first order is taken away is the constant mean suction, upward.
     mean_force = force - f1
     assert np.ptp(mean_force) < 1e-9 * abs(mean_force[0]) and mean_force[0] < 0
-    expected = -(waves[7, :SEA.waves] * np.exp(-2 * k * depth)).sum()
+    expected = -(waves[7, : SEA.waves] * np.exp(-2 * k * depth)).sum()
     assert mean_force[0] == pytest.approx(expected, rel=1e-12)
 
 
 def test_long_waves_push_the_hull_with_twice_its_displaced_mass():
     # K -> 0: Froude-Krylov plus added mass of a slender body of circular sections, 2 rho V.
-    heave, pitch, total, moment = hull_wave_integrals(np.array([1e-9]), SUBOFF.hull.x_m, SUBOFF.hull.breadth_m, RHO)
+    heave, pitch, total, moment = hull_wave_integrals(
+        np.array([1e-9]), SUBOFF.hull.x_m, SUBOFF.hull.breadth_m, RHO
+    )
     assert heave[0].real == pytest.approx(2 * RHO * _volume(SUBOFF), rel=1e-4)
-    assert total == pytest.approx(heave[0].real, rel=1e-9) and pitch[0].real == pytest.approx(moment, rel=1e-9)
+    assert total == pytest.approx(heave[0].real, rel=1e-9) and pitch[0].real == pytest.approx(
+        moment, rel=1e-9
+    )
 
 
 def test_the_expected_mean_suction_falls_as_the_spectrum_weighted_exp_minus_2_k_h():
     Z1, _ = SEA.mean_suction(1.0, SUBOFF.hull.x_m, SUBOFF.hull.breadth_m, RHO, SUBOFF.gravity_m_s2)
     Z2, _ = SEA.mean_suction(2.0, SUBOFF.hull.x_m, SUBOFF.hull.breadth_m, RHO, SUBOFF.gravity_m_s2)
-    kp = SEA.peak_frequency_radps ** 2 / SUBOFF.gravity_m_s2
+    kp = SEA.peak_frequency_radps**2 / SUBOFF.gravity_m_s2
     assert Z1 < Z2 < 0
     # Dominated by waves near the peak: decays between exp(-2 k h) of the band's ends, near the peak's.
     ratio = Z2 / Z1
-    low, high = (f ** 2 * kp for f in SEA.band)
+    low, high = (f**2 * kp for f in SEA.band)
     assert math.exp(-2 * high) < ratio < math.exp(-2 * low)
 
 
@@ -173,8 +190,14 @@ def test_the_block_integrator_in_a_sea_is_rk4_over_the_one_right_hand_side_with_
     # distance travelled; the NumPy reference passes the same force and moment to derivatives.
     rng = np.random.default_rng(11)
     params = model_params(SUBOFF, FreeSurface())
-    waves = SEA.components(rng.random(SEA.waves), rng.uniform(0, 2 * math.pi, SEA.waves), SUBOFF.hull.x_m,
-                           SUBOFF.hull.breadth_m, RHO, SUBOFF.gravity_m_s2)
+    waves = SEA.components(
+        rng.random(SEA.waves),
+        rng.uniform(0, 2 * math.pi, SEA.waves),
+        SUBOFF.hull.x_m,
+        SUBOFF.hull.breadth_m,
+        RHO,
+        SUBOFF.gravity_m_s2,
+    )
     x0, t0, u, plane, distance = np.array([0.02, 0.01, -0.003, 1.1]), 37.5, 0.6, 0.1, 22.5
 
     def f(t, state):
@@ -182,9 +205,19 @@ def test_the_block_integrator_in_a_sea_is_rk4_over_the_one_right_hand_side_with_
         return derivatives(state, u, plane, 0.0, params, force, moment)
 
     reference = rk4(f, t0, x0, integrate.CONTROL_PERIOD_S, integrate.SUBSTEPS)
-    block = _one_period_in_a_block(x0, t0, u, plane, np.ascontiguousarray(pack(params)), params.hull.packed,
-                                   waves[None], SEA.waves, distance)
+    block = _one_period_in_a_block(
+        x0,
+        t0,
+        u,
+        plane,
+        np.ascontiguousarray(pack(params)),
+        params.hull.packed,
+        waves[None],
+        SEA.waves,
+        distance,
+    )
     np.testing.assert_allclose(block, reference, rtol=1e-12, atol=1e-15)
-    calm = _one_period_in_a_block(x0, t0, u, plane, np.ascontiguousarray(pack(params)), params.hull.packed,
-                                  waves[None], 0, distance)
+    calm = _one_period_in_a_block(
+        x0, t0, u, plane, np.ascontiguousarray(pack(params)), params.hull.packed, waves[None], 0, distance
+    )
     assert np.abs(block - calm).max() > 1e-6  # and the sea moved the boat

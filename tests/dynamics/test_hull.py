@@ -22,8 +22,18 @@ def _quadrature(vehicle, w: float, q: float, n: int = 400001) -> tuple[float, fl
 
 @pytest.mark.parametrize(
     ("w", "q"),
-    [(0.1, 0.0), (-0.2, 0.0), (0.0, 0.05), (0.0, -0.05), (0.05, 0.1), (-0.05, 0.1), (0.3, -0.02),
-     (0.01, 0.2), (-0.4, -0.3), (0.0, 0.0)],
+    [
+        (0.1, 0.0),
+        (-0.2, 0.0),
+        (0.0, 0.05),
+        (0.0, -0.05),
+        (0.05, 0.1),
+        (-0.05, 0.1),
+        (0.3, -0.02),
+        (0.01, 0.2),
+        (-0.4, -0.3),
+        (0.0, 0.0),
+    ],
 )
 def test_exact_integral_matches_quadrature(suboff, w, q):
     table = HullTable.from_offsets(suboff.hull.x_m, suboff.hull.breadth_m)

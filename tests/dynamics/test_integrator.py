@@ -47,14 +47,22 @@ def test_rk4_matches_solve_ivp_over_600_s(suboff, report, mode, speed):
         d_rk = _planes(mode, gain, x_rk, t)
         d_ref = _planes(mode, gain, x_ref, t)
         x_rk = rk4(lambda s, x: derivatives(x, speed, d_rk, 0.0, params), t, x_rk, CONTROL_PERIOD_S, SUBSTEPS)
-        sol = solve_ivp(lambda s, x: derivatives(x, speed, d_ref, 0.0, params), (t, t + CONTROL_PERIOD_S),
-                        x_ref, method="DOP853", rtol=1e-10, atol=1e-12)
+        sol = solve_ivp(
+            lambda s, x: derivatives(x, speed, d_ref, 0.0, params),
+            (t, t + CONTROL_PERIOD_S),
+            x_ref,
+            method="DOP853",
+            rtol=1e-10,
+            atol=1e-12,
+        )
         assert sol.success, sol.message
         x_ref = sol.y[:, -1]
         worst_depth = max(worst_depth, abs(x_rk[3] - x_ref[3]))
         worst_pitch = max(worst_pitch, abs(x_rk[0] - x_ref[0]))
-    report(f"RK4 dt={CONTROL_PERIOD_S / SUBSTEPS} s vs solve_ivp, {mode} loop, u={speed} m/s, 600 s",
-           f"worst depth error {worst_depth:.2e} m, worst pitch error {worst_pitch:.2e} rad")
+    report(
+        f"RK4 dt={CONTROL_PERIOD_S / SUBSTEPS} s vs solve_ivp, {mode} loop, u={speed} m/s, 600 s",
+        f"worst depth error {worst_depth:.2e} m, worst pitch error {worst_pitch:.2e} rad",
+    )
     # The trajectory must actually move, or a small error would prove nothing.
     assert abs(x_ref[3] - 8.0) > 0.05 or abs(x_ref[0]) > 0.01
     assert worst_depth < DEPTH_TOL_M
@@ -75,14 +83,24 @@ def test_rk4_matches_solve_ivp_through_a_deceleration(suboff, report):
         t = k * CONTROL_PERIOD_S
         d_rk = _planes("closed", gain, x_rk, t)
         d_ref = _planes("closed", gain, x_ref, t)
-        x_rk = rk4(lambda s, x: derivatives(x, speed(s), d_rk, 0.0, params), t, x_rk, CONTROL_PERIOD_S, SUBSTEPS)
-        sol = solve_ivp(lambda s, x: derivatives(x, speed(s), d_ref, 0.0, params), (t, t + CONTROL_PERIOD_S),
-                        x_ref, method="DOP853", rtol=1e-10, atol=1e-12)
+        x_rk = rk4(
+            lambda s, x: derivatives(x, speed(s), d_rk, 0.0, params), t, x_rk, CONTROL_PERIOD_S, SUBSTEPS
+        )
+        sol = solve_ivp(
+            lambda s, x: derivatives(x, speed(s), d_ref, 0.0, params),
+            (t, t + CONTROL_PERIOD_S),
+            x_ref,
+            method="DOP853",
+            rtol=1e-10,
+            atol=1e-12,
+        )
         x_ref = sol.y[:, -1]
         worst_depth = max(worst_depth, abs(x_rk[3] - x_ref[3]))
         worst_pitch = max(worst_pitch, abs(x_rk[0] - x_ref[0]))
-    report("RK4 vs solve_ivp, closed loop, speed 1.8 -> 0.15 m/s over 600 s",
-           f"worst depth error {worst_depth:.2e} m, worst pitch error {worst_pitch:.2e} rad")
+    report(
+        "RK4 vs solve_ivp, closed loop, speed 1.8 -> 0.15 m/s over 600 s",
+        f"worst depth error {worst_depth:.2e} m, worst pitch error {worst_pitch:.2e} rad",
+    )
     assert abs(x_ref[3] - 8.0) > 1.0  # the trajectory moved (to the ordered depth)
     assert worst_depth < DEPTH_TOL_M
     assert worst_pitch < PITCH_TOL_RAD
@@ -97,8 +115,21 @@ def _periods_in_blocks(x, t0, u0, slope, stern, bow, force, prm, hull, dt, subst
     for b in range(0, x.shape[0], L):
         n = min(L, x.shape[0] - b)
         for j in range(n):
-            integrate.set_lane(block, j, x[b + j, 0], x[b + j, 1], x[b + j, 2], x[b + j, 3], t0[b + j], u0[b + j],
-                               slope[b + j], stern[b + j], bow[b + j], force[b + j], prm[b + j])
+            integrate.set_lane(
+                block,
+                j,
+                x[b + j, 0],
+                x[b + j, 1],
+                x[b + j, 2],
+                x[b + j, 3],
+                t0[b + j],
+                u0[b + j],
+                slope[b + j],
+                stern[b + j],
+                bow[b + j],
+                force[b + j],
+                prm[b + j],
+            )
         integrate.control_period_lanes(block, n, dt, substeps, hull, integrate.NO_WAVES)
         for j in range(n):
             for r in range(4):
@@ -112,7 +143,9 @@ def _periods_by_the_reference(x, t0, u0, slope, stern, bow, force, prm, hull_tab
         params = ModelParams(*prm[i].tolist(), hull=hull_table)
 
         def f(t, state, i=i, params=params):
-            return derivatives(state, u0[i] + slope[i] * (t - t0[i]), stern[i], bow[i], params, force=force[i])
+            return derivatives(
+                state, u0[i] + slope[i] * (t - t0[i]), stern[i], bow[i], params, force=force[i]
+            )
 
         x[i] = rk4(f, t0[i], x[i], dt, substeps)
 
@@ -122,8 +155,14 @@ def test_block_integrator_gives_the_bits_of_the_reference(suboff, n):
     rng = np.random.default_rng(n)
     params = model_params(suboff)
     hull = params.hull.packed
-    x = np.column_stack([rng.uniform(-0.5, 0.5, n), rng.uniform(-0.5, 0.5, n), rng.uniform(-0.2, 0.2, n),
-                         rng.uniform(1.0, 30.0, n)])
+    x = np.column_stack(
+        [
+            rng.uniform(-0.5, 0.5, n),
+            rng.uniform(-0.5, 0.5, n),
+            rng.uniform(-0.2, 0.2, n),
+            rng.uniform(1.0, 30.0, n),
+        ]
+    )
     # Roots of w - x q on stations, at the ends and off the hull; q = 0; w = 0; states that do not
     # stay finite; a pitch beyond the sine's range.
     stations = hull[0]

@@ -17,10 +17,18 @@ def _files(directory: Path) -> set[str]:
 
 
 def test_a_new_stamp_drops_the_kernels_of_these_sources_only(tmp_path: Path) -> None:
-    ours = ["transition.step-286.py311.nbi", "transition.step-286.py311.1.nbc",
-            "hull.crossflow_point-120.py311.nbi", "guf-model._derivatives_loop-258.py311.1.nbc",
-            "integrate.control_period_lanes-55.py311.nbi"]
-    others = ["solver.residual-10.py311.nbi", "transition.py", "notes.txt"]  # another package's kernel, not caches
+    ours = [
+        "transition.step-286.py311.nbi",
+        "transition.step-286.py311.1.nbc",
+        "hull.crossflow_point-120.py311.nbi",
+        "guf-model._derivatives_loop-258.py311.1.nbc",
+        "integrate.control_period_lanes-55.py311.nbi",
+    ]
+    others = [
+        "solver.residual-10.py311.nbi",
+        "transition.py",
+        "notes.txt",
+    ]  # another package's kernel, not caches
     for name in [*ours, *others, "subenv-kernels.0123456789abcdef"]:
         (tmp_path / name).write_bytes(b"x")
     check = _jit._check_directory.__wrapped__  # (the once-per-process memo bypassed)
@@ -35,7 +43,8 @@ def test_a_new_stamp_drops_the_kernels_of_these_sources_only(tmp_path: Path) -> 
 def test_the_stamp_covers_every_file_with_a_cached_kernel() -> None:
     package = Path(_jit.__file__).resolve().parents[1]
     with_kernels = {
-        str(path.relative_to(package)) for path in package.rglob("*.py")
+        str(path.relative_to(package))
+        for path in package.rglob("*.py")
         if any(marker in path.read_text() for marker in ("@kernel", "@inline_kernel", "gufunc("))
         and path.name != "_jit.py"
     }

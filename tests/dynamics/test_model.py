@@ -22,8 +22,10 @@ def test_batched_equals_one_at_a_time(suboff):
     states = rng.normal(0, [0.1, 0.1, 0.05, 5.0], size=(n, 4))
     speeds = rng.uniform(0.15, 1.8, n)
     stern, bow = rng.uniform(-0.4, 0.4, n), rng.uniform(-0.4, 0.4, n)
-    vehicles = [suboff.variant(x_GB_m=float(x), excess_buoyancy_N=float(e), crossflow_drag=float(c))
-                for x, e, c in zip(rng.normal(0, 2e-3, n), rng.normal(0, 3, n), rng.uniform(0, 0.6, n))]
+    vehicles = [
+        suboff.variant(x_GB_m=float(x), excess_buoyancy_N=float(e), crossflow_drag=float(c))
+        for x, e, c in zip(rng.normal(0, 2e-3, n), rng.normal(0, 3, n), rng.uniform(0, 0.6, n))
+    ]
     batch = derivatives(states, speeds, stern, bow, stack_params([model_params(v) for v in vehicles]))
     for i, v in enumerate(vehicles):
         one = derivatives(states[i], speeds[i], stern[i], bow[i], model_params(v))
@@ -103,7 +105,9 @@ print(repr(np.concatenate([d.ravel(), i0, i1, zs, ms]).tolist()))
 """
 
 
-def test_two_processes_compiling_the_batched_functions_at_once_on_a_cold_cache_both_get_the_answer(tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_two_processes_compiling_the_batched_functions_at_once_on_a_cold_cache_both_get_the_answer(
+    tmp_path,
+) -> None:  # type: ignore[no-untyped-def]
     # numba's cached generalized ufuncs could segfault here (numba#10128: two Ray workers did); the batched
     # functions are plain kernels over rows instead (subenv/dynamics/_jit.py).
     import os
@@ -113,8 +117,13 @@ def test_two_processes_compiling_the_batched_functions_at_once_on_a_cold_cache_b
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
 
     def start() -> subprocess.Popen[str]:
-        return subprocess.Popen([sys.executable, "-c", _COLD_CACHE_PROGRAM], env=env, stdout=subprocess.PIPE,
-                                stderr=subprocess.PIPE, text=True)
+        return subprocess.Popen(
+            [sys.executable, "-c", _COLD_CACHE_PROGRAM],
+            env=env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
 
     procs = [start(), start()]
     outputs = [p.communicate(timeout=600) for p in procs]

@@ -18,15 +18,39 @@ from subenv.envs import OBSERVATION_NAMES
 
 ENV_IDS = subenv.env_ids()
 REWARD_TERMS = ("reward_depth", "reward_pitch", "reward_effort", "reward_termination")
-INFO_KEYS = ("time_s", "depth_m", "depth_command_m", "depth_error_m", "pitch_rad", "heave_mps",
-             "pitch_rate_radps", "stern_plane_rad", "bow_plane_rad", "speed_mps", "froude_number",
-             "critical_speed_mps", "critical_froude", "termination_reason", *REWARD_TERMS)
+INFO_KEYS = (
+    "time_s",
+    "depth_m",
+    "depth_command_m",
+    "depth_error_m",
+    "pitch_rad",
+    "heave_mps",
+    "pitch_rate_radps",
+    "stern_plane_rad",
+    "bow_plane_rad",
+    "speed_mps",
+    "froude_number",
+    "critical_speed_mps",
+    "critical_froude",
+    "termination_reason",
+    *REWARD_TERMS,
+)
 
 
 def test_every_scenario_has_an_id_and_the_headline_id_is_randomized():
-    expected = {"subenv/DivePlane-v0", "subenv/Nominal-v0", "subenv/LowSpeed-v0", "subenv/NearCritical-v0",
-                "subenv/SpeedTransient-v0", "subenv/PeriscopeDepth-v0", "subenv/BallastOffset-v0",
-                "subenv/Randomized-v0", "subenv/Mixed-v0", "subenv/PeriscopeDepth-v1", "subenv/PeriscopeDepthWaves-v0"}
+    expected = {
+        "subenv/DivePlane-v0",
+        "subenv/Nominal-v0",
+        "subenv/LowSpeed-v0",
+        "subenv/NearCritical-v0",
+        "subenv/SpeedTransient-v0",
+        "subenv/PeriscopeDepth-v0",
+        "subenv/BallastOffset-v0",
+        "subenv/Randomized-v0",
+        "subenv/Mixed-v0",
+        "subenv/PeriscopeDepth-v1",
+        "subenv/PeriscopeDepthWaves-v0",
+    }
     assert set(ENV_IDS) == expected
     assert all(env_id in gym.registry for env_id in ENV_IDS)
     assert gym.spec("subenv/DivePlane-v0").kwargs["scenario"] == "Randomized"
@@ -110,9 +134,11 @@ def test_info_reports_the_required_quantities(env_id):
     assert reward == pytest.approx(sum(info[k] for k in REWARD_TERMS))
     assert info["critical_speed_mps"] > 0
     assert info["froude_number"] == pytest.approx(
-        info["speed_mps"] / math.sqrt(env.unwrapped.vehicle.gravity_m_s2 * env.unwrapped.vehicle.z_GB_m))
+        info["speed_mps"] / math.sqrt(env.unwrapped.vehicle.gravity_m_s2 * env.unwrapped.vehicle.z_GB_m)
+    )
     assert info["critical_froude"] == pytest.approx(
-        info["froude_number"] * info["critical_speed_mps"] / info["speed_mps"])
+        info["froude_number"] * info["critical_speed_mps"] / info["speed_mps"]
+    )
 
 
 def test_depth_reward_is_one_minus_tanh_of_the_scaled_error():
@@ -120,7 +146,9 @@ def test_depth_reward_is_one_minus_tanh_of_the_scaled_error():
     scale = env.unwrapped.config.depth_scale_m
     errors = []
     for offset in (0.0, 1e-9, 0.3, 2.0, 7.5, 20.0):  # from on depth to the edge of the depth band
-        _, info = env.reset(seed=0, options={"depth_command": 40.0, "initial_state": {"depth": 40.0 + offset}})
+        _, info = env.reset(
+            seed=0, options={"depth_command": 40.0, "initial_state": {"depth": 40.0 + offset}}
+        )
         *_, info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))
         error = abs(info["depth_error_m"])
         errors.append(error)
@@ -132,8 +160,16 @@ def test_observation_matches_info_without_noise():
     env = gym.make("subenv/Nominal-v0")
     env.reset(seed=1)
     obs, *_, info = env.step(np.array([0.3], dtype=np.float32))
-    expected = [info["depth_error_m"], info["pitch_rad"], info["heave_mps"], info["pitch_rate_radps"],
-                info["speed_mps"], info["stern_plane_rad"], info["bow_plane_rad"], info["depth_m"]]
+    expected = [
+        info["depth_error_m"],
+        info["pitch_rad"],
+        info["heave_mps"],
+        info["pitch_rate_radps"],
+        info["speed_mps"],
+        info["stern_plane_rad"],
+        info["bow_plane_rad"],
+        info["depth_m"],
+    ]
     assert len(OBSERVATION_NAMES) == obs.shape[0] == 8
     np.testing.assert_allclose(obs, np.array(expected, dtype=np.float32))
     assert info["stern_plane_rad"] == pytest.approx(0.3 * 0.4)
@@ -215,11 +251,16 @@ def test_plane_rate_limit():
 
 def test_reset_options_place_the_episode_exactly():
     env = gym.make("subenv/LowSpeed-v0")
-    obs, info = env.reset(seed=0, options={"speed": 0.3, "depth_command": 12.0,
-                                           "initial_state": (0.05, 0.01, -0.002, 13.5)})
+    obs, info = env.reset(
+        seed=0, options={"speed": 0.3, "depth_command": 12.0, "initial_state": (0.05, 0.01, -0.002, 13.5)}
+    )
     assert info["speed_mps"] == 0.3 and info["depth_command_m"] == 12.0
     assert (info["pitch_rad"], info["heave_mps"], info["pitch_rate_radps"], info["depth_m"]) == (
-        0.05, 0.01, -0.002, 13.5)
+        0.05,
+        0.01,
+        -0.002,
+        13.5,
+    )
     assert obs[0] == pytest.approx(1.5)
     _, info = env.reset(seed=0, options={"initial_state": {"pitch": 0.1}})
     assert info["pitch_rad"] == 0.1 and info["heave_mps"] == 0.0
@@ -279,8 +320,9 @@ def test_termination_reasons():
 
 def test_a_diverging_integration_ends_the_episode_with_finite_observations():
     # A 10 s step at 8 m/s is far outside RK4's stability region: the state blows up.
-    env = subenv.DivePlaneEnv(scenario="Nominal", dt=10.0, substeps=1, max_pitch_rad=math.pi / 2,
-                              max_depth_error_m=1000.0)
+    env = subenv.DivePlaneEnv(
+        scenario="Nominal", dt=10.0, substeps=1, max_pitch_rad=math.pi / 2, max_depth_error_m=1000.0
+    )
     env.reset(seed=0, options={"speed": 8.0, "initial_state": (0.3, 0.5, 0.1, 500.0), "depth_command": 500.0})
     obs, *_, info = _run_until_done(env, np.array([1.0], dtype=np.float32))
     assert info["termination_reason"] == "diverged"
@@ -301,8 +343,14 @@ def test_a_diverging_integration_ends_the_episode_with_finite_observations():
         ({"plane_rate_limit_radps": -1.0}, r"plane_rate_limit_radps=-1\.0 is invalid"),
         ({"max_pitch_rad": 2.0}, r"max_pitch_rad=2\.0 is invalid: must be a finite number in \[0\.01, 1\.57"),
         ({"max_depth_error_m": 0}, r"max_depth_error_m=0 is invalid"),
-        ({"effort_weight": -1.0}, r"effort_weight=-1\.0 is invalid: must be a finite number in \[0\.0, 1000000\.0\]"),
-        ({"render_mode": "ansi"}, r"render_mode='ansi' is invalid: must be None or one of \['human', 'rgb_array'\]"),
+        (
+            {"effort_weight": -1.0},
+            r"effort_weight=-1\.0 is invalid: must be a finite number in \[0\.0, 1000000\.0\]",
+        ),
+        (
+            {"render_mode": "ansi"},
+            r"render_mode='ansi' is invalid: must be None or one of \['human', 'rgb_array'\]",
+        ),
     ],
 )
 def test_bad_constructor_arguments(kwargs, message):
@@ -313,17 +361,26 @@ def test_bad_constructor_arguments(kwargs, message):
 @pytest.mark.parametrize(
     ("options", "message"),
     [
-        ({"sped": 1.0}, r"reset options \['sped'\] are unknown: allowed options are \['speed', 'depth_command'"),
+        (
+            {"sped": 1.0},
+            r"reset options \['sped'\] are unknown: allowed options are \['speed', 'depth_command'",
+        ),
         ({"speed": -0.5}, r"options\['speed'\]=-0\.5 is invalid: must be a finite number in \(0, 10\.0\]"),
         ({"speed": math.inf}, r"options\['speed'\]=inf is invalid"),
         ({"depth_command": 0.1}, r"options\['depth_command'\]=0\.1 is invalid: must be a number in \(0\.254"),
         ({"initial_state": (0.0, 0.0, 0.0)}, r"must be \(pitch, heave, pitch_rate, depth\)"),
-        ({"initial_state": (1.0, 0.0, 0.0, 10.0)}, r"\['pitch'\]=1\.0 is invalid: must be in \(-0\.6, 0\.6\) rad"),
+        (
+            {"initial_state": (1.0, 0.0, 0.0, 10.0)},
+            r"\['pitch'\]=1\.0 is invalid: must be in \(-0\.6, 0\.6\) rad",
+        ),
         ({"initial_state": (0.0, math.nan, 0.0, 10.0)}, r"\['heave'\]=nan is invalid: must be finite"),
         ({"initial_state": (0.0, 0.0, 0.0, 0.1)}, r"\['depth'\]=0\.1 is invalid: must be in \(0\.254"),
         ({"initial_state": {"roll": 0.1}}, r"unknown keys \['roll'\]: allowed keys are \['pitch', 'heave'"),
         # (a depth beyond the band of the ordered depth the draw gives: found after the draw)
-        ({"initial_state": {"depth": 100.0}}, r"\['depth'\]=100\.0 is invalid: must be in \(0\.254.*max_depth_error_m"),
+        (
+            {"initial_state": {"depth": 100.0}},
+            r"\['depth'\]=100\.0 is invalid: must be in \(0\.254.*max_depth_error_m",
+        ),
     ],
 )
 def test_bad_reset_options(options, message):
@@ -385,7 +442,9 @@ def test_register_envs_called_again_registers_the_same_ids_without_warnings():
         subenv.register_envs()
         subenv.register_envs()
     assert {env_id: gym.spec(env_id) for env_id in ENV_IDS} == before
-    assert all(gym.spec(env_id).vector_entry_point == "subenv.envs.vector:DivePlaneVectorEnv" for env_id in ENV_IDS)
+    assert all(
+        gym.spec(env_id).vector_entry_point == "subenv.envs.vector:DivePlaneVectorEnv" for env_id in ENV_IDS
+    )
 
 
 def test_render_rgb_array_through_the_env():

@@ -26,8 +26,13 @@ from subenv.envs import DivePlaneConfig, DivePlaneEnv, DivePlaneVectorEnv
 from subenv.envs import vector as vector_module
 from subenv.envs.config import MAX_DEPTH_BAND_M, MAX_WEIGHT, MIN_PITCH_LIMIT_RAD
 
-FUZZ = settings(max_examples=25, deadline=None, derandomize=True, database=None,
-                suppress_health_check=[HealthCheck.too_slow])
+FUZZ = settings(
+    max_examples=25,
+    deadline=None,
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow],
+)
 """Property tests: a fixed seed and a bounded count, so the suite is fast and repeatable."""
 _GYMNASIUM_VERSION = tuple(int(part) for part in gym.__version__.split(".")[:2])
 
@@ -125,8 +130,9 @@ def test_ctrl_c_during_threaded_stepping_never_corrupts_the_environment():
     counts = {"completed": 0, "interrupted": 0, "refused": 0}
     previous = signal.signal(signal.SIGINT, handler)
     stop = threading.Event()
-    thread = threading.Thread(target=lambda: [_thread.interrupt_main() for _ in iter(lambda: stop.wait(0.004), True)],
-                              daemon=True)
+    thread = threading.Thread(
+        target=lambda: [_thread.interrupt_main() for _ in iter(lambda: stop.wait(0.004), True)], daemon=True
+    )
     thread.start()
     try:
         for k in range(120):
@@ -171,14 +177,24 @@ def test_ctrl_c_during_threaded_stepping_never_corrupts_the_environment():
     bang=st.integers(0, 2**16),
 )
 def test_every_accepted_configuration_gives_finite_rewards_and_observations(
-        max_pitch_rad, max_depth_error_m, depth_scale_m, weights, bang):
+    max_pitch_rad, max_depth_error_m, depth_scale_m, weights, bang
+):
     pitch_weight, effort_weight, termination_penalty = weights
-    env = DivePlaneVectorEnv(num_envs=8, scenario="LowSpeed", max_pitch_rad=max_pitch_rad,
-                             max_depth_error_m=max_depth_error_m, depth_scale_m=depth_scale_m,
-                             pitch_weight=pitch_weight, effort_weight=effort_weight,
-                             termination_penalty=termination_penalty)
+    env = DivePlaneVectorEnv(
+        num_envs=8,
+        scenario="LowSpeed",
+        max_pitch_rad=max_pitch_rad,
+        max_depth_error_m=max_depth_error_m,
+        depth_scale_m=depth_scale_m,
+        pitch_weight=pitch_weight,
+        effort_weight=effort_weight,
+        termination_penalty=termination_penalty,
+    )
     obs, _ = env.reset(seed=bang)
-    assert np.isfinite(env.single_observation_space.low).all() and np.isfinite(env.single_observation_space.high).all()
+    assert (
+        np.isfinite(env.single_observation_space.low).all()
+        and np.isfinite(env.single_observation_space.high).all()
+    )
     rng = np.random.default_rng(bang)
     for _ in range(30):
         actions = rng.choice([-1.0, 1.0], size=(8, 1))  # bang-bang: the planes hard over
@@ -186,11 +202,21 @@ def test_every_accepted_configuration_gives_finite_rewards_and_observations(
         assert np.isfinite(obs).all() and np.isfinite(rewards).all()
 
 
-@pytest.mark.parametrize(("name", "value"), [
-    ("max_pitch_rad", 1e-200), ("max_pitch_rad", 2.0), ("max_depth_error_m", 1e308), ("depth_scale_m", 1e308),
-    ("pitch_weight", 1e308), ("termination_penalty", 1e308), ("effort_weight", -1.0),
-    ("plane_rate_limit_radps", 1e308), ("dt", True), ("alpha", True),
-])
+@pytest.mark.parametrize(
+    ("name", "value"),
+    [
+        ("max_pitch_rad", 1e-200),
+        ("max_pitch_rad", 2.0),
+        ("max_depth_error_m", 1e308),
+        ("depth_scale_m", 1e308),
+        ("pitch_weight", 1e308),
+        ("termination_penalty", 1e308),
+        ("effort_weight", -1.0),
+        ("plane_rate_limit_radps", 1e308),
+        ("dt", True),
+        ("alpha", True),
+    ],
+)
 def test_arguments_that_would_give_nan_or_inf_are_refused(name, value):
     with pytest.raises(ValueError, match=rf"^{name}={re.escape(repr(value))} is invalid: must be"):
         DivePlaneConfig(**{name: value})
@@ -198,7 +224,9 @@ def test_arguments_that_would_give_nan_or_inf_are_refused(name, value):
 
 def test_numpy_scalars_are_accepted_as_arguments():
     config = DivePlaneConfig(dt=np.float32(0.5), substeps=np.int64(2), max_pitch_rad=np.float64(0.6))
-    assert (config.dt, config.substeps) == (0.5, 2) and type(config.dt) is float and type(config.substeps) is int
+    assert (
+        (config.dt, config.substeps) == (0.5, 2) and type(config.dt) is float and type(config.substeps) is int
+    )
 
 
 # --- 8. a rejected call changes nothing -----------------------------------------------------------
@@ -206,8 +234,14 @@ def test_a_rejected_reset_does_not_change_the_next_episode():
     env, reference = gym.make("subenv/Randomized-v0"), gym.make("subenv/Randomized-v0")
     env.reset(seed=0)
     reference.reset(seed=0)
-    for options in ({"speed": -1.0}, {"initial_state": [0, 0, 0, "10"]}, {"depth_command": True}, {"nope": 1},
-                    {"depth_command": 10**400}, {"initial_state": {"pitch": 10**400}}):
+    for options in (
+        {"speed": -1.0},
+        {"initial_state": [0, 0, 0, "10"]},
+        {"depth_command": True},
+        {"nope": 1},
+        {"depth_command": 10**400},
+        {"initial_state": {"pitch": 10**400}},
+    ):
         with pytest.raises(ValueError, match="is invalid|unknown"):
             env.reset(options=options)
     np.testing.assert_array_equal(env.reset()[0], reference.reset()[0])
@@ -262,8 +296,12 @@ def test_a_deep_copied_sync_vector_env_over_the_env_continues_exactly():
 def test_the_vector_env_renders_one_frame_per_sub_environment_for_gymnasiums_wrappers(tmp_path):
     pytest.importorskip("moviepy", reason="Gymnasium's RecordVideo writes with moviepy (gymnasium[other])")
     from gymnasium.wrappers.vector import RecordVideo
-    env = RecordVideo(DivePlaneVectorEnv(num_envs=2, scenario="Nominal", render_mode="rgb_array"),
-                      str(tmp_path / "videos"), episode_trigger=lambda k: k == 0)
+
+    env = RecordVideo(
+        DivePlaneVectorEnv(num_envs=2, scenario="Nominal", render_mode="rgb_array"),
+        str(tmp_path / "videos"),
+        episode_trigger=lambda k: k == 0,
+    )
     env.reset(seed=0)
     for _ in range(3):
         env.step(np.zeros((2, 1)))
@@ -283,10 +321,15 @@ def test_render_gives_each_sub_environment_its_own_frame():
     np.testing.assert_array_equal(frames[2], single.render())
 
 
-@pytest.mark.parametrize(("mask", "error"), [
-    ([True, False], TypeError), (np.array([1, 0]), TypeError), (np.ones(3, dtype=bool), ValueError),
-    (np.zeros(2, dtype=bool), ValueError),
-])
+@pytest.mark.parametrize(
+    ("mask", "error"),
+    [
+        ([True, False], TypeError),
+        (np.array([1, 0]), TypeError),
+        (np.ones(3, dtype=bool), ValueError),
+        (np.zeros(2, dtype=bool), ValueError),
+    ],
+)
 def test_a_bad_reset_mask_raises_what_sync_vector_env_raises(mask, error):
     ours = DivePlaneVectorEnv(num_envs=2, scenario="Nominal")
     theirs = SyncVectorEnv([lambda: gym.make("subenv/Nominal-v0") for _ in range(2)])
@@ -326,14 +369,25 @@ def test_a_vector_reset_refused_for_an_episode_drawn_changes_nothing():
 
 # --- property-based fuzzing of what a user passes in ------------------------------------------------
 _ANYTHING = st.one_of(
-    st.floats(allow_nan=True, allow_infinity=True), st.integers(-10**400, 10**400), st.booleans(), st.none(),
-    st.text(max_size=3), st.complex_numbers(max_magnitude=10), st.sampled_from([np.float32(0.7), np.int64(30)]),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.integers(-(10**400), 10**400),
+    st.booleans(),
+    st.none(),
+    st.text(max_size=3),
+    st.complex_numbers(max_magnitude=10),
+    st.sampled_from([np.float32(0.7), np.int64(30)]),
 )
 _OPTIONS = st.dictionaries(
     st.sampled_from(["speed", "depth_command", "initial_state", "speeed"]),
-    st.one_of(_ANYTHING, st.lists(_ANYTHING, min_size=0, max_size=5),
-              st.dictionaries(st.sampled_from(["pitch", "heave", "pitch_rate", "depth", "x"]), _ANYTHING, max_size=3),
-              st.floats(0.01, 10.0), st.floats(0.3, 1000.0)),
+    st.one_of(
+        _ANYTHING,
+        st.lists(_ANYTHING, min_size=0, max_size=5),
+        st.dictionaries(
+            st.sampled_from(["pitch", "heave", "pitch_rate", "depth", "x"]), _ANYTHING, max_size=3
+        ),
+        st.floats(0.01, 10.0),
+        st.floats(0.3, 1000.0),
+    ),
     max_size=3,
 )
 
@@ -351,8 +405,11 @@ def test_reset_options_give_a_valid_episode_or_a_clear_error_that_changes_nothin
         np.testing.assert_array_equal(env.reset()[0], reference.reset()[0])  # as if never called
         return
     assert env.observation_space.contains(obs), obs
-    assert all(np.isfinite(v) for k, v in info.items() if k not in ("termination_reason", "critical_speed_mps",
-                                                                      "critical_froude", "froude_number"))
+    assert all(
+        np.isfinite(v)
+        for k, v in info.items()
+        if k not in ("termination_reason", "critical_speed_mps", "critical_froude", "froude_number")
+    )
     for _ in range(5):
         obs, reward, *_ = env.step(np.array([1.0], dtype=np.float32))
         assert np.isfinite(obs).all() and math.isfinite(reward)

@@ -186,9 +186,9 @@ def test_water_surface_drawn_only_near_the_surface(frame: Frame) -> None:
 
     shallow = surface_rows(1.0)
     assert shallow.size > 0
-    hull_rows = np.nonzero(
-        _mask(_crop(render_rgb(dataclasses.replace(frame, depth_m=1.0)), side), HULL_RGB)
-    )[0]
+    hull_rows = np.nonzero(_mask(_crop(render_rgb(dataclasses.replace(frame, depth_m=1.0)), side), HULL_RGB))[
+        0
+    ]
     assert shallow.max() < hull_rows.min()  # the surface is above the hull
     assert surface_rows(30.0).size == 0
 
@@ -218,9 +218,7 @@ def test_command_line_moves_with_command(frame: Frame) -> None:
     _, trace = panel_rects(720, 480)
 
     def command_row(value: float) -> float:
-        f = dataclasses.replace(
-            frame, depth_command_m=value, commands_m=(value,) * len(frame.times_s)
-        )
+        f = dataclasses.replace(frame, depth_command_m=value, commands_m=(value,) * len(frame.times_s))
         mask = _mask(_crop(render_rgb(f), trace), COMMAND_RGB)
         counts = mask.sum(axis=1)
         return float(np.argmax(counts))  # the row of the long dashed line

@@ -52,8 +52,13 @@ def local_ray(recipe):  # type: ignore[no-untyped-def]
     # The README's set-up hook: the runners import nothing of subenv until it registers the ids.
     hook = re.search(r'"worker_process_setup_hook": "([\w.]+)"', Path(recipe.__file__).read_text())
     assert hook and hook.group(1) == "subenv.register_envs"
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, configure_logging=False,
-             runtime_env={"worker_process_setup_hook": hook.group(1)})
+    ray.init(
+        num_cpus=2,
+        include_dashboard=False,
+        log_to_driver=False,
+        configure_logging=False,
+        runtime_env={"worker_process_setup_hook": hook.group(1)},
+    )
     yield
     ray.shutdown()
 

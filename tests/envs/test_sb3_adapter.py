@@ -26,8 +26,9 @@ def _same_info(a: dict, b: dict) -> None:
             assert a[key] == expected, key
 
 
-@pytest.mark.parametrize(("env_id", "kwargs"), [("subenv/Nominal-v0", {}),
-                                                ("subenv/DivePlane-v0", {"max_episode_steps": 30})])
+@pytest.mark.parametrize(
+    ("env_id", "kwargs"), [("subenv/Nominal-v0", {}), ("subenv/DivePlane-v0", {"max_episode_steps": 30})]
+)
 def test_adapter_reproduces_dummy_vec_env(env_id, kwargs):
     n = 3
     native = make_sb3_vec_env(env_id, n_envs=n, **kwargs)
@@ -80,8 +81,17 @@ def test_ppo_trains_through_the_adapter():
 
 def test_sac_trains_through_the_adapter():
     venv = make_sb3_vec_env("subenv/Nominal-v0", n_envs=4, seed=0)
-    model = SAC("MlpPolicy", venv, learning_starts=100, train_freq=8, gradient_steps=2, batch_size=64,
-                buffer_size=2000, seed=0, device="cpu")
+    model = SAC(
+        "MlpPolicy",
+        venv,
+        learning_starts=100,
+        train_freq=8,
+        gradient_steps=2,
+        batch_size=64,
+        buffer_size=2000,
+        seed=0,
+        device="cpu",
+    )
     model.learn(total_timesteps=384)  # 12 rounds of train_freq=8 steps at 4 envs
     assert model.num_timesteps == 384
     buffer = model.replay_buffer
@@ -96,7 +106,9 @@ def test_sac_trains_through_the_adapter():
 
 def test_set_scenario_moves_the_following_episodes_through_env_method():
     """How a curriculum changes the training distribution: the vector env's set_scenario, once for all."""
-    venv = make_sb3_vec_env("subenv/Nominal-v0", n_envs=4, seed=0, info_keys=("speed_mps", "critical_speed_mps"))
+    venv = make_sb3_vec_env(
+        "subenv/Nominal-v0", n_envs=4, seed=0, info_keys=("speed_mps", "critical_speed_mps")
+    )
     venv.reset()
     assert [info["speed_mps"] for info in venv.reset_infos] == pytest.approx([1.524] * 4)  # Nominal: 5 fps
     assert venv.env_method("set_scenario", "LowSpeed") == [None] * 4

@@ -19,17 +19,17 @@ import pytest
 import subenv
 
 DIGESTS = {
-    'subenv/DivePlane-v0': '50a7988a56b86775',
-    'subenv/Nominal-v0': '6f78ad88d87ed019',
-    'subenv/LowSpeed-v0': '44e8cecf7e46e703',
-    'subenv/NearCritical-v0': '5712025b255e31a2',
-    'subenv/SpeedTransient-v0': '36e1ad991eb88bfc',
-    'subenv/PeriscopeDepth-v0': '5e9fe2ac8e9a8d4a',
-    'subenv/BallastOffset-v0': '4eacfa9d874a9a06',
-    'subenv/Randomized-v0': '50a7988a56b86775',
-    'subenv/Mixed-v0': '6d5dcd26c5f265b6',
-    'subenv/PeriscopeDepth-v1': '3aa630265a7c8a5f',
-    'subenv/PeriscopeDepthWaves-v0': '1e534e3e9bfb06ca',
+    "subenv/DivePlane-v0": "50a7988a56b86775",
+    "subenv/Nominal-v0": "6f78ad88d87ed019",
+    "subenv/LowSpeed-v0": "44e8cecf7e46e703",
+    "subenv/NearCritical-v0": "5712025b255e31a2",
+    "subenv/SpeedTransient-v0": "36e1ad991eb88bfc",
+    "subenv/PeriscopeDepth-v0": "5e9fe2ac8e9a8d4a",
+    "subenv/BallastOffset-v0": "4eacfa9d874a9a06",
+    "subenv/Randomized-v0": "50a7988a56b86775",
+    "subenv/Mixed-v0": "6d5dcd26c5f265b6",
+    "subenv/PeriscopeDepth-v1": "3aa630265a7c8a5f",
+    "subenv/PeriscopeDepthWaves-v0": "1e534e3e9bfb06ca",
 }
 
 
@@ -52,7 +52,8 @@ def digest(env_id: str) -> str:
 def test_a_seed_gives_the_rollout_it_gave_when_the_id_was_released(env_id):
     assert digest(env_id) == DIGESTS[env_id], (
         f"{env_id}: seeded rollouts changed; bump every id's version with a Version History entry, then "
-        "update DIGESTS (python tests/envs/test_seeded_rollouts.py)")
+        "update DIGESTS (python tests/envs/test_seeded_rollouts.py)"
+    )
 
 
 if __name__ == "__main__":

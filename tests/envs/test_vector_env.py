@@ -24,7 +24,10 @@ MODES = (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP)
 def assert_same(native, reference, where: str = "") -> None:
     """Equal structure, dtypes and shapes; numbers equal to floating-point tolerance."""
     if isinstance(reference, dict):
-        assert isinstance(native, dict) and native.keys() == reference.keys(), (where, native.keys() ^ reference.keys())
+        assert isinstance(native, dict) and native.keys() == reference.keys(), (
+            where,
+            native.keys() ^ reference.keys(),
+        )
         for key in reference:
             assert_same(native[key], reference[key], f"{where}/{key}")
         return
@@ -49,8 +52,9 @@ def assert_same(native, reference, where: str = "") -> None:
 
 def run_both(env_id: str, mode: AutoresetMode, steps: int, num_envs: int = 4, seed: int = 3, **kwargs):
     """Step the native env and SyncVectorEnv over gym.make(env_id) with the same seeds and actions."""
-    sync = gym.make_vec(env_id, num_envs=num_envs, vectorization_mode="sync",
-                        vector_kwargs={"autoreset_mode": mode}, **kwargs)
+    sync = gym.make_vec(
+        env_id, num_envs=num_envs, vectorization_mode="sync", vector_kwargs={"autoreset_mode": mode}, **kwargs
+    )
     native = gym.make_vec(env_id, num_envs=num_envs, autoreset_mode=mode, **kwargs)
     assert isinstance(native, DivePlaneVectorEnv) and isinstance(sync, SyncVectorEnv)
     assert_same(native.reset(seed=seed), sync.reset(seed=seed), "reset")
@@ -82,8 +86,18 @@ def test_reproduces_sync_vector_env_through_time_limits_and_other_configurations
     run_both("subenv/PeriscopeDepth-v0", mode, steps=150, control="independent", plane_rate_limit_radps=0.05)
     run_both("subenv/LowSpeed-v0", mode, steps=150, alpha=0.5, dt=0.25, substeps=1, max_pitch_rad=0.3)
     # 10 s steps at 2-2.6 u_cr leave RK4's stability region: "diverged" ends, last valid observation kept.
-    assert run_both("subenv/SpeedTransient-v0", mode, steps=60, dt=10.0, substeps=1, max_pitch_rad=math.pi / 2,
-                    max_depth_error_m=1000.0) > 10
+    assert (
+        run_both(
+            "subenv/SpeedTransient-v0",
+            mode,
+            steps=60,
+            dt=10.0,
+            substeps=1,
+            max_pitch_rad=math.pi / 2,
+            max_depth_error_m=1000.0,
+        )
+        > 10
+    )
 
 
 def test_a_single_env_matches_the_first_row_and_seeds_are_offset_per_env():
@@ -104,7 +118,9 @@ def test_seed_lists_none_and_reset_mask_match_sync_vector_env():
     actions = np.full((3, 1), 0.5, dtype=np.float32)
     assert_same(native.step(actions), sync.step(actions))
     mask = np.array([False, True, False])
-    assert_same(native.reset(options={"reset_mask": mask.copy()}), sync.reset(options={"reset_mask": mask.copy()}))
+    assert_same(
+        native.reset(options={"reset_mask": mask.copy()}), sync.reset(options={"reset_mask": mask.copy()})
+    )
     assert_same(native.step(actions), sync.step(actions))
     # seed=None keeps each sub-environment's generator: the next draws continue its stream.
     assert_same(native.reset(options={"speed": 1.0}), sync.reset(options={"speed": 1.0}))
@@ -133,13 +149,27 @@ def test_results_do_not_depend_on_the_number_of_threads(scenario):
 
 # Every number of an episode drawn, the loading excepted (a batch draws one loading).
 _DRAWS_ALL_BUT_THE_LOADING = Scenario(
-    name="DrawsAllButTheLoading", description="every episode quantity drawn", speed_ratio=(0.5, 2.5),
+    name="DrawsAllButTheLoading",
+    description="every episode quantity drawn",
+    speed_ratio=(0.5, 2.5),
     speed_ramp=SpeedRamp(final_speed_ratio=(0.3, 0.6), start_s=(10.0, 20.0), duration_s=(30.0, 60.0)),
-    depth_command_m=(5.0, 20.0), initial_depth_offset_m=(-1.0, 1.0), initial_pitch_rad=(-0.05, 0.05),
-    initial_heave_mps=(-0.02, 0.02), initial_pitch_rate_radps=(-0.01, 0.01), sensor_noise=True,
-    disturbance_std_N=0.7, duration_s=100.0,
+    depth_command_m=(5.0, 20.0),
+    initial_depth_offset_m=(-1.0, 1.0),
+    initial_pitch_rad=(-0.05, 0.05),
+    initial_heave_mps=(-0.02, 0.02),
+    initial_pitch_rate_radps=(-0.01, 0.01),
+    sensor_noise=True,
+    disturbance_std_N=0.7,
+    duration_s=100.0,
 )
-_BATCH_READY = ("Nominal", "LowSpeed", "NearCritical", "SpeedTransient", "PeriscopeDepth-v1", "PeriscopeDepthWaves")
+_BATCH_READY = (
+    "Nominal",
+    "LowSpeed",
+    "NearCritical",
+    "SpeedTransient",
+    "PeriscopeDepth-v1",
+    "PeriscopeDepthWaves",
+)
 
 
 def test_which_scenarios_draw_their_resets_in_batches():
@@ -153,8 +183,9 @@ def test_which_scenarios_draw_their_resets_in_batches():
         get_scenario("Nominal").sample_batch(uniforms[:, :2], 1.0)
 
 
-@pytest.mark.parametrize("scenario", [*_BATCH_READY, _DRAWS_ALL_BUT_THE_LOADING],
-                         ids=lambda s: s if isinstance(s, str) else s.name)
+@pytest.mark.parametrize(
+    "scenario", [*_BATCH_READY, _DRAWS_ALL_BUT_THE_LOADING], ids=lambda s: s if isinstance(s, str) else s.name
+)
 def test_batch_resets_draw_exactly_what_one_reset_at_a_time_draws(scenario):
     # A batch of resets (a vector env's, for a scenario with one loading) takes each sub-environment's
     # numbers in a compiled loop and turns them into records over arrays: the same records, bit for
@@ -180,7 +211,9 @@ def test_batch_resets_draw_exactly_what_one_reset_at_a_time_draws(scenario):
         assert batch.episodes[i] == draw and batch.vehicles[i] == loading.vehicle
         assert all(type(v) is float for v in (*draw.initial_state, draw.depth_command_m))
         assert batch._generators[i].random() == g.random()
-    drawn = np.stack([batch._state["depth_m"], batch._episode["depth_command_m"], batch._state["disturbance_N"]])
+    drawn = np.stack(
+        [batch._state["depth_m"], batch._episode["depth_command_m"], batch._state["disturbance_N"]]
+    )
     assert np.unique(drawn, axis=1).shape[1] == n  # drawn, not shared
 
 
@@ -188,8 +221,9 @@ def test_batch_resets_draw_exactly_what_one_reset_at_a_time_draws(scenario):
 def test_many_simultaneous_resets_reproduce_sync_vector_env(mode):
     # Full planes end most episodes of Nominal within a few steps of each other: autoresets come in
     # batches (drawn as arrays), and each is still the sub-environment's own next episode.
-    sync = gym.make_vec("subenv/Nominal-v0", num_envs=32, vectorization_mode="sync",
-                        vector_kwargs={"autoreset_mode": mode})
+    sync = gym.make_vec(
+        "subenv/Nominal-v0", num_envs=32, vectorization_mode="sync", vector_kwargs={"autoreset_mode": mode}
+    )
     native = gym.make_vec("subenv/Nominal-v0", num_envs=32, autoreset_mode=mode)
     assert_same(native.reset(seed=8), sync.reset(seed=8))
     biggest = 0
@@ -221,7 +255,9 @@ def test_episodes_of_batches_from_different_scenarios_are_each_their_own():
         actions = np.full((32, 1), 1.0 if t % 40 < 30 else -1.0, dtype=np.float32)
         assert_same(native.step(actions), sync.step(actions), f"step {t}")
         widths.append(native.unwrapped._unbuilt_uniforms.shape[1])
-    assert widths[0] == get_scenario("Nominal").uniforms_per_episode < widths[-1]  # SpeedTransient drew in a batch
+    assert (
+        widths[0] == get_scenario("Nominal").uniforms_per_episode < widths[-1]
+    )  # SpeedTransient drew in a batch
 
 
 _TWO_RUNS = 2 * tr.BLOCKS_PER_RUN * LANES  # sub-environments that two threads share
@@ -289,7 +325,10 @@ def test_disabled_autoreset_needs_an_explicit_masked_reset():
         ({"num_envs": 2.5}, r"num_envs=2\.5 is invalid"),
         ({"num_envs": True}, r"num_envs=True is invalid"),
         ({"num_envs": 2, "max_episode_steps": 0}, r"max_episode_steps=0 is invalid"),
-        ({"num_envs": 2, "autoreset_mode": "Sometimes"}, r"autoreset_mode='Sometimes' is invalid: must be one of"),
+        (
+            {"num_envs": 2, "autoreset_mode": "Sometimes"},
+            r"autoreset_mode='Sometimes' is invalid: must be one of",
+        ),
         ({"num_envs": 2, "render_mode": "human"}, r"render_mode='human' is invalid"),
         ({"num_envs": 2, "threads": 0}, r"threads=0 is invalid: must be None or an integer >= 1"),
         ({"num_envs": 2, "scenario": "Fast"}, r"scenario='Fast' is unknown"),  # the single env's checks

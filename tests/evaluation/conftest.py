@@ -28,9 +28,19 @@ def make_result() -> Callable[..., EpisodeResult]:
             t, e, zeros, zeros, zeros, zeros, termination_reason="", plane_limit_rad=0.4
         )
         return EpisodeResult(
-            controller=controller, scenario=scenario, episode=episode, seed=100 + episode, control="dual",
-            alpha=0.0, initial_speed_mps=0.4, final_speed_mps=0.4, critical_speed_mps=0.5785,
-            depth_command_m=10.0, initial_depth_error_m=float(e[0]), episode_duration_s=120.0, steps=120,
+            controller=controller,
+            scenario=scenario,
+            episode=episode,
+            seed=100 + episode,
+            control="dual",
+            alpha=0.0,
+            initial_speed_mps=0.4,
+            final_speed_mps=0.4,
+            critical_speed_mps=0.5785,
+            depth_command_m=10.0,
+            initial_depth_error_m=float(e[0]),
+            episode_duration_s=120.0,
+            steps=120,
             metrics=metrics,
         )
 
@@ -52,6 +62,12 @@ def small_run() -> SmallRun:
     wrong branch (on BallastOffset two that then broach), broached, steady offset, unsettled."""
     controllers = {name: make_controller(name) for name in ("thesis", "reversal_aware")}
     scenarios = ["LowSpeed", "PeriscopeDepth", "SpeedTransient", "BallastOffset"]
-    results = evaluate(list(controllers.values()), scenarios, episodes=4, seed=DEFAULT_SEED + 3, progress=False,
-                       keep_trajectories=0)
+    results = evaluate(
+        list(controllers.values()),
+        scenarios,
+        episodes=4,
+        seed=DEFAULT_SEED + 3,
+        progress=False,
+        keep_trajectories=0,
+    )
     return SmallRun(controllers, results)

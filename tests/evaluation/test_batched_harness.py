@@ -59,8 +59,10 @@ def assert_batched_as_one_at_a_time(make: Any, scenario: str, **kwargs: Any) -> 
 @pytest.mark.parametrize("name", list(subenv_baselines.CONTROLLERS))
 def test_every_baseline_gets_the_one_at_a_time_results_bit_for_bit(name: str) -> None:
     assert isinstance(make_controller(name), BatchController)
-    lengths = [tuple(r.steps for r in assert_batched_as_one_at_a_time(lambda: make_controller(name), scenario))
-               for scenario in SCENARIOS]
+    lengths = [
+        tuple(r.steps for r in assert_batched_as_one_at_a_time(lambda: make_controller(name), scenario))
+        for scenario in SCENARIOS
+    ]
     # Some batch had episodes of different lengths: the ended ones were left behind correctly.
     assert any(len(set(steps)) > 1 for steps in lengths)
 
@@ -101,8 +103,13 @@ def test_a_batch_of_the_wrong_size_is_refused(name: str, suboff: Vehicle) -> Non
     assert isinstance(controller, BatchController)
     controller.reset_batch([{"speed_mps": 0.4}, {"speed_mps": 1.0}], suboff)
     n_obs = len(OBSERVATION_NAMES)
-    assert controller.act_batch(np.zeros((2, n_obs), dtype=np.float32)).shape == (2, 1 if name == "lqr" else 2)
-    with pytest.raises(ValueError, match=rf"observations has shape \(3, {n_obs}\): must have shape \(2, obs_dim\)"):
+    assert controller.act_batch(np.zeros((2, n_obs), dtype=np.float32)).shape == (
+        2,
+        1 if name == "lqr" else 2,
+    )
+    with pytest.raises(
+        ValueError, match=rf"observations has shape \(3, {n_obs}\): must have shape \(2, obs_dim\)"
+    ):
         controller.act_batch(np.zeros((3, n_obs), dtype=np.float32))
 
 

@@ -86,8 +86,12 @@ def test_thesis_feedback_holds_depth_at_the_design_speed():
 
 @pytest.mark.parametrize("speed_mps", [0.25, 0.35, 0.45])  # 0.43, 0.61, 0.78 u_cr
 def test_below_critical_the_thesis_feedback_ends_on_the_saturated_pitched_equilibrium(speed_mps, suboff):
-    result = run_episode(ThesisFeedback(), "LowSpeed", seed=0, options={
-        "speed": speed_mps, "depth_command": 10.0, "initial_state": (0.0, 0.0, 0.0, 8.0)})
+    result = run_episode(
+        ThesisFeedback(),
+        "LowSpeed",
+        seed=0,
+        options={"speed": speed_mps, "depth_command": 10.0, "initial_state": (0.0, 0.0, 0.0, 8.0)},
+    )
     m, tr = result.metrics, result.trajectory
     assert tr is not None
     assert not m.success and m.wrong_branch and m.outcome == "wrong_branch"
@@ -106,7 +110,8 @@ def test_every_controller_meets_the_same_episodes_and_runs_are_reproducible():
     by_episode: dict[tuple[str, int], set[tuple[float, float, float]]] = {}
     for r in first:
         by_episode.setdefault((r.scenario, r.episode), set()).add(
-            (r.initial_speed_mps, r.depth_command_m, r.initial_depth_error_m))
+            (r.initial_speed_mps, r.depth_command_m, r.initial_depth_error_m)
+        )
     assert all(len(v) == 1 for v in by_episode.values())  # same draw for both controllers
     assert len({next(iter(v)) for v in by_episode.values()}) == 6  # and distinct episodes
     again = evaluate([ThesisFeedback()], suite, seed=7, progress=False, keep_trajectories=3)
@@ -138,8 +143,14 @@ def test_registered_suites_name_registered_scenarios():
     for name in suite_names():
         assert set(get_suite(name).scenarios) <= set(scenario_names())
     assert get_suite("default").scenarios == (
-        "Nominal", "LowSpeed", "NearCritical", "SpeedTransient", "PeriscopeDepth-v1", "PeriscopeDepthWaves",
-        "BallastOffset")
+        "Nominal",
+        "LowSpeed",
+        "NearCritical",
+        "SpeedTransient",
+        "PeriscopeDepth-v1",
+        "PeriscopeDepthWaves",
+        "BallastOffset",
+    )
     tiny = get_suite("tiny")
     assert len(tiny.scenarios) == 2 and tiny.episodes <= 2
 
@@ -150,8 +161,11 @@ def test_a_suite_is_a_suite_name_a_scenario_name_or_a_list_of_scenarios():
     assert resolve_suite("subenv/LowSpeed-v0").scenarios == ("LowSpeed",)
     assert resolve_suite("subenv/PeriscopeDepth-v1").scenarios == ("PeriscopeDepth-v1",)
     assert resolve_suite(["Nominal", "LowSpeed"]).scenarios == ("Nominal", "LowSpeed")
-    with pytest.raises(ValueError, match=r"suite='Fastest' is unknown: must be a suite name \(one of \['default'.*\]\) "
-                                         r"or a scenario name \(one of \['Nominal'"):
+    with pytest.raises(
+        ValueError,
+        match=r"suite='Fastest' is unknown: must be a suite name \(one of \['default'.*\]\) "
+        r"or a scenario name \(one of \['Nominal'",
+    ):
         resolve_suite("Fastest")
 
 
@@ -159,10 +173,14 @@ def test_a_suite_is_a_suite_name_a_scenario_name_or_a_list_of_scenarios():
     ("call", "match"),
     [
         (lambda: get_suite("huge"), r"suite='huge' is unknown: must be one of \['default'"),
-        (lambda: evaluate([ZeroPlanes()], ["Nominal", "Deep"], progress=False),
-         r"scenario='Deep' is unknown: must be one of \['Nominal'"),
-        (lambda: resolve_controllers(["zero", "no_such_controller"]),
-         r"controller='zero' is unknown: must be one of"),
+        (
+            lambda: evaluate([ZeroPlanes()], ["Nominal", "Deep"], progress=False),
+            r"scenario='Deep' is unknown: must be one of \['Nominal'",
+        ),
+        (
+            lambda: resolve_controllers(["zero", "no_such_controller"]),
+            r"controller='zero' is unknown: must be one of",
+        ),
         (lambda: resolve_controllers([ZeroPlanes(), ZeroPlanes()]), r"\['zero'\] appear more than once"),
         (lambda: evaluate([ZeroPlanes()], "tiny", episodes=0, progress=False), "episodes=0 is invalid"),
         (lambda: run_episode(ZeroPlanes(), "subenv/Nope-v0", seed=0), r"scenario='Nope' is unknown"),
@@ -194,13 +212,25 @@ def test_none_runs_every_registered_controller(monkeypatch):
 def test_comparison_end_to_end_on_the_tiny_suite(tmp_path: Path, capsys):
     out = tmp_path / "evaluation"
     comparison = run_comparison([ZeroPlanes(), ThesisFeedback()], "tiny", out_dir=out, progress=True)
-    assert "8/8 episodes, 100%" in capsys.readouterr().err  # (not a terminal: log lines) every episode counted
+    assert (
+        "8/8 episodes, 100%" in capsys.readouterr().err
+    )  # (not a terminal: log lines) every episode counted
 
     assert sorted(p.name for p in out.iterdir()) == [
-        ".subenv-output", "leaderboard.md", "plots", "results.csv", "run.json", "summary.csv", "summary.md"]
+        ".subenv-output",
+        "leaderboard.md",
+        "plots",
+        "results.csv",
+        "run.json",
+        "summary.csv",
+        "summary.md",
+    ]
     assert (out / ".subenv-output").read_text() == "subenv evaluate\n"  # what overwrite=True asks of a folder
     assert sorted(p.name for p in (out / "plots").iterdir()) == [
-        "metrics_vs_speed.png", "trajectories_LowSpeed.png", "trajectories_Nominal.png"]
+        "metrics_vs_speed.png",
+        "trajectories_LowSpeed.png",
+        "trajectories_Nominal.png",
+    ]
     assert all(p.read_bytes().startswith(b"\x89PNG") for p in (out / "plots").iterdir())
     assert sorted(p.name for p in tmp_path.iterdir()) == ["evaluation"]  # no temporary folder left
 
@@ -222,11 +252,18 @@ def test_comparison_end_to_end_on_the_tiny_suite(tmp_path: Path, capsys):
     with pytest.raises(FileExistsError, match="exists"):
         run_comparison([ZeroPlanes()], "tiny", out_dir=out, progress=False)
     assert (out / "results.csv").read_bytes() == before  # untouched
-    again = run_comparison([ZeroPlanes()], "tiny", episodes=1, out_dir=out, overwrite=True, progress=False,
-                           plots=False)
+    again = run_comparison(
+        [ZeroPlanes()], "tiny", episodes=1, out_dir=out, overwrite=True, progress=False, plots=False
+    )
     assert len(again.results) == 2
     assert sorted(p.name for p in out.iterdir()) == [
-        ".subenv-output", "leaderboard.md", "results.csv", "run.json", "summary.csv", "summary.md"]
+        ".subenv-output",
+        "leaderboard.md",
+        "results.csv",
+        "run.json",
+        "summary.csv",
+        "summary.md",
+    ]
 
 
 def test_bad_input_is_refused_before_any_episode_runs(tmp_path: Path):
@@ -260,6 +297,8 @@ def test_every_episode_says_whether_it_can_be_won_and_the_loading_decides() -> N
     env = gym.make("subenv/BallastOffset-v0", control="independent")
     for r in results:
         env.reset(seed=r.seed)
-        trim = depth_holding_trim(env.unwrapped.vehicle, r.final_speed_mps, env.unwrapped.config.max_pitch_rad)
+        trim = depth_holding_trim(
+            env.unwrapped.vehicle, r.final_speed_mps, env.unwrapped.config.max_pitch_rad
+        )
         assert trim.exists == r.winnable, r.seed
     assert all(not r.metrics.success for r in lost)  # no controller wins those

@@ -25,12 +25,15 @@ def _metrics(t, e, *, pitch=None, rate=None, stern=None, bow=None, reason="", du
     n = len(t)
     zeros = np.zeros(n)
     return episode_metrics(
-        t, e,
+        t,
+        e,
         zeros if pitch is None else pitch,
         zeros if rate is None else rate,
         zeros if stern is None else stern,
         zeros if bow is None else bow,
-        termination_reason=reason, plane_limit_rad=LIMIT, episode_duration_s=duration,
+        termination_reason=reason,
+        plane_limit_rad=LIMIT,
+        episode_duration_s=duration,
     )
 
 
@@ -109,8 +112,9 @@ def test_success_from_the_last_time_off_depth_agrees_with_the_whole_record(
     if off_depth_at_s is not None:
         e[t == off_depth_at_s] = DEPTH_TOLERANCE_M + 0.01
     last_outside_s = -math.inf if off_depth_at_s is None else off_depth_at_s
-    streamed = episode_success(terminated=reason != "", start_s=float(t[0]), end_s=float(t[-1]),
-                               last_outside_s=last_outside_s)
+    streamed = episode_success(
+        terminated=reason != "", start_s=float(t[0]), end_s=float(t[-1]), last_outside_s=last_outside_s
+    )
     assert streamed == _metrics(t, e, reason=reason).success == success
 
 
@@ -207,7 +211,7 @@ def test_wrong_branch_rejects_near_misses(change: str):
     elif change == "brief":
         idx = np.flatnonzero(window)
         stern = stern.copy()
-        stern[idx[-int(0.2 * idx.size):]] = 0.5 * LIMIT
+        stern[idx[-int(0.2 * idx.size) :]] = 0.5 * LIMIT
     elif change == "short":
         keep = t <= HOLD_WINDOW_S - 10.0
         t, e, pitch, rate, stern = t[keep], e[keep], pitch[keep], rate[keep], stern[keep]
@@ -242,9 +246,16 @@ def test_outcomes_are_the_documented_ones():
     ],
 )
 def test_bad_input_is_a_clear_error(kwargs, match):
-    args = {"time_s": [0.0, 1.0, 2.0], "depth_error_m": [0.0] * 3, "pitch_rad": [0.0] * 3,
-            "pitch_rate_radps": [0.0] * 3, "stern_plane_rad": [0.0] * 3, "bow_plane_rad": [0.0] * 3,
-            "termination_reason": "", "plane_limit_rad": LIMIT}
+    args = {
+        "time_s": [0.0, 1.0, 2.0],
+        "depth_error_m": [0.0] * 3,
+        "pitch_rad": [0.0] * 3,
+        "pitch_rate_radps": [0.0] * 3,
+        "stern_plane_rad": [0.0] * 3,
+        "bow_plane_rad": [0.0] * 3,
+        "termination_reason": "",
+        "plane_limit_rad": LIMIT,
+    }
     args.update(kwargs)
     with pytest.raises(ValueError, match=match):
         episode_metrics(**args)
@@ -255,19 +266,41 @@ def test_a_froude_scaled_episode_is_judged_as_the_models(case) -> None:  # type:
     """length_ratio: an episode of a boat lambda times larger, in scaled units (times x sqrt(lambda), depths
     x lambda, rates x 1/sqrt(lambda)), gets the model episode's outcome."""
     t = _time(300.0)
-    e = {"settled": 2.0 * np.exp(-t / 20.0), "within": np.full(t.size, 0.3), "wrong_branch": 0.8 + 0.004 * t,
-         "steady_offset": np.full(t.size, 0.8), "late": np.where(t < 270.0, 2.0, 0.1)}[case]
+    e = {
+        "settled": 2.0 * np.exp(-t / 20.0),
+        "within": np.full(t.size, 0.3),
+        "wrong_branch": 0.8 + 0.004 * t,
+        "steady_offset": np.full(t.size, 0.8),
+        "late": np.where(t < 270.0, 2.0, 0.1),
+    }[case]
     pitch = np.full(t.size, 0.05) if case == "wrong_branch" else np.zeros(t.size)
     stern = np.full(t.size, LIMIT) if case == "wrong_branch" else np.zeros(t.size)
     rate = np.full(t.size, 0.5 * STEADY_PITCH_RATE_RADPS)
     ratio = 24.0
     root = math.sqrt(ratio)
     model = episode_metrics(t, e, pitch, rate, stern, stern * 0, termination_reason="", plane_limit_rad=LIMIT)
-    full = episode_metrics(t * root, e * ratio, pitch, rate / root, stern, stern * 0, termination_reason="",
-                           plane_limit_rad=LIMIT, length_ratio=ratio)
+    full = episode_metrics(
+        t * root,
+        e * ratio,
+        pitch,
+        rate / root,
+        stern,
+        stern * 0,
+        termination_reason="",
+        plane_limit_rad=LIMIT,
+        length_ratio=ratio,
+    )
     expected = {"settled": "success", "within": "success", "late": "unsettled"}.get(case, case)
     assert full.outcome == model.outcome == expected
     if case == "within":  # 7.2 m off at full scale: within the scaled tolerance, not within 0.5 m
-        unscaled = episode_metrics(t * root, e * ratio, pitch, rate / root, stern, stern * 0, termination_reason="",
-                                   plane_limit_rad=LIMIT)
+        unscaled = episode_metrics(
+            t * root,
+            e * ratio,
+            pitch,
+            rate / root,
+            stern,
+            stern * 0,
+            termination_reason="",
+            plane_limit_rad=LIMIT,
+        )
         assert unscaled.outcome == "steady_offset"

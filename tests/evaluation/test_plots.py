@@ -43,7 +43,8 @@ def test_metrics_vs_speed_is_written(tmp_path: Path, randomised: bool, at_speed)
     rng = np.random.default_rng(0)
     results = [
         at_speed(c, float(u), 0.5785 * (rng.uniform(0.8, 1.25) if randomised else 1.0), u > 0.6)
-        for c in ("a", "b") for u in np.linspace(0.2, 1.5, 12)
+        for c in ("a", "b")
+        for u in np.linspace(0.2, 1.5, 12)
     ]
     path = plot_metrics_vs_speed(results, tmp_path / "plots" / "m.png")
     assert path.read_bytes().startswith(b"\x89PNG")
@@ -71,7 +72,7 @@ def test_speed_transient_shows_the_speed_and_where_it_crosses_u_cr(small_run):
     fig = outcomes_figure(mine, get)
     columns = len(representative_episodes(mine)["SpeedTransient"])
     assert len(fig.axes) == 4 * columns  # depth error, pitch, planes, and the speed
-    speed_axes = fig.axes[3 * columns:]
+    speed_axes = fig.axes[3 * columns :]
     for ax, r in zip(speed_axes, representative_episodes(mine)["SpeedTransient"].values()):
         tr = get(r)
         crossing = speed_crossing_s(tr)
@@ -85,12 +86,24 @@ def test_speed_transient_shows_the_speed_and_where_it_crosses_u_cr(small_run):
 
 
 def test_speed_crossing_is_interpolated_and_absent_at_constant_speed():
-    info = {"time_s": 0.0, "depth_error_m": 0.0, "pitch_rad": 0.0, "heave_mps": 0.0, "pitch_rate_radps": 0.0,
-            "speed_mps": 2.0, "stern_plane_rad": 0.0, "bow_plane_rad": 0.0, "depth_m": 10.0,
-            "depth_command_m": 10.0, "critical_speed_mps": 1.0}
+    info = {
+        "time_s": 0.0,
+        "depth_error_m": 0.0,
+        "pitch_rad": 0.0,
+        "heave_mps": 0.0,
+        "pitch_rate_radps": 0.0,
+        "speed_mps": 2.0,
+        "stern_plane_rad": 0.0,
+        "bow_plane_rad": 0.0,
+        "depth_m": 10.0,
+        "depth_command_m": 10.0,
+        "critical_speed_mps": 1.0,
+    }
     recorder = TrajectoryRecorder(info)
     for k in range(1, 5):
-        recorder.record(np.zeros(1), info | {"time_s": 10.0 * k, "speed_mps": 2.0 - 0.4 * k})  # 1.2 at 20 s, 0.8 at 30 s
+        recorder.record(
+            np.zeros(1), info | {"time_s": 10.0 * k, "speed_mps": 2.0 - 0.4 * k}
+        )  # 1.2 at 20 s, 0.8 at 30 s
     assert speed_crossing_s(recorder.finish("", 0.4, 40.0)) == pytest.approx(25.0)
     level = TrajectoryRecorder(info)
     level.record(np.zeros(1), info | {"time_s": 1.0})
@@ -102,8 +115,10 @@ def test_replay_gives_the_recorded_episode_and_refuses_another(small_run):
     tr = replay_trajectory(r, small_run.controllers[r.controller])
     assert tr.metrics() == r.metrics
     with pytest.raises(ValueError, match="the results say 'success'"):
-        replay_trajectory(dataclasses.replace(r, metrics=dataclasses.replace(r.metrics, outcome="success")),
-                          small_run.controllers[r.controller])
+        replay_trajectory(
+            dataclasses.replace(r, metrics=dataclasses.replace(r.metrics, outcome="success")),
+            small_run.controllers[r.controller],
+        )
 
 
 def test_outcome_plot_is_written_and_needs_one_scenario_with_trajectories(tmp_path: Path, small_run):

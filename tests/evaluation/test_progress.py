@@ -18,7 +18,9 @@ class Terminal(io.StringIO):
         return True
 
 
-LINE = re.compile(r"^evaluate: (\d+)/(\d+) episodes, (\d+)% \(lqr on LowSpeed\); (\d+:\d\d) elapsed, ETA (\d+:\d\d|\?)$")
+LINE = re.compile(
+    r"^evaluate: (\d+)/(\d+) episodes, (\d+)% \(lqr on LowSpeed\); (\d+:\d\d) elapsed, ETA (\d+:\d\d|\?)$"
+)
 
 
 @pytest.mark.parametrize("total", [8, 40, 3600])
@@ -90,8 +92,11 @@ def test_a_plain_env_says_it_compiles_on_its_first_reset_and_step_only(vector, m
             entered.append("exit")
 
     monkeypatch.setattr(compiling, "compile_notice", Recording)
-    env = (gym.make_vec("subenv/LowSpeed-v0", num_envs=2, vectorization_mode="vector_entry_point") if vector
-           else gym.make("subenv/LowSpeed-v0"))
+    env = (
+        gym.make_vec("subenv/LowSpeed-v0", num_envs=2, vectorization_mode="vector_entry_point")
+        if vector
+        else gym.make("subenv/LowSpeed-v0")
+    )
     env.reset(seed=0)
     for _ in range(3):
         env.step(env.action_space.sample())

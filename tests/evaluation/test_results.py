@@ -148,8 +148,16 @@ def _wrong_branch_then_broached(make_result, controller: str, scenario: str, epi
     t = np.arange(0.0, 121.0, 1.0)
     e = np.linspace(2.0, -8.0, t.size)
     limit = 0.4
-    m = episode_metrics(t, e, np.full_like(t, math.radians(3.0)), np.zeros_like(t), np.full_like(t, limit),
-                        np.zeros_like(t), termination_reason="broached", plane_limit_rad=limit)
+    m = episode_metrics(
+        t,
+        e,
+        np.full_like(t, math.radians(3.0)),
+        np.zeros_like(t),
+        np.full_like(t, limit),
+        np.zeros_like(t),
+        termination_reason="broached",
+        plane_limit_rad=limit,
+    )
     assert m.wrong_branch and m.broached and m.outcome == "wrong_branch"
     return dataclasses.replace(make_result(controller, scenario, episode, False), metrics=m)
 
@@ -157,15 +165,26 @@ def _wrong_branch_then_broached(make_result, controller: str, scenario: str, epi
 def _broached(make_result, controller: str, scenario: str, episode: int):
     t = np.arange(0.0, 31.0, 1.0)
     zeros = np.zeros_like(t)
-    m = episode_metrics(t, np.linspace(0.0, -10.0, t.size), zeros, zeros, zeros, zeros,
-                        termination_reason="broached", plane_limit_rad=0.4)
+    m = episode_metrics(
+        t,
+        np.linspace(0.0, -10.0, t.size),
+        zeros,
+        zeros,
+        zeros,
+        zeros,
+        termination_reason="broached",
+        plane_limit_rad=0.4,
+    )
     assert m.outcome == "broached"
     return dataclasses.replace(make_result(controller, scenario, episode, False), metrics=m)
 
 
 def test_outcome_counts_count_every_episode_once(make_result):
-    metrics = [_wrong_branch_then_broached(make_result, "c", "A", 0).metrics,
-               _broached(make_result, "c", "A", 1).metrics, make_result("c", "A", 2, True).metrics]
+    metrics = [
+        _wrong_branch_then_broached(make_result, "c", "A", 0).metrics,
+        _broached(make_result, "c", "A", 1).metrics,
+        make_result("c", "A", 2, True).metrics,
+    ]
     counts = res.outcome_counts(metrics)
     assert list(counts)[: len(OUTCOMES)] == list(OUTCOMES)
     assert counts["wrong_branch"] == 1 and counts["broached"] == 1 and counts["success"] == 1
@@ -187,7 +206,7 @@ def _assert_tables_agree(results) -> set[str]:
     scenarios = {r.scenario for r in results}
     board_failures = [k for k in board[0] if k not in {"controller", "all scenarios", "winnable", *scenarios}]
     columns = [c for c in summary[0] if c != "winnable: success"]
-    rate_columns = columns[3: columns.index("IAE [m s]")]
+    rate_columns = columns[3 : columns.index("IAE [m s]")]
     assert rate_columns[0] == "success" and rate_columns[1:] == board_failures
     for row in summary:
         percents = [int(row[c].split("%")[0]) for c in rate_columns]
@@ -203,10 +222,14 @@ def _assert_tables_agree(results) -> set[str]:
 def test_leaderboard_and_summary_count_failures_alike(make_result):
     results = []
     for i in range(4):
-        results += [_wrong_branch_then_broached(make_result, "thesis", "A", i) if i < 2
-                    else _broached(make_result, "thesis", "A", i),
-                    make_result("thesis", "B", i, success=i < 3), make_result("other", "A", i, success=True),
-                    _broached(make_result, "other", "B", i) if i == 0 else make_result("other", "B", i, True)]
+        results += [
+            _wrong_branch_then_broached(make_result, "thesis", "A", i)
+            if i < 2
+            else _broached(make_result, "thesis", "A", i),
+            make_result("thesis", "B", i, success=i < 3),
+            make_result("other", "A", i, success=True),
+            _broached(make_result, "other", "B", i) if i == 0 else make_result("other", "B", i, True),
+        ]
     assert _assert_tables_agree(results) == {"wrong branch", "steady offset", "broached"}
     board = {row["controller"]: row for row in _markdown_rows(res.leaderboard_markdown(results))}
     assert board["thesis"]["broached"] == "2" and board["thesis"]["wrong branch"] == "2"
@@ -230,7 +253,9 @@ def test_by_speed_ratio_bins_each_scenario_on_its_own(make_result):
         results.append(dataclasses.replace(r, final_speed_mps=2.63 * r.critical_speed_mps))
     rows = res.by_speed_ratio(results, bins=2)
     low = [row for row in rows if row["scenario"] == "Low"]
-    assert [x for row in low for x in (row["ratio_low"], row["ratio_high"])] == pytest.approx([0.3, 0.55, 0.55, 0.8])
+    assert [x for row in low for x in (row["ratio_low"], row["ratio_high"])] == pytest.approx(
+        [0.3, 0.55, 0.55, 0.8]
+    )
     assert [row["episodes"] for row in low] == [4, 4]
     assert [row["success"] for row in low] == [0, 4]
     assert (low[1]["success_ci_low"], low[1]["success_ci_high"]) == pytest.approx(res.wilson_interval(4, 4))
@@ -252,7 +277,9 @@ def test_median_interval_brackets_the_median_and_repeats():
 
 def test_representative_episode_is_the_commonest_controllers_median(make_result):
     results = [make_result("rare", "S", 0, success=True, iae=0.5)]
-    results += [make_result("common", "S", i, success=True, iae=float(iae)) for i, iae in enumerate([3, 1, 2])]
+    results += [
+        make_result("common", "S", i, success=True, iae=float(iae)) for i, iae in enumerate([3, 1, 2])
+    ]
     results += [make_result("rare", "S", 5, success=False)]
     chosen = res.representative_episodes(results)["S"]
     assert list(chosen) == ["success", "steady_offset"]
@@ -263,9 +290,12 @@ def test_representative_episode_is_the_commonest_controllers_median(make_result)
 def test_the_leaderboard_ranks_by_the_winnable_episodes(make_result):
     """An episode that no controller can win (no depth-holding trim within the limits) does not rank:
     a controller that lost only unwinnable episodes ranks above one that lost a winnable one."""
+
     def run(controller, lost_winnable):  # type: ignore[no-untyped-def]
         rows = [dataclasses.replace(make_result(controller, "A", i, True), winnable=True) for i in range(8)]
-        rows += [dataclasses.replace(make_result(controller, "A", 8 + i, False), winnable=False) for i in range(3)]
+        rows += [
+            dataclasses.replace(make_result(controller, "A", 8 + i, False), winnable=False) for i in range(3)
+        ]
         if lost_winnable:  # wins two of the unwinnable ones by luck, loses one winnable
             rows[0] = dataclasses.replace(make_result(controller, "A", 0, False), winnable=True)
             rows[8] = dataclasses.replace(make_result(controller, "A", 8, True), winnable=False)

@@ -27,10 +27,17 @@ def _loadings(vehicle_name, rng, free_surface):
     surface = FreeSurface() if free_surface else FreeSurface(suction_factor=0.0)
     variants = [model_params(vehicle, surface)]
     for _ in range(7):
-        variants.append(model_params(vehicle.variant(
-            z_GB_m=vehicle.z_GB_m * rng.uniform(0.2, 3.0), x_GB_m=rng.uniform(-0.01, 0.01) * vehicle.length_m,
-            excess_buoyancy_N=rng.uniform(-0.01, 0.01) * vehicle.weight_N, crossflow_drag=rng.uniform(0.0, 1.0)),
-            surface))
+        variants.append(
+            model_params(
+                vehicle.variant(
+                    z_GB_m=vehicle.z_GB_m * rng.uniform(0.2, 3.0),
+                    x_GB_m=rng.uniform(-0.01, 0.01) * vehicle.length_m,
+                    excess_buoyancy_N=rng.uniform(-0.01, 0.01) * vehicle.weight_N,
+                    crossflow_drag=rng.uniform(0.0, 1.0),
+                ),
+                surface,
+            )
+        )
     return stack_params([variants[i % len(variants)] for i in range(N)])
 
 
@@ -38,32 +45,58 @@ def _inputs(rng, vehicle_name, free_surface):
     params = _loadings(vehicle_name, rng, free_surface)
     length = subenv.load_vehicle(vehicle_name).length_m
     depth_low = 0.6 * length / 8.0 if free_surface else 5.0  # periscope depth: the suction is strong
-    state = np.column_stack([rng.uniform(-0.4, 0.4, N), rng.uniform(-0.5, 0.5, N), rng.uniform(-0.1, 0.1, N),
-                             rng.uniform(depth_low, depth_low + 3.0, N)])
+    state = np.column_stack(
+        [
+            rng.uniform(-0.4, 0.4, N),
+            rng.uniform(-0.5, 0.5, N),
+            rng.uniform(-0.1, 0.1, N),
+            rng.uniform(depth_low, depth_low + 3.0, N),
+        ]
+    )
     state[:20, 1:3] = 0.0  # level flight: w = q = 0, the cross-flow's root at the hull's end
     state[20:40, 2] = 0.0
-    inputs = {"speed": rng.uniform(0.2, 2.5, N), "stern": rng.uniform(-0.4, 0.4, N), "bow": rng.uniform(-0.4, 0.4, N),
-              "force": rng.normal(0.0, 0.01 * params.W_minus_B.max() + 10.0, N)}
+    inputs = {
+        "speed": rng.uniform(0.2, 2.5, N),
+        "stern": rng.uniform(-0.4, 0.4, N),
+        "bow": rng.uniform(-0.4, 0.4, N),
+        "force": rng.normal(0.0, 0.01 * params.W_minus_B.max() + 10.0, N),
+    }
     return state, params, inputs
 
 
-@pytest.mark.parametrize("vehicle_name, free_surface", [("suboff", False), ("suboff", True), ("remus100", True)])
+@pytest.mark.parametrize(
+    "vehicle_name, free_surface", [("suboff", False), ("suboff", True), ("remus100", True)]
+)
 def test_the_right_hand_side_on_jax_is_the_compiled_one(vehicle_name, free_surface):
     rng = np.random.default_rng(11)
     state, params, inputs = _inputs(rng, vehicle_name, free_surface)
     moment = rng.normal(0.0, 50.0, N)
-    expected = derivatives(state, inputs["speed"], inputs["stern"], inputs["bow"], params, inputs["force"], moment)
-    got = jax.jit(sj.derivatives)(state, inputs["speed"], inputs["stern"], inputs["bow"], pack_params(params),
-                                  params.hull.packed, inputs["force"], moment)
+    expected = derivatives(
+        state, inputs["speed"], inputs["stern"], inputs["bow"], params, inputs["force"], moment
+    )
+    got = jax.jit(sj.derivatives)(
+        state,
+        inputs["speed"],
+        inputs["stern"],
+        inputs["bow"],
+        pack_params(params),
+        params.hull.packed,
+        inputs["force"],
+        moment,
+    )
     assert got.dtype == jnp.float64
     np.testing.assert_allclose(np.asarray(got), expected, rtol=TOLERANCE, atol=TOLERANCE)
     if free_surface:  # (the suction is in the comparison: without it the answer differs)
         deep_params = params._replace(rho_suction=0.0 * params.rho_suction)
-        deep = derivatives(state, inputs["speed"], inputs["stern"], inputs["bow"], deep_params, inputs["force"], moment)
+        deep = derivatives(
+            state, inputs["speed"], inputs["stern"], inputs["bow"], deep_params, inputs["force"], moment
+        )
         assert np.max(np.abs(deep - expected)) > 1e3 * TOLERANCE
 
 
-@pytest.mark.parametrize("vehicle_name, free_surface", [("suboff", False), ("suboff", True), ("remus100", False)])
+@pytest.mark.parametrize(
+    "vehicle_name, free_surface", [("suboff", False), ("suboff", True), ("remus100", False)]
+)
 def test_twenty_control_periods_on_jax_are_the_compiled_ones(vehicle_name, free_surface):
     """The environments' integrator (rk4 over the right-hand side, two steps per 0.5 s period; the
     block integrator gives its bits, tests/dynamics/test_integrator.py) with speed ramps."""
@@ -72,15 +105,29 @@ def test_twenty_control_periods_on_jax_are_the_compiled_ones(vehicle_name, free_
     slope = rng.uniform(-0.01, 0.01, N)
     slope[: N // 2] = 0.0
     prm, hull = pack_params(params), params.hull.packed
-    period = jax.jit(lambda x, t0: sj.control_period(x, t0, 0.5, inputs["speed"] + slope * t0, slope, inputs["stern"],
-                                                     inputs["bow"], prm, hull, inputs["force"]))
+    period = jax.jit(
+        lambda x, t0: sj.control_period(
+            x,
+            t0,
+            0.5,
+            inputs["speed"] + slope * t0,
+            slope,
+            inputs["stern"],
+            inputs["bow"],
+            prm,
+            hull,
+            inputs["force"],
+        )
+    )
     expected, got = state.copy(), jnp.asarray(state)
     for k in range(20):
         t0 = 0.5 * k
         speed0 = inputs["speed"] + slope * t0
 
         def rhs(t, x, t0=t0, speed0=speed0):
-            return derivatives(x, speed0 + slope * (t - t0), inputs["stern"], inputs["bow"], params, inputs["force"])
+            return derivatives(
+                x, speed0 + slope * (t - t0), inputs["stern"], inputs["bow"], params, inputs["force"]
+            )
 
         expected = rk4(rhs, t0, expected, 0.5, 2)
         got = period(got, t0)
@@ -117,7 +164,9 @@ def test_deep_water_leaves_the_suction_out_and_refuses_a_free_surface():
     without = sj.derivatives(*args, prm, hull, free_surface=False)  # (found from prm by default as well)
     np.testing.assert_allclose(np.asarray(without), derivatives(*args, deep), rtol=TOLERANCE, atol=TOLERANCE)
     near = pack_params(_loadings("suboff", rng, free_surface=True))
-    with pytest.raises(ValueError, match=r"free_surface=False is invalid for these loadings: 400 of them have a free"):
+    with pytest.raises(
+        ValueError, match=r"free_surface=False is invalid for these loadings: 400 of them have a free"
+    ):
         sj.derivatives(*args, near, hull, free_surface=False)
 
 
@@ -132,8 +181,23 @@ def _periods_in_blocks(x, t0, speed0, slope, stern, bow, force, prm, hull, dista
         m = min(lanes, x.shape[0] - b)
         for j in range(m):
             i = b + j
-            integrate.set_lane(block, j, x[i, 0], x[i, 1], x[i, 2], x[i, 3], t0, speed0[i], slope[i], stern[i], bow[i],
-                               force[i], prm[i], distance[i], n_waves[i])
+            integrate.set_lane(
+                block,
+                j,
+                x[i, 0],
+                x[i, 1],
+                x[i, 2],
+                x[i, 3],
+                t0,
+                speed0[i],
+                slope[i],
+                stern[i],
+                bow[i],
+                force[i],
+                prm[i],
+                distance[i],
+                n_waves[i],
+            )
             waves[j] = seas[i]
         integrate.control_period_lanes(block, m, integrate.CONTROL_PERIOD_S, integrate.SUBSTEPS, hull, waves)
         for j in range(m):
@@ -147,17 +211,41 @@ def test_twenty_control_periods_in_a_sea_on_jax_are_the_environments_block_integ
     period against the compiled block integrator itself."""
     rng = np.random.default_rng(14)
     _, _, inputs = _inputs(rng, "suboff", free_surface=True)
-    params = stack_params([model_params(subenv.load_vehicle("suboff"), FreeSurface())] * N)  # (one loading: a sea
+    params = stack_params(
+        [model_params(subenv.load_vehicle("suboff"), FreeSurface())] * N
+    )  # (one loading: a sea
     # drives the light variants of the other tests out of the water within 20 periods)
-    state = np.column_stack([rng.uniform(-0.05, 0.05, N), rng.uniform(-0.05, 0.05, N), rng.uniform(-0.01, 0.01, N),
-                             rng.uniform(1.0, 2.0, N)])  # near level flight at periscope depth (SUBOFF: 4.4 m long)
-    inputs["stern"], inputs["bow"], inputs["force"] = 0.1 * inputs["stern"], 0.1 * inputs["bow"], 0.1 * inputs["force"]
-    inputs["speed"] = rng.uniform(0.3, 1.0, N)  # (PeriscopeDepth's speeds: faster, the suction broaches the boat)
+    state = np.column_stack(
+        [
+            rng.uniform(-0.05, 0.05, N),
+            rng.uniform(-0.05, 0.05, N),
+            rng.uniform(-0.01, 0.01, N),
+            rng.uniform(1.0, 2.0, N),
+        ]
+    )  # near level flight at periscope depth (SUBOFF: 4.4 m long)
+    inputs["stern"], inputs["bow"], inputs["force"] = (
+        0.1 * inputs["stern"],
+        0.1 * inputs["bow"],
+        0.1 * inputs["force"],
+    )
+    inputs["speed"] = rng.uniform(
+        0.3, 1.0, N
+    )  # (PeriscopeDepth's speeds: faster, the suction broaches the boat)
     vehicle = subenv.load_vehicle("suboff")
     sea = SeaState(significant_height_m=0.03, peak_period_s=2.0, waves=12)
-    seas = np.stack([sea.components(rng.random(sea.waves), rng.uniform(0.0, 2.0 * np.pi, sea.waves), vehicle.hull.x_m,
-                                    vehicle.hull.breadth_m, vehicle.water_density_kg_m3, vehicle.gravity_m_s2)
-                     for _ in range(N)])
+    seas = np.stack(
+        [
+            sea.components(
+                rng.random(sea.waves),
+                rng.uniform(0.0, 2.0 * np.pi, sea.waves),
+                vehicle.hull.x_m,
+                vehicle.hull.breadth_m,
+                vehicle.water_density_kg_m3,
+                vehicle.gravity_m_s2,
+            )
+            for _ in range(N)
+        ]
+    )
     n_waves = np.full(N, sea.waves)
     seas[: N // 4], n_waves[: N // 4] = 0.0, 0  # calm
     assert seas.shape[1:] == (WAVE_FIELDS, MAX_WAVES)
@@ -167,23 +255,62 @@ def test_twenty_control_periods_in_a_sea_on_jax_are_the_environments_block_integ
 
     @jax.jit
     def period(x, t0, speed0, distance0):
-        return sj.control_period(x, t0, integrate.CONTROL_PERIOD_S, speed0, slope, inputs["stern"], inputs["bow"], prm,
-                                 hull, inputs["force"], waves=seas, distance0=distance0)
+        return sj.control_period(
+            x,
+            t0,
+            integrate.CONTROL_PERIOD_S,
+            speed0,
+            slope,
+            inputs["stern"],
+            inputs["bow"],
+            prm,
+            hull,
+            inputs["force"],
+            waves=seas,
+            distance0=distance0,
+        )
 
     expected, got = state.copy(), jnp.asarray(state)
     for k in range(20):
         t0 = integrate.CONTROL_PERIOD_S * k
         speed0 = inputs["speed"] + slope * t0
-        expected = _periods_in_blocks(expected, t0, speed0, slope, inputs["stern"], inputs["bow"], inputs["force"],
-                                      prm, hull, distance, n_waves, seas)
+        expected = _periods_in_blocks(
+            expected,
+            t0,
+            speed0,
+            slope,
+            inputs["stern"],
+            inputs["bow"],
+            inputs["force"],
+            prm,
+            hull,
+            distance,
+            n_waves,
+            seas,
+        )
         got = period(got, t0, speed0, distance)
         speed1 = speed0 + slope * integrate.CONTROL_PERIOD_S
-        distance = distance + 0.5 * (speed0 + speed1) * integrate.CONTROL_PERIOD_S  # as the transition keeps it
+        distance = (
+            distance + 0.5 * (speed0 + speed1) * integrate.CONTROL_PERIOD_S
+        )  # as the transition keeps it
     assert np.all(np.isfinite(expected))
     np.testing.assert_allclose(np.asarray(got), expected, rtol=TOLERANCE, atol=TOLERANCE)
-    calm = np.asarray(jax.jit(sj.control_period, static_argnums=2)(
-        state, 0.0, integrate.CONTROL_PERIOD_S, inputs["speed"], slope, inputs["stern"], inputs["bow"], prm, hull,
-        inputs["force"]))
+    calm = np.asarray(
+        jax.jit(sj.control_period, static_argnums=2)(
+            state,
+            0.0,
+            integrate.CONTROL_PERIOD_S,
+            inputs["speed"],
+            slope,
+            inputs["stern"],
+            inputs["bow"],
+            prm,
+            hull,
+            inputs["force"],
+        )
+    )
     first = np.asarray(period(jnp.asarray(state), 0.0, inputs["speed"], rng.uniform(0.0, 100.0, N)))
-    assert np.abs(first - calm)[N // 4:].max() > 1e-9  # (and the sea moves the states that have one)
-    np.testing.assert_allclose(first[: N // 4], calm[: N // 4], rtol=TOLERANCE, atol=TOLERANCE)  # (calm: not moved)
+    assert np.abs(first - calm)[N // 4 :].max() > 1e-9  # (and the sea moves the states that have one)
+    np.testing.assert_allclose(
+        first[: N // 4], calm[: N // 4], rtol=TOLERANCE, atol=TOLERANCE
+    )  # (calm: not moved)

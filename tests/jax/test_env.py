@@ -1,6 +1,5 @@
 """The functional JAX environment (subenv.jax.make) against the Gymnasium environments it traces."""
 
-
 import dataclasses
 
 import gymnasium as gym
@@ -29,7 +28,7 @@ EXACT_PERIODS = 100
 # 400 periods, JAX against JAX (test_the_dynamics_amplify_..., which prints it). The episodes must still end alike, their
 # values within:
 LATER_TOLERANCE = 1e-6
-VALUE_KEYS = tr.REPORT_KEYS[:tr.REPORT_KEYS.index("reason")]
+VALUE_KEYS = tr.REPORT_KEYS[: tr.REPORT_KEYS.index("reason")]
 
 
 def _gym_numbers(config, seed):
@@ -107,7 +106,9 @@ def test_the_dynamics_amplify_a_rounding_difference_beyond_the_exact_tolerance(r
     one state perturbed by 1e-15 (relative), the same planes' angles: the difference outgrows 1e-12."""
     env, params = sj.make("subenv/Nominal-v0", episodes=1, seed=3)
     state = env.reset_to(0, params, jnp.zeros(tr.N_OBS))
-    other = dataclasses.replace(state, depth_m=state.depth_m * (1 + 1e-15), pitch_rad=state.pitch_rad * (1 + 1e-15))
+    other = dataclasses.replace(
+        state, depth_m=state.depth_m * (1 + 1e-15), pitch_rad=state.pitch_rad * (1 + 1e-15)
+    )
     perturbations = jnp.asarray(np.random.default_rng(3).uniform(-0.3, 0.3, (400, 1)))
 
     def body(carry, perturbation):
@@ -119,12 +120,16 @@ def test_the_dynamics_amplify_a_rounding_difference_beyond_the_exact_tolerance(r
 
     _, differences = jax.jit(lambda a, b: jax.lax.scan(body, (a, b), perturbations))(state, other)
     differences = np.asarray(differences)
-    report("JAX env, Nominal, a 1e-15 difference after 100 / 400 control periods (depth, relative)",
-           f"{differences[99]:.1e} / {differences[-1]:.1e}")
+    report(
+        "JAX env, Nominal, a 1e-15 difference after 100 / 400 control periods (depth, relative)",
+        f"{differences[99]:.1e} / {differences[-1]:.1e}",
+    )
     assert differences[-1] > 1e-12
 
 
-@pytest.mark.parametrize("kwargs", [{"control": "independent"}, {"plane_rate_limit_radps": 0.07, "alpha": 0.5}])
+@pytest.mark.parametrize(
+    "kwargs", [{"control": "independent"}, {"plane_rate_limit_radps": 0.07, "alpha": 0.5}]
+)
 def test_the_jax_env_plays_the_gymnasium_envs_variants(kwargs):
     n, worst = _play_both("subenv/Randomized-v0", seed=5, kwargs=kwargs, steps=300)
     assert n >= 20 and worst <= TOLERANCE
@@ -188,15 +193,18 @@ def test_the_gymnax_interface():
     assert sj.make("subenv/Randomized-v0", episodes=2, control="independent")[0].num_actions == 2
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    ({"env_id": "CartPole-v1"}, "env_id"),
-    ({"env_id": "subenv/Nope-v0"}, "env_id"),
-    ({"episodes": 0}, "episodes"),
-    ({"seed": -1}, "seed"),
-    ({"max_episode_steps": 0}, "max_episode_steps"),
-    ({"env_id": "subenv/PeriscopeDepth-v1", "free_surface": False}, "free surface"),
-    ({"env_id": "subenv/PeriscopeDepthWaves-v0", "sea": False}, "sea"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"env_id": "CartPole-v1"}, "env_id"),
+        ({"env_id": "subenv/Nope-v0"}, "env_id"),
+        ({"episodes": 0}, "episodes"),
+        ({"seed": -1}, "seed"),
+        ({"max_episode_steps": 0}, "max_episode_steps"),
+        ({"env_id": "subenv/PeriscopeDepth-v1", "free_surface": False}, "free surface"),
+        ({"env_id": "subenv/PeriscopeDepthWaves-v0", "sea": False}, "sea"),
+    ],
+)
 def test_make_refuses_bad_arguments_by_name(kwargs, match):
     with pytest.raises(ValueError, match=match):
         sj.make(**{"episodes": 2, **kwargs})
@@ -236,9 +244,16 @@ def _policy(obs, xp, gain=1.0):
 
 
 def _metrics(time_s, info, reason, plane_limit_rad):
-    return episode_metrics(time_s, info["depth_error_m"], info["pitch_rad"], info["pitch_rate_radps"],
-                           info["stern_plane_rad"], info["bow_plane_rad"], termination_reason=reason,
-                           plane_limit_rad=plane_limit_rad)
+    return episode_metrics(
+        time_s,
+        info["depth_error_m"],
+        info["pitch_rad"],
+        info["pitch_rate_radps"],
+        info["stern_plane_rad"],
+        info["bow_plane_rad"],
+        termination_reason=reason,
+        plane_limit_rad=plane_limit_rad,
+    )
 
 
 def _gym_metrics(env_id, seeds):
@@ -254,7 +269,9 @@ def _gym_metrics(env_id, seeds):
             rows.append(info)
             done = terminated or truncated
         record = {key: np.array([r[key] for r in rows]) for key in VALUE_KEYS}
-        out.append(_metrics(record["time_s"], record, info["termination_reason"] if terminated else "", limit))
+        out.append(
+            _metrics(record["time_s"], record, info["termination_reason"] if terminated else "", limit)
+        )
     return out
 
 
@@ -271,12 +288,16 @@ def _jax_metrics(env_id, seeds, key, gains):
 
         def body(carry, key):
             state, done = carry
-            new, info = env.transition(state, _policy(state.obs, jnp, gain), jax.random.normal(key, (sj.N_NORMALS,)))
+            new, info = env.transition(
+                state, _policy(state.obs, jnp, gain), jax.random.normal(key, (sj.N_NORMALS,))
+            )
             new = jax.tree_util.tree_map(lambda a, b: jnp.where(done, a, b), state, new)
             ended = (info["terminated"] > 0) | (info["truncated"] > 0)
             return (new, done | ended), ({k: info[k] for k in (*VALUE_KEYS, "reason", "terminated")}, done)
 
-        _, (info, before) = jax.lax.scan(body, (state, jnp.array(False)), jax.random.split(key, env.max_episode_steps))
+        _, (info, before) = jax.lax.scan(
+            body, (state, jnp.array(False)), jax.random.split(key, env.max_episode_steps)
+        )
         return state, info, before
 
     n = len(seeds)
@@ -284,10 +305,14 @@ def _jax_metrics(env_id, seeds, key, gains):
     by_gain = jax.vmap(jax.vmap(episode, in_axes=(None, 0, 0)), in_axes=(0, None, None))
     resets, infos, before = jax.jit(by_gain)(jnp.asarray(gains, dtype=float), rows, keys)
     infos, before = {key: np.asarray(value) for key, value in infos.items()}, np.asarray(before)
-    reset = {"time_s": resets.time_s, "pitch_rad": resets.pitch_rad,
-             "depth_error_m": resets.depth_m - resets.episode.depth_command_m,
-             "pitch_rate_radps": resets.pitch_rate_radps, "stern_plane_rad": resets.stern_plane_rad,
-             "bow_plane_rad": resets.bow_plane_rad}
+    reset = {
+        "time_s": resets.time_s,
+        "pitch_rad": resets.pitch_rad,
+        "depth_error_m": resets.depth_m - resets.episode.depth_command_m,
+        "pitch_rate_radps": resets.pitch_rate_radps,
+        "stern_plane_rad": resets.stern_plane_rad,
+        "bow_plane_rad": resets.bow_plane_rad,
+    }
     reset = {key: np.asarray(value) for key, value in reset.items()}
     out = []
     for g in range(len(gains)):
@@ -295,8 +320,12 @@ def _jax_metrics(env_id, seeds, key, gains):
         for k in range(n):
             live = ~before[g, k]
             last = int(np.flatnonzero(live)[-1])
-            reason = tr.REASONS[int(infos["reason"][g, k, last])] if infos["terminated"][g, k, last] > 0 else ""
-            record = {key: np.concatenate([[value[g, k]], infos[key][g, k][live]]) for key, value in reset.items()}
+            reason = (
+                tr.REASONS[int(infos["reason"][g, k, last])] if infos["terminated"][g, k, last] > 0 else ""
+            )
+            record = {
+                key: np.concatenate([[value[g, k]], infos[key][g, k][live]]) for key, value in reset.items()
+            }
             out[-1].append(_metrics(record["time_s"], record, reason, env.config.plane_limit_rad))
     return out
 

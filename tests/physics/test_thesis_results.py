@@ -50,8 +50,14 @@ def _fly_thesis_controller(speed_fps: float, duration_s: float = 3000.0) -> dict
     scenario = get_scenario("Nominal").replace(name="ThesisRun", duration_s=duration_s)
     env = subenv.DivePlaneEnv(scenario=scenario, vehicle=vehicle, max_depth_error_m=1e4)
     gain = _to_si(PUBLISHED_GAIN_FT)
-    obs, info = env.reset(seed=0, options={"speed": fps_to_mps(speed_fps), "depth_command": 50.0,
-                                           "initial_state": (0.0, 0.0, 0.0, 50.0 + FOOT_M)})
+    obs, info = env.reset(
+        seed=0,
+        options={
+            "speed": fps_to_mps(speed_fps),
+            "depth_command": 50.0,
+            "initial_state": (0.0, 0.0, 0.0, 50.0 + FOOT_M),
+        },
+    )
     times, depth_errors = [], []
     while True:
         x = np.array([obs[1], obs[2], obs[3], obs[0]])  # theta, w, q, depth error

@@ -18,7 +18,9 @@ from subenv.vehicles import load_vehicle
 MODEL, FULL = load_vehicle("suboff"), load_vehicle("suboff_fullscale")
 RATIO = FULL.length_m / MODEL.length_m
 KEYS = ("time_s", "depth_m", "pitch_rad", "heave_mps", "pitch_rate_radps", "speed_mps", "depth_command_m")
-SCALES = np.array([math.sqrt(RATIO), RATIO, 1.0, math.sqrt(RATIO), 1 / math.sqrt(RATIO), math.sqrt(RATIO), RATIO])
+SCALES = np.array(
+    [math.sqrt(RATIO), RATIO, 1.0, math.sqrt(RATIO), 1 / math.sqrt(RATIO), math.sqrt(RATIO), RATIO]
+)
 
 
 def _fly(env, steps: int) -> tuple[np.ndarray, list[float], str]:  # type: ignore[no-untyped-def]
@@ -35,8 +37,17 @@ def _fly(env, steps: int) -> tuple[np.ndarray, list[float], str]:  # type: ignor
     return np.array(rows), rewards, info["termination_reason"]
 
 
-@pytest.mark.parametrize("scenario", ["LowSpeed", "NearCritical", "BallastOffset", "PeriscopeDepth",
-                                      "PeriscopeDepth-v1", "PeriscopeDepthWaves"])
+@pytest.mark.parametrize(
+    "scenario",
+    [
+        "LowSpeed",
+        "NearCritical",
+        "BallastOffset",
+        "PeriscopeDepth",
+        "PeriscopeDepth-v1",
+        "PeriscopeDepthWaves",
+    ],
+)
 def test_the_full_scale_boat_flies_the_models_episode_froude_scaled(scenario) -> None:  # type: ignore[no-untyped-def]
     """With the control period scaled too (dt x sqrt(lambda)), the full-scale episode is the model's in
     scaled units, step by step, with the same rewards and the same end. (NearCritical's heave-force
@@ -71,8 +82,12 @@ def test_on_the_reference_vehicle_nothing_is_scaled() -> None:
     draw = get_scenario("LowSpeed").sample(np.random.default_rng(0), MODEL.weight_N)
     assert draw.froude_scaled(1.0) is draw
     assert DivePlaneConfig(scenario="LowSpeed").max_depth_error_m == DEPTH_BAND_M
-    assert DivePlaneConfig(scenario="LowSpeed", vehicle=FULL).max_depth_error_m == pytest.approx(DEPTH_BAND_M * RATIO)
-    assert DivePlaneConfig(scenario="LowSpeed", vehicle=FULL, max_depth_error_m=30.0).max_depth_error_m == 30.0
+    assert DivePlaneConfig(scenario="LowSpeed", vehicle=FULL).max_depth_error_m == pytest.approx(
+        DEPTH_BAND_M * RATIO
+    )
+    assert (
+        DivePlaneConfig(scenario="LowSpeed", vehicle=FULL, max_depth_error_m=30.0).max_depth_error_m == 30.0
+    )
     with pytest.raises(ValueError, match=r"length_ratio=0 is invalid: must be a finite number > 0"):
         draw.froude_scaled(0)
 

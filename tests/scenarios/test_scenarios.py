@@ -24,8 +24,15 @@ def _episodes(name: str, n: int = 40, **env_kwargs):
 
 
 def test_registry_lists_and_rejects():
-    assert scenario_names()[:7] == ["Nominal", "LowSpeed", "NearCritical", "SpeedTransient",
-                                    "PeriscopeDepth", "BallastOffset", "Randomized"]
+    assert scenario_names()[:7] == [
+        "Nominal",
+        "LowSpeed",
+        "NearCritical",
+        "SpeedTransient",
+        "PeriscopeDepth",
+        "BallastOffset",
+        "Randomized",
+    ]
     assert scenario_names()[-2:] == ["PeriscopeDepth-v1", "PeriscopeDepthWaves"]
     with pytest.raises(ValueError, match=r"scenario='Slow' is unknown: must be one of \['Nominal'"):
         get_scenario("Slow")
@@ -124,11 +131,19 @@ def test_disturbance_force_varies_within_an_episode():
         ({"speed_mps": (1.0, 0.5)}, r"speed_mps=\(1\.0, 0\.5\) is invalid: must be a \(low, high\) pair"),
         ({"speed_mps": (-1.0, 0.5)}, r"speed_mps=\(-1\.0, 0\.5\) is invalid"),
         ({"speed_ratio": (0.5, 0.4)}, r"speed_ratio=\(0\.5, 0\.4\) is invalid"),
-        ({"speed_mps": (1.0, 1.0), "speed_ratio": (0.5, 0.5)},
-         r"speed_mps=\(1\.0, 1\.0\), speed_ratio=\(0\.5, 0\.5\) are invalid: give one of them"),
-        ({"speed_ratio": (0.5, 0.5), "speed_ramp": SpeedRamp(start_s=(1.0, 1.0), duration_s=(1.0, 1.0),
-                                                             final_speed_mps=(0.2, 0.2))},
-         r"its final speed must be given as the initial speed is, final_speed_ratio"),
+        (
+            {"speed_mps": (1.0, 1.0), "speed_ratio": (0.5, 0.5)},
+            r"speed_mps=\(1\.0, 1\.0\), speed_ratio=\(0\.5, 0\.5\) are invalid: give one of them",
+        ),
+        (
+            {
+                "speed_ratio": (0.5, 0.5),
+                "speed_ramp": SpeedRamp(
+                    start_s=(1.0, 1.0), duration_s=(1.0, 1.0), final_speed_mps=(0.2, 0.2)
+                ),
+            },
+            r"its final speed must be given as the initial speed is, final_speed_ratio",
+        ),
         ({"duration_s": 0.0}, r"duration_s=0\.0 is invalid: must be a finite number > 0"),
         ({"z_GB_scale": (0.0, 1.0)}, r"z_GB_scale=\(0\.0, 1\.0\) is invalid"),
         ({"disturbance_std_N": -1.0}, r"disturbance_std_N=-1\.0 is invalid"),
@@ -142,7 +157,12 @@ def test_bad_scenario_definitions(kwargs, message):
     with pytest.raises(ValueError, match="duration_s"):
         SpeedRamp(final_speed_mps=(0.1, 0.2), start_s=(0.0, 1.0), duration_s=(-1.0, 1.0))
     with pytest.raises(ValueError, match="give exactly one of them"):
-        SpeedRamp(final_speed_mps=(0.1, 0.2), final_speed_ratio=(0.1, 0.2), start_s=(0.0, 1.0), duration_s=(1.0, 1.0))
+        SpeedRamp(
+            final_speed_mps=(0.1, 0.2),
+            final_speed_ratio=(0.1, 0.2),
+            start_s=(0.0, 1.0),
+            duration_s=(1.0, 1.0),
+        )
 
 
 def test_a_custom_scenario_object_runs_without_registration():
@@ -163,24 +183,41 @@ def test_a_draw_is_its_uniform_numbers_mapped_onto_the_intervals() -> None:
         assert scenario.sample(rng, 1000.0) == scenario.episode_from_uniforms(uniforms, 1000.0)
         assert rng.random() == twin.random()  # both generators are left in the same state
     rows = np.random.default_rng(0).random((5, k))
-    batch = scenario.replace(x_GB_sign_random=False, z_GB_m=(0.007, 0.007), z_GB_scale=(1.0, 1.0),
-                             x_GB_m=(0.003, 0.003), excess_buoyancy_fraction=(0.012, 0.012), crossflow_drag=(0.5, 0.5))
+    batch = scenario.replace(
+        x_GB_sign_random=False,
+        z_GB_m=(0.007, 0.007),
+        z_GB_scale=(1.0, 1.0),
+        x_GB_m=(0.003, 0.003),
+        excess_buoyancy_fraction=(0.012, 0.012),
+        crossflow_drag=(0.5, 0.5),
+    )
     drawn = batch.sample_batch(rows[:, : batch.uniforms_per_episode], 1000.0)
     for i in range(5):
         one = batch.episode_from_uniforms(rows[i, : batch.uniforms_per_episode], 1000.0)
         assert one.depth_command_m == drawn.depth_command_m[i]
-        assert one.initial_state == tuple(float(v[i]) if isinstance(v, np.ndarray) else v for v in drawn.initial_state)
+        assert one.initial_state == tuple(
+            float(v[i]) if isinstance(v, np.ndarray) else v for v in drawn.initial_state
+        )
     with pytest.raises(ValueError, match=r"uniforms has 2 numbers: must have 15"):
         scenario.episode_from_uniforms([0.5, 0.5], 1000.0)
 
 
 _ALL_RANDOM = Scenario(
     # Every quantity drawn, from pairwise disjoint intervals: a value landing in another's field shows.
-    name="AllRandom", description="every quantity drawn", speed_mps=(1.2, 1.4),
+    name="AllRandom",
+    description="every quantity drawn",
+    speed_mps=(1.2, 1.4),
     speed_ramp=SpeedRamp(final_speed_mps=(0.2, 0.4), start_s=(10.0, 20.0), duration_s=(30.0, 60.0)),
-    depth_command_m=(8.0, 9.5), initial_depth_offset_m=(-2.0, -1.0), initial_pitch_rad=(0.02, 0.05),
-    initial_heave_mps=(0.1, 0.15), initial_pitch_rate_radps=(0.001, 0.002), z_GB_m=(0.006, 0.009),
-    z_GB_scale=(0.9, 1.1), x_GB_m=(0.003, 0.004), x_GB_sign_random=True, excess_buoyancy_fraction=(0.011, 0.013),
+    depth_command_m=(8.0, 9.5),
+    initial_depth_offset_m=(-2.0, -1.0),
+    initial_pitch_rad=(0.02, 0.05),
+    initial_heave_mps=(0.1, 0.15),
+    initial_pitch_rate_radps=(0.001, 0.002),
+    z_GB_m=(0.006, 0.009),
+    z_GB_scale=(0.9, 1.1),
+    x_GB_m=(0.003, 0.004),
+    x_GB_sign_random=True,
+    excess_buoyancy_fraction=(0.011, 0.013),
     crossflow_drag=(0.45, 0.6),
 )
 

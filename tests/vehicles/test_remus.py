@@ -51,8 +51,18 @@ def test_the_shipped_file_is_what_the_module_writes_and_loads_to_the_same_vehicl
 def test_the_dimensional_coefficients_are_prestero_s_table(remus):
     # The file holds primes made with rho/2 L^n; the vehicle's dimensional derivatives are his numbers again.
     c = remus.coefficients
-    published = {"Z_wdot": P.Z_wdot, "Z_qdot": P.Z_qdot, "M_wdot": P.M_wdot, "M_qdot": P.M_qdot, "Z_w": P.Z_uw,
-                 "Z_q": P.Z_uq, "M_w": P.M_uw, "M_q": P.M_uq, "Z_delta_s": P.Z_uuds, "M_delta_s": P.M_uuds}
+    published = {
+        "Z_wdot": P.Z_wdot,
+        "Z_qdot": P.Z_qdot,
+        "M_wdot": P.M_wdot,
+        "M_qdot": P.M_qdot,
+        "Z_w": P.Z_uw,
+        "Z_q": P.Z_uq,
+        "M_w": P.M_uw,
+        "M_q": P.M_uq,
+        "Z_delta_s": P.Z_uuds,
+        "M_delta_s": P.M_uuds,
+    }
     for name, value in published.items():
         assert getattr(c, name) == pytest.approx(value, rel=1e-12), name
     assert (c.Z_delta_b, c.M_delta_b) == (0.0, 0.0)
@@ -99,8 +109,10 @@ def test_below_the_critical_speed_the_stern_planes_reverse_in_the_environment(re
     depth_change = {}
     for ratio in (0.6, 1.6):
         env = gym.make("subenv/Nominal-v0", vehicle=REMUS100_NAME)
-        _, info = env.reset(seed=0, options={"speed": ratio * ucr, "depth_command": 5.0,
-                                             "initial_state": (0.0, 0.0, 0.0, 5.0)})
+        _, info = env.reset(
+            seed=0,
+            options={"speed": ratio * ucr, "depth_command": 5.0, "initial_state": (0.0, 0.0, 0.0, 5.0)},
+        )
         start = info["depth_m"]
         for _ in range(80):
             _, _, terminated, truncated, info = env.step(np.array([0.25], dtype=np.float32))
@@ -112,14 +124,20 @@ def test_below_the_critical_speed_the_stern_planes_reverse_in_the_environment(re
 
 
 def test_a_vehicle_without_bow_planes_refuses_what_would_move_them(remus):
-    with pytest.raises(ValueError, match=r"control='independent' is invalid for vehicle 'remus100', which has no bow planes"):
+    with pytest.raises(
+        ValueError, match=r"control='independent' is invalid for vehicle 'remus100', which has no bow planes"
+    ):
         gym.make("subenv/Nominal-v0", vehicle=REMUS100_NAME, control="independent")
-    with pytest.raises(ValueError, match=r"alpha=0\.5 is invalid for vehicle 'remus100', which has no bow planes"):
+    with pytest.raises(
+        ValueError, match=r"alpha=0\.5 is invalid for vehicle 'remus100', which has no bow planes"
+    ):
         gym.make("subenv/Nominal-v0", vehicle=REMUS100_NAME, alpha=0.5)
     with pytest.raises(ValueError, match=r"alpha='bow' is invalid: must be .*'remus100' has no bow planes"):
         plane_derivatives(remus, BOW_PLANES_ONLY)
     # Bow planes with effect need both derivatives; both zero is a vehicle without them.
-    with pytest.raises(ValueError, match=r"planes\.Z_delta_b=0\.0 is invalid: must be a non-zero number .* or 0 for both"):
+    with pytest.raises(
+        ValueError, match=r"planes\.Z_delta_b=0\.0 is invalid: must be a non-zero number .* or 0 for both"
+    ):
         PlaneCoefficients(Z_delta_s=-0.01, M_delta_s=-0.005, Z_delta_b=0, M_delta_b=0.001)
     assert not PlaneCoefficients(Z_delta_s=-0.01, M_delta_s=-0.005).has_bow_planes
 
@@ -141,11 +159,17 @@ def test_the_evaluation_leaves_bow_plane_controllers_out_on_a_vehicle_without_th
     stern, both = _Fixed("stern", "dual", 0.0), _Fixed("both", "independent", 0.0)
     assert isinstance(stern, Controller) and needs_bow_planes(both) and not needs_bow_planes(stern)
     assert needs_bow_planes(_Fixed("mixed", "dual", 0.5))
-    with pytest.raises(ValueError, match=r"controllers \['both'\] move the bow planes .* vehicle 'remus100' has none"):
+    with pytest.raises(
+        ValueError, match=r"controllers \['both'\] move the bow planes .* vehicle 'remus100' has none"
+    ):
         resolve_controllers([stern, both], remus)
     assert resolve_controllers([stern, both], load_vehicle("suboff")) == [stern, both]
     names = [c.name for c in resolve_controllers(None, remus)]
-    assert names and "reversal_aware" not in names and "reversal_aware" in [c.name for c in resolve_controllers(None)]
+    assert (
+        names
+        and "reversal_aware" not in names
+        and "reversal_aware" in [c.name for c in resolve_controllers(None)]
+    )
 
 
 @pytest.mark.parametrize("ratio", [0.6, 1.5, 3.0])
@@ -175,8 +199,13 @@ def test_the_shallowest_depth_held_is_froude_scaled_on_every_shipped_vehicle():
 
     model, full = load_vehicle("suboff"), load_vehicle("suboff_fullscale")
     ratio = full.length_m / model.length_m
-    held = {v.name: min_level_flight_depth(v, 0.9 * critical_speed(v)) for v in (model, full, load_vehicle("remus100"))}
-    assert held["suboff_fullscale"].min_depth_m == pytest.approx(ratio * held["suboff"].min_depth_m, abs=2e-3 * ratio)
+    held = {
+        v.name: min_level_flight_depth(v, 0.9 * critical_speed(v))
+        for v in (model, full, load_vehicle("remus100"))
+    }
+    assert held["suboff_fullscale"].min_depth_m == pytest.approx(
+        ratio * held["suboff"].min_depth_m, abs=2e-3 * ratio
+    )
     assert held["suboff_fullscale"].limited_by == held["suboff"].limited_by == "no trim"
     assert held["remus100"].min_depth_m > 0.5 * P.diameter_m
 
@@ -190,7 +219,9 @@ def test_the_shipped_report_is_this_code_s(remus):
     text = (Path(__file__).resolve().parents[2] / "docs" / "remus100" / "report.md").read_text("utf-8")
     assert f"| u_cr, eq. 3.9 closed form | {critical_speed(remus):.5g} | m/s |" in text
     (hopf,) = hopf_points(remus)
-    assert f"| Hopf speed u_H, eigenvalues of level flight (planes held) | {hopf.speed_mps:.4f} | m/s |" in text
+    assert (
+        f"| Hopf speed u_H, eigenvalues of level flight (planes held) | {hopf.speed_mps:.4f} | m/s |" in text
+    )
 
 
 def test_the_command_line_runs_the_comparison_on_remus_without_the_bow_plane_controllers(tmp_path, capsys):
@@ -199,14 +230,57 @@ def test_the_command_line_runs_the_comparison_on_remus_without_the_bow_plane_con
     from subenv.cli import main
 
     out = tmp_path / "remus"
-    main(["evaluate", "--vehicle", REMUS100_NAME, "--controllers", "thesis,lqr", "--suite", "tiny", "--episodes", "1",
-          "--no-plots", "--no-progress", "--out", str(out)])
+    main(
+        [
+            "evaluate",
+            "--vehicle",
+            REMUS100_NAME,
+            "--controllers",
+            "thesis,lqr",
+            "--suite",
+            "tiny",
+            "--episodes",
+            "1",
+            "--no-plots",
+            "--no-progress",
+            "--out",
+            str(out),
+        ]
+    )
     run = json.loads((out / "run.json").read_text())
     assert run["vehicle"] == REMUS100_NAME and [c["name"] for c in run["controllers"]] == ["thesis", "lqr"]
-    with pytest.raises(SystemExit, match=r"subenv evaluate: controllers \['reversal_aware'\] move the bow planes"):
-        main(["evaluate", "--vehicle", REMUS100_NAME, "--controllers", "reversal_aware", "--suite", "tiny",
-              "--episodes", "1", "--no-plots", "--out", str(tmp_path / "refused")])
+    with pytest.raises(
+        SystemExit, match=r"subenv evaluate: controllers \['reversal_aware'\] move the bow planes"
+    ):
+        main(
+            [
+                "evaluate",
+                "--vehicle",
+                REMUS100_NAME,
+                "--controllers",
+                "reversal_aware",
+                "--suite",
+                "tiny",
+                "--episodes",
+                "1",
+                "--no-plots",
+                "--out",
+                str(tmp_path / "refused"),
+            ]
+        )
     assert not (tmp_path / "refused").exists()
-    with pytest.raises(SystemExit, match=r"subenv sweep: controllers \['reversal_aware'\] move the bow planes"):
-        main(["sweep", "--vehicle", REMUS100_NAME, "--controllers", "reversal_aware", "--out", str(tmp_path / "s")])
+    with pytest.raises(
+        SystemExit, match=r"subenv sweep: controllers \['reversal_aware'\] move the bow planes"
+    ):
+        main(
+            [
+                "sweep",
+                "--vehicle",
+                REMUS100_NAME,
+                "--controllers",
+                "reversal_aware",
+                "--out",
+                str(tmp_path / "s"),
+            ]
+        )
     assert not (tmp_path / "s").exists()

@@ -43,7 +43,9 @@ def _froude_length(vehicle: Vehicle, speed_mps: float) -> float:
 
 def _state_scale(ratio: float) -> np.ndarray:
     """x' = S x for x = (theta [rad], w [m/s], q [1/s], Z [m]) at equal Froude number."""
-    return np.array([1.0, froude_factor("speed", ratio), froude_factor("rate", ratio), froude_factor("length", ratio)])
+    return np.array(
+        [1.0, froude_factor("speed", ratio), froude_factor("rate", ratio), froude_factor("length", ratio)]
+    )
 
 
 # --- the critical speed: Riedel (1993) eq. 3.9 and Ch. VI's claim ---------------------------------
@@ -55,8 +57,12 @@ def test_critical_speed_scales_with_sqrt_ratio_and_the_critical_froude_number_st
         u_model, u_scaled = critical_speed(suboff, alpha), critical_speed(scaled, alpha)
         assert u_scaled == pytest.approx(math.sqrt(ratio) * u_model, rel=SCALING_RTOL)
         # Both Froude numbers: on the metacentric height (eq. 4.25, the thesis's) and on the length.
-        assert critical_froude(scaled, alpha) == pytest.approx(critical_froude(suboff, alpha), rel=SCALING_RTOL)
-        assert _froude_length(scaled, u_scaled) == pytest.approx(_froude_length(suboff, u_model), rel=SCALING_RTOL)
+        assert critical_froude(scaled, alpha) == pytest.approx(
+            critical_froude(suboff, alpha), rel=SCALING_RTOL
+        )
+        assert _froude_length(scaled, u_scaled) == pytest.approx(
+            _froude_length(suboff, u_model), rel=SCALING_RTOL
+        )
 
 
 def test_full_scale_suboff_has_the_thesis_critical_froude_numbers():
@@ -71,9 +77,14 @@ def test_full_scale_suboff_has_the_thesis_critical_froude_numbers():
 
 # --- time scales: linear model and equilibria --------------------------------------------------------
 @settings(max_examples=30, deadline=None)
-@given(ratio=RATIOS, speed_over_critical=st.sampled_from([0.3, 0.8, 1.2, 2.5]), alpha=st.sampled_from(ALLOCATIONS))
-def test_linear_model_at_equal_froude_number_is_the_same_system_in_scaled_time(suboff, ratio, speed_over_critical,
-                                                                                alpha):
+@given(
+    ratio=RATIOS,
+    speed_over_critical=st.sampled_from([0.3, 0.8, 1.2, 2.5]),
+    alpha=st.sampled_from(ALLOCATIONS),
+)
+def test_linear_model_at_equal_froude_number_is_the_same_system_in_scaled_time(
+    suboff, ratio, speed_over_critical, alpha
+):
     """A' = S A S^-1 / sqrt(lambda), B' = S B / sqrt(lambda): eigenvalues x 1/sqrt(lambda) (eqs 2.59-2.68)."""
     scaled = froude_scaled(suboff, ratio)
     u = speed_over_critical * critical_speed(suboff, alpha)
@@ -105,18 +116,24 @@ def test_equilibria_at_equal_froude_number_correspond(suboff, ratio, speed_over_
         assert (b.saturated, b.stable) == (a.saturated, a.stable)
         assert b.pitch_rad == pytest.approx(a.pitch_rad, rel=EQUILIBRIUM_RTOL, abs=1e-12)
         assert b.plane_rad == pytest.approx(a.plane_rad, rel=EQUILIBRIUM_RTOL, abs=1e-12)
-        assert b.heave_mps == pytest.approx(froude_factor("speed", ratio) * a.heave_mps, rel=EQUILIBRIUM_RTOL,
-                                            abs=1e-12)
-        assert b.depth_rate_mps == pytest.approx(froude_factor("speed", ratio) * a.depth_rate_mps,
-                                                 rel=EQUILIBRIUM_RTOL, abs=1e-12)
+        assert b.heave_mps == pytest.approx(
+            froude_factor("speed", ratio) * a.heave_mps, rel=EQUILIBRIUM_RTOL, abs=1e-12
+        )
+        assert b.depth_rate_mps == pytest.approx(
+            froude_factor("speed", ratio) * a.depth_rate_mps, rel=EQUILIBRIUM_RTOL, abs=1e-12
+        )
         if a.depth_offset_m is None:
             assert b.depth_offset_m is None
         else:
             assert b.depth_offset_m == pytest.approx(ratio * a.depth_offset_m, rel=EQUILIBRIUM_RTOL, abs=1e-9)
         eig_a = np.sort_complex(a.eigenvalues)
         eig_b = np.sort_complex(b.eigenvalues)
-        np.testing.assert_allclose(eig_b, froude_factor("rate", ratio) * eig_a, rtol=EQUILIBRIUM_RTOL,
-                                   atol=EQUILIBRIUM_RTOL * np.abs(eig_a).max())
+        np.testing.assert_allclose(
+            eig_b,
+            froude_factor("rate", ratio) * eig_a,
+            rtol=EQUILIBRIUM_RTOL,
+            atol=EQUILIBRIUM_RTOL * np.abs(eig_a).max(),
+        )
 
 
 # --- what scales how --------------------------------------------------------------------------------
@@ -124,20 +141,49 @@ def test_each_field_scales_by_its_power_and_the_coefficients_stay(suboff):
     ratio = 3.0
     scaled = froude_scaled(suboff.variant(x_GB_m=2e-3, excess_buoyancy_N=1.5), ratio)
     base = suboff.variant(x_GB_m=2e-3, excess_buoyancy_N=1.5)
-    for name, power in [("length_m", 1), ("x_G_m", 1), ("z_G_m", 1), ("x_B_m", 1), ("z_B_m", 1),
-                        ("weight_N", 3), ("buoyancy_N", 3), ("inertia_y_kg_m2", 5), ("mass_kg", 3),
-                        ("z_GB_m", 1), ("x_GB_m", 1), ("excess_buoyancy_N", 3), ("hull_area_m2", 2),
-                        ("hull_centroid_x_m", 1)]:
-        assert getattr(scaled, name) == pytest.approx(ratio**power * getattr(base, name), rel=SCALING_RTOL), name
+    for name, power in [
+        ("length_m", 1),
+        ("x_G_m", 1),
+        ("z_G_m", 1),
+        ("x_B_m", 1),
+        ("z_B_m", 1),
+        ("weight_N", 3),
+        ("buoyancy_N", 3),
+        ("inertia_y_kg_m2", 5),
+        ("mass_kg", 3),
+        ("z_GB_m", 1),
+        ("x_GB_m", 1),
+        ("excess_buoyancy_N", 3),
+        ("hull_area_m2", 2),
+        ("hull_centroid_x_m", 1),
+    ]:
+        assert getattr(scaled, name) == pytest.approx(ratio**power * getattr(base, name), rel=SCALING_RTOL), (
+            name
+        )
     np.testing.assert_allclose(scaled.hull.x_m, ratio * np.asarray(base.hull.x_m), rtol=SCALING_RTOL)
-    np.testing.assert_allclose(scaled.hull.breadth_m, ratio * np.asarray(base.hull.breadth_m), rtol=SCALING_RTOL)
+    np.testing.assert_allclose(
+        scaled.hull.breadth_m, ratio * np.asarray(base.hull.breadth_m), rtol=SCALING_RTOL
+    )
     assert scaled.hydro == base.hydro and scaled.planes == base.planes
     assert (scaled.water_density_kg_m3, scaled.gravity_m_s2, scaled.crossflow_drag) == (
-        base.water_density_kg_m3, base.gravity_m_s2, base.crossflow_drag)
+        base.water_density_kg_m3,
+        base.gravity_m_s2,
+        base.crossflow_drag,
+    )
     # The dimensional derivatives follow rho/2 L^n by themselves (Appendix A): Z_w ~ L^2 .. M_qdot ~ L^5.
     c, d = base.coefficients, scaled.coefficients
-    for name, power in [("Z_w", 2), ("Z_delta_s", 2), ("Z_q", 3), ("Z_wdot", 3), ("M_w", 3), ("M_delta_s", 3),
-                        ("Z_qdot", 4), ("M_wdot", 4), ("M_q", 4), ("M_qdot", 5)]:
+    for name, power in [
+        ("Z_w", 2),
+        ("Z_delta_s", 2),
+        ("Z_q", 3),
+        ("Z_wdot", 3),
+        ("M_w", 3),
+        ("M_delta_s", 3),
+        ("Z_qdot", 4),
+        ("M_wdot", 4),
+        ("M_q", 4),
+        ("M_qdot", 5),
+    ]:
         assert getattr(d, name) == pytest.approx(ratio**power * getattr(c, name), rel=SCALING_RTOL), name
 
 
@@ -171,7 +217,9 @@ def test_froude_factor_has_the_documented_powers():
 
 
 # --- bad ratios -------------------------------------------------------------------------------------
-@pytest.mark.parametrize("ratio", [0, 0.0, -1.0, -0.0, math.nan, math.inf, -math.inf, 10**400, "2", None, True, 1j])
+@pytest.mark.parametrize(
+    "ratio", [0, 0.0, -1.0, -0.0, math.nan, math.inf, -math.inf, 10**400, "2", None, True, 1j]
+)
 def test_ratio_that_is_not_a_finite_positive_number_is_refused(suboff, ratio):
     with pytest.raises(ValueError, match=r"length_ratio=.* is invalid: must be a finite number > 0"):
         froude_scaled(suboff, ratio)
@@ -182,8 +230,11 @@ def test_ratio_that_is_not_a_finite_positive_number_is_refused(suboff, ratio):
 @pytest.mark.parametrize("ratio", [1e-3, 1e3])
 def test_ratio_giving_a_length_outside_the_range_is_refused_with_the_allowed_ratios(suboff, ratio):
     low, high = LENGTH_RANGE_M
-    with pytest.raises(ValueError, match=rf"length_ratio={ratio!r} is invalid: must be a number giving a length in "
-                                         rf"\[{low}, {high}\] m .*so in \[0\.00234\d*, 234\.6\d*\]"):
+    with pytest.raises(
+        ValueError,
+        match=rf"length_ratio={ratio!r} is invalid: must be a number giving a length in "
+        rf"\[{low}, {high}\] m .*so in \[0\.00234\d*, 234\.6\d*\]",
+    ):
         froude_scaled(suboff, ratio)
 
 
@@ -192,7 +243,9 @@ def test_full_scale_file_is_exactly_what_the_scaling_writes():
     """The shipped numbers are generated (python -m subenv.vehicles.fullscale), never typed."""
     from importlib import resources
 
-    shipped = resources.files("subenv.vehicles.data").joinpath(f"{SUBOFF_FULLSCALE_NAME}.toml").read_text("utf-8")
+    shipped = (
+        resources.files("subenv.vehicles.data").joinpath(f"{SUBOFF_FULLSCALE_NAME}.toml").read_text("utf-8")
+    )
     assert shipped == suboff_fullscale_toml()
 
 
@@ -206,10 +259,13 @@ def test_full_scale_suboff_loads_as_the_scaled_model(suboff):
     for name in ("weight_N", "buoyancy_N", "inertia_y_kg_m2", "z_G_m", "hull_area_m2", "hull_centroid_x_m"):
         assert getattr(loaded, name) == pytest.approx(getattr(made, name), rel=SCALING_RTOL), name
     np.testing.assert_allclose(loaded.hull.x_m, made.hull.x_m, rtol=1e-11, atol=1e-11 * loaded.length_m)
-    np.testing.assert_allclose(loaded.hull.breadth_m, made.hull.breadth_m, rtol=1e-11, atol=1e-11 * loaded.length_m)
+    np.testing.assert_allclose(
+        loaded.hull.breadth_m, made.hull.breadth_m, rtol=1e-11, atol=1e-11 * loaded.length_m
+    )
     for alpha in ALLOCATIONS:
-        assert critical_speed(loaded, alpha) == pytest.approx(math.sqrt(ratio) * critical_speed(suboff, alpha),
-                                                              rel=1e-11)
+        assert critical_speed(loaded, alpha) == pytest.approx(
+            math.sqrt(ratio) * critical_speed(suboff, alpha), rel=1e-11
+        )
 
 
 @pytest.mark.parametrize("name", ["suboff", SUBOFF_FULLSCALE_NAME])
@@ -221,8 +277,9 @@ def test_a_written_vehicle_file_loads_back_to_the_same_vehicle(tmp_path, name):
     back = load_vehicle(path)
     assert dataclasses.replace(back, hull=vehicle.hull) == vehicle
     np.testing.assert_allclose(back.hull.x_m, vehicle.hull.x_m, rtol=1e-11, atol=1e-11 * vehicle.length_m)
-    np.testing.assert_allclose(back.hull.breadth_m, vehicle.hull.breadth_m, rtol=1e-11,
-                               atol=1e-11 * vehicle.length_m)
+    np.testing.assert_allclose(
+        back.hull.breadth_m, vehicle.hull.breadth_m, rtol=1e-11, atol=1e-11 * vehicle.length_m
+    )
 
 
 def test_the_report_compares_the_full_scale_boat_with_the_froude_scaled_published_numbers():

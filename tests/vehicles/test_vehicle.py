@@ -99,7 +99,9 @@ def test_variants_change_only_what_they_name(suboff):
 def test_user_vehicle_file_by_path(tmp_path: Path, suboff):
     text = resources.files("subenv.vehicles.data").joinpath("suboff.toml").read_text()
     path = tmp_path / "mysub.toml"
-    path.write_text(text.replace('name = "suboff"', 'name = "mysub"').replace("inertia_y = 561.32", "inertia_y = 600.0"))
+    path.write_text(
+        text.replace('name = "suboff"', 'name = "mysub"').replace("inertia_y = 561.32", "inertia_y = 600.0")
+    )
     v = load_vehicle(path)
     assert v.name == "mysub"
     assert v.inertia_y_kg_m2 == pytest.approx(600.0 * SLUG_KG * FOOT_M**2)
@@ -109,8 +111,10 @@ def test_user_vehicle_file_by_path(tmp_path: Path, suboff):
 def test_si_vehicle_file_round_trips(suboff):
     raw = _suboff_file()
     si = dict(raw, units="si")
-    si["rigid_body"] = {k: v * (FOOT_M if k in ("length", "x_G", "z_G", "x_B", "z_B") else 1.0)
-                        for k, v in raw["rigid_body"].items()}
+    si["rigid_body"] = {
+        k: v * (FOOT_M if k in ("length", "x_G", "z_G", "x_B", "z_B") else 1.0)
+        for k, v in raw["rigid_body"].items()
+    }
     si["rigid_body"]["weight"] = suboff.weight_N
     si["rigid_body"]["buoyancy"] = suboff.buoyancy_N
     si["rigid_body"]["inertia_y"] = suboff.inertia_y_kg_m2
@@ -148,7 +152,12 @@ _DELETE = object()
         (None, "units", "imperial", r"units='imperial' is invalid: must be one of \['si', 'us_customary'\]"),
         (None, "planes", _DELETE, r"missing section \[planes\]"),
         ("planes", "limit", 2.0, r"planes\.limit_rad=2\.0 is invalid: must be in \(0, pi/2\] rad"),
-        ("hydrodynamics", "crossflow_drag", -0.1, r"crossflow_drag=-0\.1 is invalid: must be a finite number >= 0"),
+        (
+            "hydrodynamics",
+            "crossflow_drag",
+            -0.1,
+            r"crossflow_drag=-0\.1 is invalid: must be a finite number >= 0",
+        ),
         ("hull", "radius_ratio", [0.0, 1.0], r"stations but 2 breadths"),
     ],
 )
@@ -158,7 +167,10 @@ def test_invalid_vehicle_data_names_field_value_and_allowed(section, key, value,
 
 
 def test_unknown_vehicle_name_lists_the_shipped_ones():
-    with pytest.raises(ValueError, match=r"vehicle='seawolf' is unknown: must be one of \['remus100', 'suboff', 'suboff_fullscale'\]"):
+    with pytest.raises(
+        ValueError,
+        match=r"vehicle='seawolf' is unknown: must be one of \['remus100', 'suboff', 'suboff_fullscale'\]",
+    ):
         load_vehicle("seawolf")
     with pytest.raises(FileNotFoundError, match="does not exist"):
         load_vehicle("/nonexistent/sub.toml")
@@ -179,7 +191,11 @@ def test_variant_is_the_vehicle_built_from_scratch(suboff):
     fresh = Vehicle(**{f.name: getattr(v, f.name) for f in dataclasses.fields(v)})
     assert v == fresh
     assert v.coefficients == fresh.coefficients
-    assert (v.z_G_m, v.x_G_m, v.buoyancy_N) == (suboff.z_B_m + 0.02, suboff.x_B_m + 0.003, suboff.weight_N - 1.5)
+    assert (v.z_G_m, v.x_G_m, v.buoyancy_N) == (
+        suboff.z_B_m + 0.02,
+        suboff.x_B_m + 0.003,
+        suboff.weight_N - 1.5,
+    )
 
 
 def test_variant_checks_what_it_changes(suboff):
@@ -190,6 +206,7 @@ def test_variant_checks_what_it_changes(suboff):
 
 
 # --- physical admissibility and hostile files (issue 18, finding 6) ---------------------------------
+
 
 def _nd2(raw: dict) -> float:
     """rho/2 L^3 in the file's units: the factor that makes Z_wdot an added mass."""
@@ -205,8 +222,11 @@ def test_mass_matrix_must_be_positive_definite(Z_wdot):
     # Z_wdot = m / (rho/2 L^3) makes m - Z_wdot zero (a singular matrix); 3.0 makes it negative.
     raw = _suboff_file()
     value = _mass_slug(raw) / _nd2(raw) if Z_wdot == "singular" else Z_wdot
-    with pytest.raises(ValueError, match=r"vehicle file <dict>: .*hydrodynamics\.Z_wdot=.*mass matrix.*"
-                                         r"must be positive definite"):
+    with pytest.raises(
+        ValueError,
+        match=r"vehicle file <dict>: .*hydrodynamics\.Z_wdot=.*mass matrix.*"
+        r"must be positive definite",
+    ):
         vehicle_from_dict(_broken("hydrodynamics", "Z_wdot", value))
 
 
@@ -229,11 +249,26 @@ def test_variant_moving_G_checks_the_mass_matrix(suboff):
     ("section", "key", "value", "message"),
     [
         (None, "units", ["si"], r"units=\['si'\] is invalid: must be one of \['si', 'us_customary'\]"),
-        ("rigid_body", "length", 1e308, r"length_m=3\.048e\+307 is invalid: must be a finite number in \[0\.01, 1000\.0\]"),
-        ("environment", "water_density", 1e-300, r"water_density_kg_m3=5\.15.*e-298 is invalid: must be a finite number in \[500\.0, 2000\.0\]"),
+        (
+            "rigid_body",
+            "length",
+            1e308,
+            r"length_m=3\.048e\+307 is invalid: must be a finite number in \[0\.01, 1000\.0\]",
+        ),
+        (
+            "environment",
+            "water_density",
+            1e-300,
+            r"water_density_kg_m3=5\.15.*e-298 is invalid: must be a finite number in \[500\.0, 2000\.0\]",
+        ),
         ("planes", "Z_delta_s", 0.0, r"planes\.Z_delta_s=0\.0 is invalid: must be a non-zero"),
         ("planes", "M_delta_b", 0, r"planes\.M_delta_b=0\.0 is invalid: must be a non-zero"),
-        ("hull", "radius_ratio", [0.0] * 25, r"hull offsets: planform area=0\.0 m\^2 is invalid: must be > 0"),
+        (
+            "hull",
+            "radius_ratio",
+            [0.0] * 25,
+            r"hull offsets: planform area=0\.0 m\^2 is invalid: must be > 0",
+        ),
         ("hydrodynamics", "Z_w", True, r"hydrodynamics\.Z_w=True is invalid: must be a number"),
     ],
 )
@@ -246,7 +281,10 @@ def test_inadmissible_vehicle_data_names_the_parameter(section, key, value, mess
     ("content", "message"),
     [
         (b"\xff\xfe\x00\x01", r"vehicle file '.*bad\.toml' is not UTF-8 text \(byte 0xff at position 0\)"),
-        ('name = "Sub\u00e9"\n'.encode("latin-1"), r"vehicle file '.*bad\.toml' is not UTF-8 text \(byte 0xe9"),
+        (
+            'name = "Sub\u00e9"\n'.encode("latin-1"),
+            r"vehicle file '.*bad\.toml' is not UTF-8 text \(byte 0xe9",
+        ),
     ],
 )
 def test_a_file_that_is_not_utf8_is_named(tmp_path: Path, content, message):
@@ -293,19 +331,33 @@ def test_make_refuses_a_singular_vehicle_file_naming_it(tmp_path: Path):
     text = resources.files("subenv.vehicles.data").joinpath("suboff.toml").read_text()
     path = tmp_path / "singular.toml"
     path.write_text(text.replace("Z_wdot = -1.4529e-2", f"Z_wdot = {_mass_slug(raw) / _nd2(raw)!r}"))
-    with pytest.raises(ValueError, match=rf"vehicle file {re.escape(str(path))}: hydrodynamics\.Z_wdot=.*positive definite"):
+    with pytest.raises(
+        ValueError, match=rf"vehicle file {re.escape(str(path))}: hydrodynamics\.Z_wdot=.*positive definite"
+    ):
         gym.make("subenv/DivePlane-v0", vehicle=str(path))
 
 
-_NUMERIC_FIELDS = [(section, key) for section, values in _suboff_file().items() if isinstance(values, dict)
-                   for key, value in values.items() if isinstance(value, (int, float)) and not isinstance(value, bool)]
+_NUMERIC_FIELDS = [
+    (section, key)
+    for section, values in _suboff_file().items()
+    if isinstance(values, dict)
+    for key, value in values.items()
+    if isinstance(value, (int, float)) and not isinstance(value, bool)
+]
 
 
 @settings(max_examples=60, deadline=None, derandomize=True, database=None)
-@given(field=st.sampled_from(_NUMERIC_FIELDS),
-       value=st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.integers(-10**400, 10**400),
-                       st.booleans(), st.text(max_size=2), st.lists(st.floats(), max_size=2)),
-       scale=st.sampled_from([None, -1.0, 0.0, 1e-300, 0.5, 2.0, 1e300]))
+@given(
+    field=st.sampled_from(_NUMERIC_FIELDS),
+    value=st.one_of(
+        st.floats(allow_nan=True, allow_infinity=True),
+        st.integers(-(10**400), 10**400),
+        st.booleans(),
+        st.text(max_size=2),
+        st.lists(st.floats(), max_size=2),
+    ),
+    scale=st.sampled_from([None, -1.0, 0.0, 1e-300, 0.5, 2.0, 1e300]),
+)
 def test_a_perturbed_vehicle_file_loads_an_admissible_vehicle_or_is_refused_by_name(field, value, scale):
     """Fuzzing the shipped file, one field at a time: the loader gives a vehicle whose environment
     steps with finite outputs, or a ValueError that names the file; never another exception."""
@@ -323,7 +375,9 @@ def test_a_perturbed_vehicle_file_loads_an_admissible_vehicle_or_is_refused_by_n
         return
     try:
         env = gym.make("subenv/Nominal-v0", vehicle=vehicle)
-    except ValueError as error:  # admissible as a vehicle, but not for the environment (e.g. no critical speed)
+    except (
+        ValueError
+    ) as error:  # admissible as a vehicle, but not for the environment (e.g. no critical speed)
         assert "is invalid" in str(error) or "has none" in str(error), error
         return
     obs, _ = env.reset(seed=0)
