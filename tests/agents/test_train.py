@@ -142,7 +142,7 @@ def test_trained_agent_runs_in_the_evaluation_harness_deterministically(trained)
     first = evaluate([controller], "tiny", episodes=1, progress=False)
     second = evaluate([AgentController(runs[1].run_dir, name="agent")], "tiny", episodes=1, progress=False)
     assert [r.trajectory.steps for r in first] == [r.trajectory.steps for r in second]
-    for x, y in zip(first, second):
+    for x, y in zip(first, second, strict=True):
         np.testing.assert_array_equal(x.trajectory.depth_m, y.trajectory.depth_m)
 
 
