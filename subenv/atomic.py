@@ -36,6 +36,7 @@ and only such a folder is replaced.
 from __future__ import annotations
 
 import contextlib
+import glob
 import os
 import shutil
 import socket
@@ -72,18 +73,13 @@ def _alive(pid: int) -> bool:
     except ProcessLookupError:
         return False
     except (PermissionError, OverflowError):  # another user's process; not a process id of ours
-        return True
+        pass
     return True
 
 
 def _empty_or_absent(path: Path) -> bool:
-    if not os.path.lexists(path):
-        return True
-    if path.is_symlink() or not path.is_dir():
-        return False
     try:
-        with os.scandir(path) as entries:
-            return next(entries, None) is None
+        return not os.path.lexists(path) or (path.is_dir() and not path.is_symlink() and not os.listdir(path))
     except OSError:  # unreadable: it may hold something
         return False
 
@@ -93,20 +89,14 @@ def _clean_up(target: Path) -> None:
     if os.name != "posix":  # (Windows' os.kill(pid, 0) sends a Ctrl-C instead of checking)
         return
     start = _writers(target)
-    try:
-        with os.scandir(target.parent) as entries:
-            names = sorted(e.name for e in entries if e.name.startswith(start))
-    except OSError:  # no parent folder yet, or a file: nothing was left there
-        return
-    for name in names:
-        pid, _, rest = name[len(start) :].partition(".")
+    for leftover in sorted(target.parent.glob(glob.escape(start) + "*")):  # (none if no parent folder)
+        pid, _, rest = leftover.name[len(start) :].partition(".")
         if not (pid.isdigit() and rest.endswith((".tmp", ".old"))) or _alive(int(pid)):
             continue
-        leftover = target.parent / name
         with contextlib.suppress(FileNotFoundError):  # (another writer put it right meanwhile)
             if rest.endswith(".old") and _empty_or_absent(target):
                 os.rename(leftover, target)  # killed between the two renames of a replacement
-            elif leftover.is_dir() and not leftover.is_symlink():
+            elif leftover.is_dir():
                 shutil.rmtree(leftover, ignore_errors=True)
             else:
                 leftover.unlink()
