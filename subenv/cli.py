@@ -327,7 +327,8 @@ def _grid_axis(text: str) -> tuple[str, tuple[float, ...]]:
 
 
 _PRINTED_POINTS = 60
-"""A sweep with more grid points x controllers than this prints one line per controller (the table is in success.md)."""
+"""A sweep with more grid points x controllers than this prints one line per controller (the table is
+in success.md)."""
 
 DEFAULT_MAPS: dict[str, list[tuple[str, tuple[float, ...]]]] = {
     "x_GB": [
@@ -344,6 +345,7 @@ DEFAULT_MAPS: dict[str, list[tuple[str, tuple[float, ...]]]] = {
 
 
 def sweep(args: argparse.Namespace) -> int:
+    """``subenv sweep``: run (or resume) the sweep, or the default maps' two; 130 when interrupted."""
     from subenv.evaluation.rollout import resolve_controllers
     from subenv.sweep import SweepSpec
     from subenv.vehicles import load_vehicle
@@ -372,25 +374,33 @@ def sweep(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise SystemExit(f"subenv sweep: {exc}") from None
     out = Path(args.out or f"results/sweep/{time.strftime('%Y%m%d-%H%M%S')}")
-    for name, spec in specs.items():
-        if len(specs) > 1:
-            print(
-                f"## {name}: " + " x ".join(f"{axis} ({len(values)})" for axis, values in spec.grid),
-                flush=True,
-            )
-        _sweep_one(spec, out / name if name else out, args)
+    try:
+        for name, spec in specs.items():
+            if len(specs) > 1:
+                print(
+                    f"## {name}: " + " x ".join(f"{axis} ({len(values)})" for axis, values in spec.grid),
+                    flush=True,
+                )
+            _sweep_one(spec, out / name if name else out, args)
+    except KeyboardInterrupt:  # (Ray is stopped by then; the finished chunks are on disk)
+        print(
+            f"subenv sweep: interrupted; the same command resumes it from the finished chunks in {out}",
+            file=sys.stderr,
+        )
+        return 130  # (128 + SIGINT, as a shell reports a command ended by Ctrl-C)
     return 0
 
 
 def _sweep_one(spec: Any, out: Path, args: argparse.Namespace) -> None:
     """Run (or resume) one sweep, print its success per grid point, draw its maps."""
+    from subenv.atomic import OutputDirError
     from subenv.sweep import run_sweep
 
     try:
         path = run_sweep(
             spec, out, address=args.address, num_cpus=args.num_cpus, progress=not args.no_progress
         )
-    except FileExistsError as exc:
+    except (FileExistsError, OutputDirError) as exc:
         raise SystemExit(f"subenv sweep: --out: {exc}") from None
     import pyarrow.parquet as pq
 
