@@ -205,8 +205,8 @@ def _installed_controllers(requested: Sequence[str] | None) -> None:
 
 
 def _note_other_vehicle(vehicle_name: str, controllers: Sequence[str] | None) -> None:
-    """On a vehicle of another length the comparison is Froude-scaled, but the agents are not; on one without bow
-    planes the controllers that move them are left out of the default comparison."""
+    """On a vehicle of another length the comparison is Froude-scaled, but the agents are not; on one
+    without bow planes the controllers that move them are left out of the default comparison."""
     from subenv.evaluation.rollout import needs_bow_planes, resolve_controllers
     from subenv.thesis import reference_length_ratio
     from subenv.vehicles import load_vehicle
@@ -226,13 +226,15 @@ def _note_other_vehicle(vehicle_name: str, controllers: Sequence[str] | None) ->
     if ratio != 1.0:
         print(
             f"(--vehicle {vehicle_name}: the scenarios, the success criterion and the classical baselines' "
-            f"designs are Froude-scaled to its {vehicle.length_m:.4g} m (x{ratio:.4g}); the trained agents are "
-            "SUBOFF's and only run there as they were trained)",
+            f"designs are Froude-scaled to its {vehicle.length_m:.4g} m (x{ratio:.4g}); the trained agents "
+            "are SUBOFF's and only run there as they were trained)",
             file=sys.stderr,
         )
 
 
 def evaluate(args: argparse.Namespace) -> int:
+    """``subenv evaluate``: 0 when every controller ran every episode; 1 when one failed (the others'
+    results are written, and each failure is a line on stderr)."""
     from subenv.atomic import OutputDirError
     from subenv.evaluation import (
         DEFAULT_SEED,
@@ -277,9 +279,14 @@ def evaluate(args: argparse.Namespace) -> int:
         raise SystemExit(f"subenv evaluate: {exc}") from None
     print(comparison.leaderboard)
     print(
-        f"\n{len(comparison.results)} episodes in {comparison.elapsed_s:.1f} s; results in {comparison.out_dir}/"
+        f"\n{len(comparison.results)} episodes in {comparison.elapsed_s:.1f} s; "
+        f"results in {comparison.out_dir}/"
     )
-    return 0
+    # A failed controller cost the others nothing (their results are written); the run still did not do
+    # what was asked: each failure on one line, and a non-zero status.
+    for failure in comparison.failures:
+        print(f"subenv evaluate: {failure.message}", file=sys.stderr)
+    return 1 if comparison.failures else 0
 
 
 def train(argv: Sequence[str]) -> int:
