@@ -1,7 +1,7 @@
 """The ``subenv`` command line: the submarine depth-control benchmark's commands.
 
-``subenv evaluate`` (the main job) compares the installed controllers on a suite of scenarios; ``subenv sweep``
-runs them over a grid of the physics' parameters on Ray (:mod:`subenv.sweep`);
+``subenv evaluate`` (the main job) compares the installed controllers on a suite of scenarios;
+``subenv sweep`` runs them over a grid of the physics' parameters on Ray (:mod:`subenv.sweep`);
 ``subenv demo`` flies the thesis's pole-placement design (Riedel 1993 Ch. II.B, computed here from
 the linear model) once above and once below the critical speed, prints a summary and writes a plot.
 The command line is the composition root: it finds the controllers through their entry points
@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import importlib.util
+import json
 import math
 import sys
 import time
@@ -37,6 +38,8 @@ from subenv.vehicles import available_vehicles
 
 @dataclass
 class Run:
+    """One flight of the demonstration: its label, speed and recorded signals."""
+
     label: str
     speed_mps: float
     times: np.ndarray
@@ -101,6 +104,7 @@ def _write_plot(runs: Sequence[Run], ucr: float, path: Path) -> None:
 
 
 def demo(args: argparse.Namespace) -> int:
+    """``subenv demo``: fly the thesis design above and below u_cr, print a summary, plot both."""
     env = gym.make(args.env)
     ucr = critical_speed(env.unwrapped.base_vehicle)  # type: ignore[attr-defined]
     env.close()
@@ -134,6 +138,7 @@ def demo(args: argparse.Namespace) -> int:
 
 
 def analyze(args: argparse.Namespace) -> int:
+    """``subenv analyze``: write the report that reproduces Riedel (1993)."""
     from subenv.analysis.report import write_report
     from subenv.atomic import OutputDirError
     from subenv.vehicles import load_vehicle
@@ -238,7 +243,6 @@ def evaluate(args: argparse.Namespace) -> int:
     from subenv.atomic import OutputDirError
     from subenv.evaluation import (
         DEFAULT_SEED,
-        DEFAULT_SUITE,
         ENTRY_POINT_GROUP,
         controller_names,
         run_comparison,
@@ -256,7 +260,6 @@ def evaluate(args: argparse.Namespace) -> int:
             f"subenv evaluate: no controllers are registered: install a package that declares some "
             f"in the {ENTRY_POINT_GROUP!r} entry-point group, or see --plugins"
         )
-    suite = DEFAULT_SUITE if args.suite is None else args.suite[0] if len(args.suite) == 1 else args.suite
     _note_other_vehicle(args.vehicle, args.controllers)
     if not args.no_plots:
         require("plot", "the plots (or pass --no-plots)", "matplotlib")
@@ -264,7 +267,7 @@ def evaluate(args: argparse.Namespace) -> int:
     try:
         comparison = run_comparison(
             args.controllers,
-            suite,
+            args.suite,  # (None: the default suite)
             args.episodes,
             out,
             overwrite=args.force,
@@ -272,6 +275,7 @@ def evaluate(args: argparse.Namespace) -> int:
             progress=not args.no_progress,
             plots=not args.no_plots,
             vehicle=args.vehicle,
+            env_kwargs=args.env_kwargs,
         )
     except (FileExistsError, OutputDirError) as exc:
         raise SystemExit(f"subenv evaluate: --out: {exc}") from None
@@ -290,13 +294,15 @@ def evaluate(args: argparse.Namespace) -> int:
 
 
 def train(argv: Sequence[str]) -> int:
-    """``subenv train ...`` is ``python -m subenv_agents.train ...`` (imported by name: the composition root)."""
+    """``subenv train ...`` is ``python -m subenv_agents.train ...`` (imported by name: the composition
+    root)."""
     require("rl", "subenv train", "stable_baselines3", "yaml")
     module = importlib.import_module("subenv_agents.train")
     return int(module.main(list(argv)))
 
 
 def list_environments(args: argparse.Namespace) -> int:
+    """``subenv list``: the environment ids and their scenarios."""
     from subenv.scenarios import get_scenario, scenario_names
 
     for name in scenario_names():
@@ -460,6 +466,20 @@ def _names(text: str) -> list[str]:
     return names
 
 
+def _json_object(text: str) -> dict[str, Any]:
+    """A JSON object (``--env-kwargs``); argparse reports a ValueError's type as the usage error."""
+    try:
+        value = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise argparse.ArgumentTypeError(f"invalid value {text!r}: not JSON ({exc.msg})") from None
+    if not isinstance(value, dict):
+        raise argparse.ArgumentTypeError(
+            f"invalid value {text!r}: must be a JSON object of the environment's arguments, e.g. "
+            "'{\"plane_rate_limit_radps\": 0.05}'"
+        )
+    return value
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="subenv",
@@ -508,6 +528,14 @@ def _parser() -> argparse.ArgumentParser:
         default="suboff",
         help="vehicle name or file (default: %(default)s); the scenarios are Froude-scaled to "
         "its length (shipped: " + ", ".join(available_vehicles()) + ")",
+    )
+    p_eval.add_argument(
+        "--env-kwargs",
+        type=_json_object,
+        metavar="JSON",
+        help="the environments' other arguments, a JSON object, e.g. '{\"plane_rate_limit_radps\": 0.05}' "
+        "(checked by the environment before anything runs; recorded in run.json; a controller that takes "
+        "them, such as mpc, is told them: name it <name>:uninformed to run it untold)",
     )
     p_eval.add_argument("--list", action="store_true", help="list the controllers and suites, and exit")
     p_demo = sub.add_parser("demo", help="fly the thesis controller above and below the critical speed")

@@ -128,7 +128,7 @@ def no_work(monkeypatch):
     def refuse(*args, **kwargs):
         pytest.fail("the command started its work before checking its arguments")
 
-    monkeypatch.setattr(subenv.evaluation.comparison, "evaluate", refuse)
+    monkeypatch.setattr(subenv.evaluation.comparison, "roll_out", refuse)
     monkeypatch.setattr(subenv.analysis.report, "reproduce_numbers", refuse)
 
 
@@ -196,7 +196,7 @@ def test_an_empty_out_folder_is_accepted(tmp_path: Path, monkeypatch, command, f
     def started(*args, **kwargs):  # the command got past its checks of --out
         raise _WorkStarted
 
-    monkeypatch.setattr(subenv.evaluation.comparison, "evaluate", started)
+    monkeypatch.setattr(subenv.evaluation.comparison, "roll_out", started)
     monkeypatch.setattr(subenv.analysis.report, "reproduce_numbers", started)
     (tmp_path / "empty").mkdir()
     with pytest.raises(_WorkStarted):
@@ -346,7 +346,7 @@ def test_evaluate_arguments_are_refused_in_one_line_or_reach_the_work(options, t
     def reached(*args, **kwargs):  # type: ignore[no-untyped-def]
         raise _Reached
 
-    monkeypatch.setattr(subenv.evaluation.comparison, "evaluate", reached)
+    monkeypatch.setattr(subenv.evaluation.comparison, "roll_out", reached)
     argv = ["evaluate", "--no-progress", "--out", str(tmp_path_factory.mktemp("fuzz") / "out")]
     for flag, word in options:
         argv += [flag, word]
@@ -416,7 +416,7 @@ def test_controllers_that_cannot_load_are_skipped_with_a_note(tmp_path: Path, mo
     )
 
     monkeypatch.setattr(
-        subenv.evaluation.comparison, "evaluate", lambda *a, **k: pytest.fail("reached the work")
+        subenv.evaluation.comparison, "roll_out", lambda *a, **k: pytest.fail("reached the work")
     )
     assert main(["evaluate", "--list"]) == 0
     printed = capsys.readouterr()
@@ -459,3 +459,64 @@ def test_evaluate_takes_a_vehicle_and_says_what_is_not_scaled(tmp_path: Path, ca
     ):
         main(["evaluate", "--vehicle", "boat", "--out", str(tmp_path / "none")])
     assert not (tmp_path / "none").exists()
+
+
+@pytest.mark.parametrize(
+    ("value", "message"),
+    [
+        (
+            '{"plane_rate_limit_radps": -1}',
+            "subenv evaluate: env_kwargs: plane_rate_limit_radps=-1 is invalid",
+        ),
+        ('{"plane_rate": 0.05}', "subenv evaluate: env_kwargs: 'plane_rate' is unknown: must be one of"),
+        ('{"control": "independent"}', "subenv evaluate: env_kwargs: 'control' cannot be set there"),
+    ],
+)
+def test_evaluate_refuses_bad_env_kwargs_in_one_line_before_any_work(tmp_path: Path, no_work, value, message):
+    with pytest.raises(SystemExit) as exit_:
+        main([*EVALUATE, "--env-kwargs", value, "--out", str(tmp_path / "out")])
+    assert str(exit_.value.code).startswith(message) and "\n" not in str(exit_.value.code)
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(("value", "reason"), [("{nope", "not JSON"), ("[0.05]", "must be a JSON object")])
+def test_evaluate_env_kwargs_must_be_a_json_object(tmp_path: Path, capsys, no_work, value, reason):
+    with pytest.raises(SystemExit) as exit_:
+        main([*EVALUATE, "--env-kwargs", value, "--out", str(tmp_path / "out")])
+    assert (
+        exit_.value.code == 2
+        and f"argument --env-kwargs: invalid value {value!r}: {reason}" in capsys.readouterr().err
+    )
+
+
+def test_evaluate_passes_env_kwargs_to_the_environments_and_records_them(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    settings = '{"plane_rate_limit_radps": 0.05, "max_pitch_rad": 0.4}'
+    assert (
+        main(
+            [
+                *EVALUATE,
+                "--controllers",
+                "thesis,mpc,mpc:uninformed",
+                "--no-plots",
+                "--env-kwargs",
+                settings,
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
+    record = json.loads((out / "run.json").read_text())
+    assert record["env_kwargs"] == {"plane_rate_limit_radps": 0.05, "max_pitch_rad": 0.4}
+    assert [(c["name"], c["informed"]) for c in record["controllers"]] == [
+        ("thesis", False),
+        ("mpc", True),
+        ("mpc:uninformed", False),
+    ]
+    rows = list(csv.DictReader((out / "results.csv").open()))
+    assert {r["controller"]: r["informed"] for r in rows} == {
+        "thesis": "False",
+        "mpc": "True",
+        "mpc:uninformed": "False",
+    }
