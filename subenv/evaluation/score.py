@@ -71,9 +71,12 @@ SCORE_MAX: Final = 1000.0
 """The score's scale, DeepMind Control Suite's (0-1000 per task)."""
 
 BOOTSTRAP_RESAMPLES: Final = 2000
-"""Resamples of the score's and the quality's intervals: the percentile bounds then move by about a
-tenth of the interval's width from one bootstrap seed to another, and the intervals of a comparison of
-eight controllers on seven scenarios take about a second."""
+"""Resamples of the score's and the quality's intervals: 50 beyond each bound of a 95% percentile
+interval, and a bound moves by at most 4% of the interval's width from one bootstrap seed to another
+(measured over seeds 0-4 on the default suite's mpc, reversal_aware and lqr). One bootstrap per
+controller gives every scenario's interval and the pooled one (each scenario's episodes are resampled
+from that scenario alone, so its own interval is that of its own bootstrap): the default suite's eight
+controllers (5600 episodes) take 0.6-0.7 s on a loaded 2-core machine."""
 
 BOOTSTRAP_SEED: Final = 0
 """Fixed, so the same results give the same intervals every time."""
@@ -95,63 +98,66 @@ def score_value(wins: int, scored: int, quality: float) -> float:
     return SCORE_MAX * (wins - 1 + quality) / scored
 
 
-def _sums(strata: Sequence[np.ndarray], axis: int) -> tuple[np.ndarray, np.ndarray]:
-    """(wins, sum of the won episodes' q) over strata of x (q won, -1 lost), along ``axis``."""
-    wins = sum(np.count_nonzero(x >= 0, axis=axis) for x in strata)
-    total = sum(np.where(x >= 0, x, 0.0).sum(axis=axis) for x in strata)
-    return np.asarray(wins), np.asarray(total)
+def _score_values(wins: np.ndarray, total: np.ndarray, scored: int) -> np.ndarray:
+    """:func:`score_value`, vectorised: ``wins`` W and the won episodes' summed quality ``total``."""
+    quality = total / np.maximum(wins, 1)
+    return np.where(wins >= 1, SCORE_MAX * (wins - 1 + quality) / max(scored, 1), 0.0)
 
 
-def _score_statistic(scored: int) -> Callable[..., np.ndarray]:
-    """The score of strata of x, vectorised along ``axis`` (N = ``scored``, fixed by the strata)."""
-
-    def statistic(*strata: np.ndarray, axis: int = -1) -> np.ndarray:
-        wins, total = _sums(strata, axis)
-        quality = total / np.maximum(wins, 1)
-        return np.where(wins >= 1, SCORE_MAX * (wins - 1 + quality) / scored, 0.0)
-
-    return statistic
+def _scores_of(strata: Sequence[np.ndarray], axis: int) -> np.ndarray:
+    """The score of each stratum of x (q won, -1 lost), then of all pooled: shape (k + 1, ...)."""
+    wins = [np.count_nonzero(x >= 0, axis=axis) for x in strata]
+    totals = [np.maximum(x, 0.0).sum(axis=axis) for x in strata]  # (q >= 0: the won episodes' q)
+    each = [_score_values(w, t, x.shape[axis]) for w, t, x in zip(wins, totals, strata, strict=True)]
+    pooled = _score_values(sum(wins), sum(totals), sum(x.shape[axis] for x in strata))
+    return np.stack([*each, pooled])
 
 
-def _quality_statistic(*strata: np.ndarray, axis: int = -1) -> np.ndarray:
-    """1000 times the mean of strata of q, vectorised along ``axis``."""
-    wins, total = _sums(strata, axis)
-    return SCORE_MAX * total / wins
+def _qualities_of(strata: Sequence[np.ndarray], axis: int) -> np.ndarray:
+    """1000 times the mean of each stratum of q, then of all pooled: shape (k + 1, ...)."""
+    totals = [x.sum(axis=axis) for x in strata]
+    sizes = [x.shape[axis] for x in strata]
+    each = [SCORE_MAX * t / n for t, n in zip(totals, sizes, strict=True)]
+    return np.stack([*each, SCORE_MAX * sum(totals) / sum(sizes)])
 
 
-def _stratified_interval(
+def _stratified_intervals(
     strata: Sequence[np.ndarray],
-    statistic: Callable[..., np.ndarray],
+    statistic: Callable[[Sequence[np.ndarray], int], np.ndarray],
     confidence: float,
-) -> tuple[float, float]:
-    """The percentile interval of ``statistic`` over a stratified bootstrap of ``strata``.
+) -> np.ndarray:
+    """Percentile intervals of a statistic of every stratum and of all pooled (``statistic`` returns
+    k + 1 values for k non-empty strata), from one stratified bootstrap: each resample draws every
+    stratum's episodes from that stratum alone, keeping its size; returns shape (k + 1, 2).
 
-    A stratum of one episode resamples to itself, so it enters every resample as it is; without a
-    stratum of two or more the interval is (nan, nan) (nothing to resample).
+    A stratum of one episode resamples to itself, so it enters every resample as it is, and its own
+    interval is (nan, nan), as is the pooled one without a stratum of two or more (nothing to resample).
     """
-    varying = [x for x in strata if x.size >= 2]
-    fixed = [x for x in strata if x.size == 1]
+    varying = [i for i, x in enumerate(strata) if x.size >= 2]
+    out = np.full((len(strata) + 1, 2), np.nan)
     if not varying:
-        return (math.nan, math.nan)
-    if all(np.all(x == x[0]) for x in varying):  # every resample is the sample
-        value = float(statistic(*strata))
-        return (value, value)
+        return out
     from scipy import stats  # imported on use: importing subenv.evaluation stays light
 
-    def with_fixed(*resampled: np.ndarray, axis: int = -1) -> np.ndarray:
-        shape = resampled[0].shape[:-1]
-        return statistic(*resampled, *(np.broadcast_to(x, (*shape, 1)) for x in fixed), axis=axis)
+    def resampled(*drawn: np.ndarray, axis: int = -1) -> np.ndarray:
+        batch = drawn[0].shape[:-1]
+        full = [np.broadcast_to(x, (*batch, x.size)) for x in strata]
+        for i, x in zip(varying, drawn, strict=True):
+            full[i] = x
+        return statistic(full, axis)
 
     ci = stats.bootstrap(
-        tuple(varying),
-        with_fixed,
+        tuple(strata[i] for i in varying),
+        resampled,
         n_resamples=BOOTSTRAP_RESAMPLES,
         confidence_level=confidence,
         method="percentile",
         vectorized=True,
         rng=np.random.default_rng(BOOTSTRAP_SEED),
     ).confidence_interval
-    return (float(ci.low), float(ci.high))
+    out[:] = np.stack([ci.low, ci.high], axis=-1)
+    out[[i for i, x in enumerate(strata) if x.size < 2]] = np.nan
+    return out
 
 
 @dataclass(frozen=True)
@@ -202,33 +208,46 @@ class Score:
         return row
 
 
-def _score(controller: str, scenario: str, results: Sequence[EpisodeResult], confidence: float) -> Score:
-    """The :class:`Score` of one controller's ``results`` (one scenario's, or a suite's: stratified by
-    scenario)."""
-    counted = [r for r in results if r.counts]
-    by_scenario: dict[str, list[EpisodeResult]] = {}
-    for r in counted:
-        by_scenario.setdefault(r.scenario, []).append(r)
-    x = [
-        np.array([r.metrics.quality if r.metrics.success else -1.0 for r in rs])
-        for rs in by_scenario.values()
-    ]
-    won = [xs[xs >= 0] for xs in x]
-    n = len(counted)
-    wins = sum(w.size for w in won)
-    q = float(np.sum([w.sum() for w in won])) / wins if wins else math.nan
-    return Score(
-        controller=controller,
-        scenario=scenario,
-        episodes=len(results),
-        scored=n,
-        wins=wins,
-        quality=SCORE_MAX * q,
-        score=score_value(wins, n, q),
-        success_ci=wilson_interval(wins, n, confidence),
-        quality_ci=_stratified_interval(won, _quality_statistic, confidence),
-        score_ci=_stratified_interval(x, _score_statistic(n), confidence) if n else (math.nan, math.nan),
-    )
+def _controller_scores(controller: str, results: Sequence[EpisodeResult], confidence: float) -> list[Score]:
+    """One controller's :class:`Score` on each scenario (in the order first seen), then pooled; the
+    intervals of all of them from one stratified bootstrap of the score and one of the quality."""
+    scenarios = list(dict.fromkeys(r.scenario for r in results))
+    every = {s: [r for r in results if r.scenario == s] for s in scenarios}
+    x = {
+        s: np.array([r.metrics.quality if r.metrics.success else -1.0 for r in rs if r.counts])
+        for s, rs in every.items()
+    }
+    won = {s: xs[xs >= 0] for s, xs in x.items()}
+    scored = [s for s in scenarios if x[s].size]  # (a scenario without scored episodes has no score)
+    winning = [s for s in scenarios if won[s].size]
+    score_rows = _stratified_intervals([x[s] for s in scored], _scores_of, confidence)
+    quality_rows = _stratified_intervals([won[s] for s in winning], _qualities_of, confidence)
+    score_ci = dict(zip([*scored, POOLED], score_rows, strict=True))
+    quality_ci = dict(zip([*winning, POOLED], quality_rows, strict=True))
+    out = []
+    for scenario in [*scenarios, POOLED]:
+        xs = np.concatenate([x[s] for s in scenarios]) if scenario == POOLED else x[scenario]
+        n, wins = xs.size, int(np.count_nonzero(xs >= 0))
+        q = float(np.maximum(xs, 0.0).sum()) / wins if wins else math.nan
+        out.append(
+            Score(
+                controller=controller,
+                scenario=scenario,
+                episodes=len(results) if scenario == POOLED else len(every[scenario]),
+                scored=n,
+                wins=wins,
+                quality=SCORE_MAX * q,
+                score=score_value(wins, n, q),
+                success_ci=wilson_interval(wins, n, confidence),
+                quality_ci=_pair(quality_ci.get(scenario)),
+                score_ci=_pair(score_ci.get(scenario)),
+            )
+        )
+    return out
+
+
+def _pair(interval: np.ndarray | None) -> tuple[float, float]:
+    return (math.nan, math.nan) if interval is None else (float(interval[0]), float(interval[1]))
 
 
 def scores(results: Sequence[EpisodeResult], confidence: float = CONFIDENCE_LEVEL) -> list[Score]:
@@ -237,13 +256,7 @@ def scores(results: Sequence[EpisodeResult], confidence: float = CONFIDENCE_LEVE
     by_controller: dict[str, list[EpisodeResult]] = {}
     for r in results:
         by_controller.setdefault(r.controller, []).append(r)
-    out = []
-    for controller, mine in by_controller.items():
-        scenarios = list(dict.fromkeys(r.scenario for r in mine))
-        for scenario in scenarios:
-            out.append(_score(controller, scenario, [r for r in mine if r.scenario == scenario], confidence))
-        out.append(_score(controller, POOLED, mine, confidence))
-    return out
+    return [s for c, mine in by_controller.items() for s in _controller_scores(c, mine, confidence)]
 
 
 def rank_by_score(pooled: Iterable[Score]) -> list[str]:
@@ -370,21 +383,20 @@ def paired_comparisons(
     list of PairedComparison
         Per pair: the pooled comparison, then (``per_scenario``) one per scenario both ran.
     """
-    index = {(r.controller, r.scenario, r.seed): r for r in results}
-    controllers = list(dict.fromkeys(r.controller for r in results))
-    scenarios = list(dict.fromkeys(r.scenario for r in results))
+    runs: dict[str, dict[tuple[str, int], EpisodeResult]] = {}  # controller -> (scenario, seed) -> result
+    for r in results:
+        runs.setdefault(r.controller, {})[(r.scenario, r.seed)] = r
     out = []
-    for first, second in itertools.combinations(controllers, 2) if pairs is None else pairs:
+    for first, second in itertools.combinations(runs, 2) if pairs is None else pairs:
+        theirs = runs[second]
         matched = [
-            (r, index[(second, r.scenario, r.seed)])
-            for r in results
-            if r.controller == first and (second, r.scenario, r.seed) in index
+            (r, theirs[key])
+            for key, r in runs[first].items()
+            if key in theirs and r.counts and theirs[key].counts
         ]
-        matched = [(x, y) for x, y in matched if x.counts and y.counts]
         out.append(_paired(first, second, POOLED, matched))
-        if per_scenario:
-            for scenario in scenarios:
-                mine = [(x, y) for x, y in matched if x.scenario == scenario]
-                if mine:
-                    out.append(_paired(first, second, scenario, mine))
+        by_scenario: dict[str, list[tuple[EpisodeResult, EpisodeResult]]] = {}
+        for pair in matched if per_scenario else ():
+            by_scenario.setdefault(pair[0].scenario, []).append(pair)
+        out += [_paired(first, second, scenario, mine) for scenario, mine in by_scenario.items()]
     return out
