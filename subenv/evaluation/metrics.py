@@ -379,8 +379,11 @@ def regulation_window(
         window at each change.
     """
     start = time_s[:-1]
-    orders = np.atleast_1d(np.asarray(time_s[:1] if order_times_s is None else order_times_s, dtype=float))
-    given = orders[np.clip(np.searchsorted(orders, start, side="right") - 1, 0, None)]
+    if order_times_s is None:
+        given: np.ndarray | float = float(time_s[0])
+    else:
+        orders = np.atleast_1d(np.asarray(order_times_s, dtype=float))
+        given = orders[np.clip(np.searchsorted(orders, start, side="right") - 1, 0, None)]
     result: np.ndarray = start - given >= approach_s - _slack(float(time_s[-1]))
     return result
 
@@ -397,18 +400,17 @@ def _regulation_accuracy(
     sample that ends it is (zero-order hold, as the planes); the window runs to ``scheduled_end_s``,
     and the part of it after the record's end (a terminated episode) counts as outside."""
     window = regulation_window(t, approach_s)
-    held = float(np.sum(dts[window & (abs_e[1:] <= band_m)]))
-    recorded = float(np.sum(dts[window]))
+    held = float(np.dot(dts, window & (abs_e[1:] <= band_m)))
+    recorded = float(np.dot(dts, window))
     window_start = float(t[0]) + approach_s
     missing = max(0.0, scheduled_end_s - max(float(t[-1]), window_start))
     total = recorded + missing
     return held / total if total > 0 else 0.0
 
 
-def _plane_effort(planes: np.ndarray, dts: np.ndarray, duration: float, limit: float, count: int) -> float:
-    """sqrt(time mean of the sum of squared plane angles / count) / limit, at most 1 (``planes``:
-    (2, n - 1), sample k >= 1 weighted by the step that ended at it)."""
-    mean_square = float(np.sum((planes**2).sum(axis=0) * dts)) / duration
+def _plane_effort(mean_square: float, limit: float, count: int) -> float:
+    """sqrt(``mean_square`` / count) / limit, at most 1: ``mean_square`` the time mean of the sum of the
+    squared plane angles [rad^2]."""
     return min(1.0, math.sqrt(mean_square / count) / limit)
 
 
@@ -661,7 +663,8 @@ def episode_metrics(
     accuracy = _regulation_accuracy(
         t, dts, abs_e, REGULATION_BAND_M * length, APPROACH_S * time, scheduled_end
     )
-    effort = _plane_effort(planes, dts, duration, plane_limit_rad, plane_count)
+    mean_square = float(np.sum((planes**2).sum(axis=0) * dts)) / duration
+    effort = _plane_effort(mean_square, plane_limit_rad, plane_count)
     return EpisodeMetrics(
         outcome=_outcome(success, wrong_branch, steady_offset, termination_reason),
         success=success,
@@ -674,7 +677,7 @@ def episode_metrics(
         settling_time_s=_settling_time(t, within, terminated),
         overshoot_m=_overshoot(e, abs_e),
         peak_pitch_deg=math.degrees(float(np.abs(theta).max())),
-        plane_rms_rad=math.sqrt(float(np.sum((planes**2).sum(axis=0) * dts)) / duration),
+        plane_rms_rad=math.sqrt(mean_square),
         saturated_fraction=float(np.sum(dts[saturated])) / duration,
         hold_max_abs_error_m=hold_max,
         final_abs_error_m=float(abs_e[-1]),

@@ -22,6 +22,7 @@ from subenv.evaluation import (
 )
 from subenv.evaluation.environments import check_env_kwargs, env_settings, setting_names
 from subenv.evaluation.plan import resolve_controllers
+from subenv.evaluation.plots import replay_trajectory
 from subenv.vehicles import Vehicle, load_vehicle
 
 SHORT = Suite(
@@ -136,3 +137,17 @@ def test_the_settings_and_who_was_told_are_in_run_json(tmp_path: Path) -> None:
         for line in board.split("\n\n")[1].splitlines()[2:]
     }
     assert rows == {"bang_bang": "yes", "thesis": "no"}
+
+
+def test_the_figures_replay_their_episodes_in_the_run_settings(tmp_path: Path) -> None:
+    """The outcome figures replay an episode that was not kept (here episodes 1 and 2) in the settings
+    of the run: in the default settings the replay would be another episode, and refused."""
+    settings = {"plane_rate_limit_radps": 0.05}
+    comparison = run_comparison(
+        [BangBang()], SHORT, episodes=3, out_dir=tmp_path / "run", progress=False, env_kwargs=settings
+    )
+    assert (tmp_path / "run" / "plots" / "trajectories_Nominal.png").is_file()
+    unkept = next(r for r in comparison.results if r.trajectory is None)
+    replay_trajectory(unkept, BangBang(), max_duration_s=SHORT.max_duration_s, env_kwargs=settings)
+    with pytest.raises(ValueError, match="replaying bang_bang on Nominal seed"):
+        replay_trajectory(unkept, BangBang(), max_duration_s=SHORT.max_duration_s)
