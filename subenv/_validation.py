@@ -43,16 +43,20 @@ def is_finite(value: Any) -> bool:
         return False
 
 
-def require(name: str, value: Any, ok: bool, allowed: str) -> None:
+def require(name: str, value: Any, ok: bool | np.bool_, allowed: str) -> None:
     """Raise ``ValueError("{name}={value!r} is invalid: must be {allowed}")`` unless ``ok``."""
     if not ok:
         raise ValueError(f"{name}={_shown(value)} is invalid: must be {allowed}")
 
 
 def _shown(value: Any) -> str:
-    """``repr(value)``; an integer beyond the float range by its size (its repr may be thousands of digits)."""
+    """``repr(value)``; an integer beyond the float range by its size (its repr may be thousands of digits),
+    also in a list or tuple."""
     if isinstance(value, int) and not isinstance(value, bool) and abs(value) > sys.float_info.max:
         return f"<an integer of {value.bit_length()} bits>"
+    if type(value) in (list, tuple):
+        shown = ", ".join(_shown(v) for v in value)
+        return f"[{shown}]" if isinstance(value, list) else f"({shown}{',' if len(value) == 1 else ''})"
     return repr(value)
 
 
