@@ -113,9 +113,13 @@ def load_vehicle(name_or_path: str | os.PathLike[str]) -> Vehicle:
     ------
     ValueError
         Unknown name; a path that is not a regular file or not UTF-8 TOML; a missing or unknown
-        key; a value outside its allowed range; a vehicle that is not physically admissible (a mass
-        matrix with added mass that is not positive definite, a hull without area, a plane without
-        effect). The message names the file, the field, the value and what is allowed.
+        key; a value that is not a finite number or outside its allowed range; a vehicle that is not
+        physically admissible or that the model cannot run (a mass matrix with added mass that is not
+        positive definite, buoyancy not within a factor of 2 of the weight, centres of gravity or
+        buoyancy beyond a hull length, a radius of gyration longer than the hull, stern planes without
+        a critical speed, a derived quantity that overflows, a hull without area, a plane without
+        effect): see :class:`~subenv.vehicles.Vehicle`. The message names the file, the field, the
+        value and what is allowed.
     FileNotFoundError
         A path that does not exist.
     """
