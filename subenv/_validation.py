@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import sys
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -17,12 +18,15 @@ __all__ = [
     "integer",
     "interval",
     "is_finite",
+    "is_integer",
     "is_number",
+    "mapping",
     "non_negative",
     "number",
     "positive",
     "real_array",
     "require",
+    "seed",
 ]
 
 
@@ -31,6 +35,11 @@ def is_number(value: Any) -> bool:
     return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(
         value, (bool, np.bool_)
     )
+
+
+def is_integer(value: Any) -> bool:
+    """An integer (Python or NumPy), not a bool."""
+    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
 
 
 def is_finite(value: Any) -> bool:
@@ -88,14 +97,26 @@ def non_negative(name: str, value: Any) -> float:
 
 def integer(name: str, value: Any, low: int, high: int | None = None) -> int:
     """An integer (Python or NumPy, not a bool) in [low, high]."""
-    ok = (
-        isinstance(value, (int, np.integer))
-        and not isinstance(value, (bool, np.bool_))
-        and low <= value
-        and (high is None or value <= high)
-    )
+    ok = is_integer(value) and low <= value and (high is None or value <= high)
     require(name, value, ok, f"an integer in [{low}, {high}]" if high is not None else f"an integer >= {low}")
     return int(value)
+
+
+def seed(name: str, value: Any) -> int | None:
+    """A seed of ``reset(seed=...)``: None, or an integer >= 0 (Python or NumPy, not a bool) as a Python int.
+
+    Gymnasium's ``np_random`` takes only a Python int >= 0 (it raises ``gymnasium.error.Error`` for a NumPy
+    integer and a negative one; a bool it takes as 0 or 1): the environments give it this one, so that
+    ``np.int64(3)`` draws what ``3`` draws.
+    """
+    require(name, value, value is None or (is_integer(value) and value >= 0), "None or an integer >= 0")
+    return None if value is None else int(value)
+
+
+def mapping(name: str, value: Any) -> dict[str, Any]:
+    """None (empty) or a mapping (a dict), as a new dict: ``reset(options=...)``."""
+    require(name, value, value is None or isinstance(value, Mapping), "None or a dict")
+    return dict(value) if value is not None else {}
 
 
 def interval(name: str, value: Any, low: float = -math.inf, high: float = math.inf) -> tuple[float, float]:
