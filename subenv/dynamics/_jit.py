@@ -214,9 +214,9 @@ def inline_kernel(fn: FunctionT) -> FunctionT:
 
 
 def rows(value: Any, shape: tuple[int, ...]) -> Any:
-    """``value`` broadcast to ``shape`` as a contiguous float64 array of one row per element (``shape + (k,)``
-    arrays: pass ``shape + (k,)`` and reshape): how the batched NumPy-facing functions hand a batch to a kernel
-    that loops over it."""
+    """``value`` broadcast to ``shape`` as a contiguous float64 array of one row per element
+    (``shape + (k,)`` arrays: pass ``shape + (k,)`` and reshape): how the batched NumPy-facing functions
+    hand a batch to a kernel that loops over it."""
     return np.ascontiguousarray(np.broadcast_to(np.asarray(value, dtype=float), shape)).reshape(-1)
 
 

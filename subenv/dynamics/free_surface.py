@@ -22,8 +22,9 @@ first-order slender-body heave force and pitch moment for the same image system 
 boundary, the sea floor). This is the model here.
 
 *The force: Lagally's theorem.* A source of strength m in an outer flow of velocity V feels the
-force -rho m V (Lagally's theorem; Newman 1977 ch. 4; Milne-Thomson 1968, *Theoretical Hydrodynamics*). The outer
-flow at the hull's sources is the image line's, so the upward force per unit length at station x is
+force -rho m V (Lagally's theorem; Newman 1977 ch. 4; Milne-Thomson 1968, *Theoretical
+Hydrodynamics*). The outer flow at the hull's sources is the image line's, so the upward force per
+unit length at station x is
 
     f(x) = rho m(x) int m(xi) (h(x) + h(xi)) / (4 pi r^3) dxi,
     r^2 = (x - xi)^2 cos^2(theta) + (h(x) + h(xi))^2,
@@ -147,7 +148,8 @@ def suction_point(
 # same terms over arrays of segments.
 @inline_kernel
 def station_depth(depth: float, x: float, sin_theta: float, radius: float) -> float:
-    """Depth [m] of the hull's sources at station ``x`` [m] (a station above the surface is taken at its radius)."""
+    """Depth [m] of the hull's sources at station ``x`` [m] (a station above the surface is taken at its
+    radius)."""
     return max(depth - x * sin_theta, radius)
 
 
@@ -170,7 +172,8 @@ def source_pair(xk: float, hk: float, sk: float, xm: float, hm: float, sm: float
 def suction_from_sums(
     force: float, moment: float, u: float, rho_suction: float, cos_theta: float
 ) -> tuple[float, float]:
-    """(Z_fs [N], M_fs [N m]) from the sums over the pairs (``force``: up positive; ``moment``: with x_k weights)."""
+    """(Z_fs [N], M_fs [N m]) from the sums over the pairs (``force``: up positive; ``moment``: with x_k
+    weights)."""
     scale = rho_suction * u * u / _FOUR_PI
     return -scale * force * cos_theta, scale * moment * cos_theta
 

@@ -203,7 +203,8 @@ def crossflow_from_moments(
 
 @inline_kernel
 def crossflow_point(w: float, q: float, hull: FloatArray) -> tuple[float, float]:
-    """Exact I_0, I_1 (see :func:`crossflow_integrals`) for one (w, q); ``hull`` is :attr:`HullTable.packed`."""
+    """Exact I_0, I_1 (see :func:`crossflow_integrals`) for one (w, q); ``hull`` is
+    :attr:`HullTable.packed`."""
     s = crossflow_root(w, q, hull)
     C0, C1, C2, C3 = cumulative_moments_point(s, hull)
     return crossflow_from_moments(w, q, C0, C1, C2, C3, hull)
