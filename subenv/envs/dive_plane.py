@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import os
 from typing import Any, Final, SupportsFloat
@@ -15,7 +14,7 @@ from subenv import _validation as check
 from subenv.envs import transition as tr
 from subenv.envs._compiling import first_call
 from subenv.envs._interrupts import interrupts_deferred
-from subenv.envs.config import OBSERVATION_NAMES, ControlMode, DivePlaneConfig
+from subenv.envs.config import DEFAULT_ARGUMENTS, OBSERVATION_NAMES, ControlMode, DivePlaneConfig
 from subenv.envs.episodes import Loadings, check_options, draw_episode, new_seas, write_episode, write_sea
 from subenv.envs.info import step_info
 from subenv.scenarios.scenario import EpisodeConfig, Scenario
@@ -181,19 +180,19 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def __init__(
         self,
-        scenario: str | Scenario = DivePlaneConfig.scenario,
-        vehicle: str | os.PathLike[str] | Vehicle = DivePlaneConfig.vehicle,
-        control: ControlMode = DivePlaneConfig.control,
-        alpha: float = DivePlaneConfig.alpha,
-        dt: float = DivePlaneConfig.dt,
-        substeps: int = DivePlaneConfig.substeps,
-        plane_rate_limit_radps: float | None = DivePlaneConfig.plane_rate_limit_radps,
-        max_pitch_rad: float = DivePlaneConfig.max_pitch_rad,
-        max_depth_error_m: float | None = DivePlaneConfig.max_depth_error_m,
-        depth_scale_m: float | None = DivePlaneConfig.depth_scale_m,
-        pitch_weight: float = DivePlaneConfig.pitch_weight,
-        effort_weight: float = DivePlaneConfig.effort_weight,
-        termination_penalty: float = DivePlaneConfig.termination_penalty,
+        scenario: str | Scenario = DEFAULT_ARGUMENTS["scenario"],
+        vehicle: str | os.PathLike[str] | Vehicle = DEFAULT_ARGUMENTS["vehicle"],
+        control: ControlMode = DEFAULT_ARGUMENTS["control"],
+        alpha: float = DEFAULT_ARGUMENTS["alpha"],
+        dt: float = DEFAULT_ARGUMENTS["dt"],
+        substeps: int = DEFAULT_ARGUMENTS["substeps"],
+        plane_rate_limit_radps: float | None = DEFAULT_ARGUMENTS["plane_rate_limit_radps"],
+        max_pitch_rad: float = DEFAULT_ARGUMENTS["max_pitch_rad"],
+        max_depth_error_m: float | None = DEFAULT_ARGUMENTS["max_depth_error_m"],
+        depth_scale_m: float | None = DEFAULT_ARGUMENTS["depth_scale_m"],
+        pitch_weight: float = DEFAULT_ARGUMENTS["pitch_weight"],
+        effort_weight: float = DEFAULT_ARGUMENTS["effort_weight"],
+        termination_penalty: float = DEFAULT_ARGUMENTS["termination_penalty"],
         render_mode: str | None = None,
         *,
         config: DivePlaneConfig | None = None,
@@ -218,7 +217,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         elif not isinstance(config, DivePlaneConfig):
             raise ValueError(f"config={config!r} is invalid: must be a DivePlaneConfig")
         else:
-            changed = sorted(name for name, value in given.items() if value != _DEFAULTS[name])
+            changed = sorted(name for name, value in given.items() if value != DEFAULT_ARGUMENTS[name])
             if changed:
                 raise ValueError(f"config and keyword arguments {changed} were given: give one or the other")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -459,7 +458,6 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         return self._rngs
 
 
-_DEFAULTS: Final = {f.name: f.default for f in dataclasses.fields(DivePlaneConfig)}
 _FIRST: Final = np.zeros(1, dtype=np.intp)  # the index of a single environment
 _TIME, _DEPTH, _COMMAND, _REWARD, _TERMINATED, _TRUNCATED = (
     tr.REPORT_KEYS.index(key)
