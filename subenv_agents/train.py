@@ -216,11 +216,13 @@ def train(
     if threads is not None:
         torch.set_num_threads(threads)
     run_dir = Path(run_dir) if run_dir is not None else _next_run_dir(Path(log_folder), config)
-    if run_dir.exists():
+    # An empty folder loses nothing: a run may fill it (as every output folder of subenv may).
+    existed = run_dir.is_dir() and not run_dir.is_symlink() and not any(run_dir.iterdir())
+    if run_dir.exists() and not existed:
         raise FileExistsError(f"run folder {str(run_dir)!r} exists: choose another (or delete it)")
     # The outermost folder this run creates (the run folder, or <log-folder>/<algo>/... if new).
-    created = next(p for p in reversed((run_dir, *run_dir.parents)) if not p.exists())
-    run_dir.mkdir(parents=True)
+    created = next((p for p in reversed((run_dir, *run_dir.parents)) if not p.exists()), None)
+    run_dir.mkdir(parents=True, exist_ok=existed)
     try:
         atomic_write_text(
             run_dir / CONFIG_FILE,
@@ -320,11 +322,14 @@ def train(
         # Nothing trained yet: leave no half-made run folder behind (it would block the same --run-dir),
         # nor the folders made for it (<log-folder>/<algo>/) while they are empty (another run may use one).
         shutil.rmtree(run_dir, ignore_errors=True)
-        with suppress(OSError):
-            for folder in run_dir.parents:
-                if folder == created.parent:
-                    break
-                folder.rmdir()
+        if existed:  # the empty folder it was given is left as it was
+            run_dir.mkdir(exist_ok=True)
+        elif created is not None:
+            with suppress(OSError):
+                for folder in run_dir.parents:
+                    if folder == created.parent:
+                        break
+                    folder.rmdir()
         raise
     start = time.perf_counter()
     model.learn(

@@ -17,7 +17,7 @@ import numba
 import numpy as np
 
 from subenv.dynamics import CONTROL_PERIOD_S, SUBSTEPS, ModelParams, derivatives, model_params, rk4
-from subenv.envs.config import DEPTH_BAND_M, NOISE_STD, OBSERVATION_NAMES, DivePlaneConfig
+from subenv.envs.config import DEFAULT_ARGUMENTS, DEPTH_BAND_M, NOISE_STD, OBSERVATION_NAMES
 from subenv.evaluation import SingleRowMixin, check_batch
 from subenv.extras import require
 from subenv.thesis import reference_length_ratio
@@ -254,9 +254,9 @@ class DepthMPC(SingleRowMixin):
         noise: ObserverNoise = ObserverNoise(),
         dt_s: float = CONTROL_PERIOD_S,
         substeps: int = SUBSTEPS,
-        plane_rate_limit_radps: float | None = DivePlaneConfig.plane_rate_limit_radps,
-        max_pitch_rad: float = DivePlaneConfig.max_pitch_rad,
-        max_depth_error_m: float | None = DivePlaneConfig.max_depth_error_m,
+        plane_rate_limit_radps: float | None = DEFAULT_ARGUMENTS["plane_rate_limit_radps"],
+        max_pitch_rad: float = DEFAULT_ARGUMENTS["max_pitch_rad"],
+        max_depth_error_m: float | None = DEFAULT_ARGUMENTS["max_depth_error_m"],
         pitch_fraction: float = 0.5,
         depth_band_margin_m: float = 5.0,
         surface_margin_m: float = 0.25,

@@ -316,6 +316,7 @@ def test_command_line_trains_and_rejects_bad_input(tmp_path, capsys) -> None:  #
         "batch_size:128",
         "n_epochs:1",
     ]
+    (tmp_path / "cli").mkdir()  # an existing empty run folder is filled (it loses nothing)
     assert main(args) == 0
     assert "trained ppo on subenv/LowSpeed-v0" in capsys.readouterr().out
     assert load_agent(tmp_path / "cli").config.n_envs == 2
