@@ -12,7 +12,6 @@ episode; :func:`env_settings` is what :meth:`InformedController.inform
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Iterable, Mapping
 from typing import Any, Final
@@ -20,7 +19,7 @@ from typing import Any, Final
 import gymnasium as gym
 
 from subenv.envs import DivePlaneVectorEnv
-from subenv.envs.config import DivePlaneConfig
+from subenv.envs.config import DEFAULT_ARGUMENTS, DivePlaneConfig
 from subenv.evaluation.controller import Controller, InformedController
 from subenv.evaluation.suites import scenario_of
 from subenv.scenarios.registry import get_scenario
@@ -50,9 +49,9 @@ HARNESS_ARGUMENTS: Final = {
 
 
 def setting_names() -> list[str]:
-    """The environment's arguments ``env_kwargs`` may set: every field of
-    :class:`~subenv.envs.config.DivePlaneConfig` but :data:`HARNESS_ARGUMENTS`."""
-    return [f.name for f in dataclasses.fields(DivePlaneConfig) if f.name not in HARNESS_ARGUMENTS]
+    """The environment's arguments ``env_kwargs`` may set: every one of
+    :data:`~subenv.envs.config.DEFAULT_ARGUMENTS` but :data:`HARNESS_ARGUMENTS`."""
+    return [name for name in DEFAULT_ARGUMENTS if name not in HARNESS_ARGUMENTS]
 
 
 def _scenario_id(scenario: str | Scenario) -> tuple[str, dict[str, Any]]:
@@ -104,10 +103,8 @@ def env_settings(scenario: str | Scenario, env_kwargs: Mapping[str, Any] | None 
     """
     env_id, _ = _scenario_id(scenario)
     registered = gym.spec(env_id).kwargs
-    defaults = {f.name: f.default for f in dataclasses.fields(DivePlaneConfig)}
-    return {
-        name: (env_kwargs or {}).get(name, registered.get(name, defaults[name])) for name in setting_names()
-    }
+    given = env_kwargs or {}
+    return {name: given.get(name, registered.get(name, DEFAULT_ARGUMENTS[name])) for name in setting_names()}
 
 
 def inform(controller: Controller, scenario: str | Scenario, env_kwargs: Mapping[str, Any] | None) -> bool:
@@ -136,7 +133,7 @@ def env_id_and_kwargs(
     }
     spec = gym.spec(env_id)
     if max_duration_s is not None:
-        dt = kwargs.get("dt", spec.kwargs.get("dt", DivePlaneConfig.dt))
+        dt = kwargs.get("dt", spec.kwargs.get("dt", DEFAULT_ARGUMENTS["dt"]))
         kwargs["max_episode_steps"] = max(1, math.ceil(max_duration_s / dt - 1e-9))
     else:
         # On a vehicle of another length the episodes are Froude-scaled (Scenario.reference_length_m):
