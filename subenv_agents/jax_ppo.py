@@ -13,8 +13,9 @@ accelerator that is the fast path; on a CPU it runs too (``benchmarks/jax_ppo.py
   environments observed, as PureJaxRL's ``NormalizeVecObservation`` and SB3's ``VecNormalize``),
   rewards scaled by the running deviation of the discounted return; the statistics are saved with
   the network.
-- Truncated episodes (time limit) bootstrap from the value of their last state, terminated ones
-  from zero (the environment's ``info["discount"]``).
+- A truncated episode (the scenario's duration, the time limit) bootstraps from the value of the
+  observation its last step reached (gymnax 1.0's ``info["final_observation"]``: the step's own
+  observation is already the next episode's), a terminated one from zero (:func:`advantages`).
 - Optimisation is optax's (global-norm clipping, Adam with a linearly annealed step).
 
 ``python -m subenv_agents.jax_ppo --out DIR`` trains and writes a model folder (:func:`save`):
@@ -40,23 +41,15 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, NamedTuple
 
+import gymnasium as gym
 import numpy as np
 
-from subenv import _validation as check
-from subenv.extras import require
-
-require("jax-rl", "PPO on the JAX environment (subenv_agents.jax_ppo)", "jax", "optax")
-
-import gymnasium as gym
-import jax
-import jax.numpy as jnp
-import optax
-
 import subenv.envs
-import subenv.jax as sj
+from subenv import _validation as check
 from subenv.atomic import atomic_output_dir, check_output_dir
 from subenv.envs.config import DivePlaneConfig
 from subenv.evaluation import SingleRowMixin, check_batch
+from subenv.extras import require
 from subenv.vehicles import Vehicle
 from subenv_agents.records import (
     BASELINE,
@@ -67,9 +60,19 @@ from subenv_agents.records import (
     target_met,
 )
 
+require("jax-rl", "PPO on the JAX environment (subenv_agents.jax_ppo)", "jax", "optax")
+
+# (after require(), which names the extra to install where they are missing)
+import jax  # noqa: E402
+import jax.numpy as jnp  # noqa: E402
+import optax  # noqa: E402
+
+import subenv.jax as sj  # noqa: E402
+
 __all__ = [
     "JaxPPOController",
     "PPOConfig",
+    "advantages",
     "load",
     "main",
     "make_train",
@@ -175,12 +178,13 @@ class PPOConfig:
 
 # --- the network -----------------------------------------------------------------------------------
 def init_network(key: jax.Array, obs_dim: int, act_dim: int, hidden: Sequence[int]) -> dict[str, Any]:
-    """The actor's and the critic's layers (orthogonal weights, zero biases) and the log standard deviations."""
+    """The actor's and the critic's layers (orthogonal weights, zero biases) and the log standard
+    deviations."""
 
     def mlp(key: jax.Array, sizes: Sequence[int], last_scale: float) -> list[dict[str, jax.Array]]:
         layers = []
         for i, (k, n_in, n_out) in enumerate(
-            zip(jax.random.split(key, len(sizes) - 1), sizes[:-1], sizes[1:])
+            zip(jax.random.split(key, len(sizes) - 1), sizes[:-1], sizes[1:], strict=True)
         ):
             scale = last_scale if i == len(sizes) - 2 else math.sqrt(2.0)
             layers.append(
@@ -252,13 +256,38 @@ def normalize(stats: RunningStats, obs: jax.Array) -> jax.Array:
 
 # --- the training ------------------------------------------------------------------------------------
 class Rollout(NamedTuple):
+    """One step of every environment (a leading time axis in a rollout)."""
+
     obs: jax.Array  # normalised
     action: jax.Array
     log_prob: jax.Array
     value: jax.Array
     reward: jax.Array  # scaled
     terminated: jax.Array
-    done: jax.Array
+    done: jax.Array  # terminated or truncated: the next step is a new episode's
+    final_value: jax.Array  # the value of the observation the step reached (info["final_observation"])
+
+
+def advantages(
+    rollout: Rollout, last_value: jax.Array, gamma: float, lam: float
+) -> tuple[jax.Array, jax.Array]:
+    """GAE(gamma, lambda) advantages of a rollout (time first) and the value targets, ``last_value`` the
+    value of the observation after its last step.
+
+    Each step bootstraps from the value of where it led: zero after a termination, the final
+    observation's after a truncation (the next step of the rollout is a new episode's), the next
+    step's otherwise; the advantages do not run on across an episode's end.
+    """
+
+    def back(carry: tuple[jax.Array, jax.Array], t: Rollout) -> tuple[tuple[jax.Array, jax.Array], jax.Array]:
+        gae, next_value = carry
+        bootstrap = jnp.where(t.terminated, 0.0, jnp.where(t.done, t.final_value, next_value))
+        delta = t.reward + gamma * bootstrap - t.value
+        gae = delta + gamma * lam * (1.0 - t.done) * gae
+        return (gae, t.value), gae
+
+    _, adv = jax.lax.scan(back, (jnp.zeros_like(last_value), last_value), rollout, reverse=True)
+    return adv, adv + rollout.value
 
 
 class Metrics(NamedTuple):
@@ -305,9 +334,13 @@ def make_train(
         mean, value = _mlp(state.network["actor"], obs), _value(state.network, obs)
         log_std = state.network["log_std"]
         action = mean + jnp.exp(log_std) * jax.random.normal(key_action, mean.shape)
-        next_obs, env_state, reward, done, info = step_envs(
+        next_obs, env_state, reward, terminated, truncated, info = step_envs(
             jax.random.split(key_env, n), state.env_state, action, params
         )
+        done = terminated | truncated
+        obs_stats = state.obs_stats.update(next_obs)
+        # (normalised as the next step's observation is: its value is the next step's where no episode ended)
+        final_value = _value(state.network, normalize(obs_stats, info["final_observation"]))
         returns = state.returns * gamma + reward
         return_stats = (
             state.return_stats.update(returns[:, None]) if config.normalize_reward else state.return_stats
@@ -319,8 +352,9 @@ def make_train(
             _log_prob(mean, log_std, action),
             value,
             scaled.astype(jnp.float32),
-            info["terminated"] > 0.0,
+            terminated,
             done,
+            final_value,
         )
         state = state._replace(
             env_state=env_state,
@@ -328,23 +362,9 @@ def make_train(
             key=key,
             return_stats=return_stats,
             returns=jnp.where(done, 0.0, returns),
-            obs_stats=state.obs_stats.update(next_obs),
+            obs_stats=obs_stats,
         )
         return state, (rollout, reward)
-
-    def advantages(rollout: Rollout, last_value: jax.Array) -> tuple[jax.Array, jax.Array]:
-        def back(
-            carry: tuple[jax.Array, jax.Array], t: Rollout
-        ) -> tuple[tuple[jax.Array, jax.Array], jax.Array]:
-            gae, next_value = carry
-            # The next state's value; a truncated episode's last state stands in for its final one.
-            bootstrap = jnp.where(t.terminated, 0.0, jnp.where(t.done, t.value, next_value))
-            delta = t.reward + gamma * bootstrap - t.value
-            gae = delta + gamma * lam * (1.0 - t.done) * gae
-            return (gae, t.value), gae
-
-        _, adv = jax.lax.scan(back, (jnp.zeros_like(last_value), last_value), rollout, reverse=True)
-        return adv, adv + rollout.value
 
     def loss(network: Any, batch: Rollout, adv: jax.Array, target: jax.Array) -> jax.Array:
         mean, value = _mlp(network["actor"], batch.obs), _value(network, batch.obs)
@@ -362,7 +382,7 @@ def make_train(
     def update(state: TrainState, index: jax.Array) -> tuple[TrainState, Metrics]:
         state, (rollout, rewards) = jax.lax.scan(env_step, state, None, steps)
         last_value = _value(state.network, normalize(state.obs_stats, state.obs))
-        adv, target = advantages(rollout, last_value)
+        adv, target = advantages(rollout, last_value, gamma, lam)
         batch = jax.tree_util.tree_map(lambda x: x.reshape((n * steps, *x.shape[2:])), (rollout, adv, target))
 
         def epoch(carry: tuple[Any, Any, jax.Array], _: None) -> tuple[tuple[Any, Any, jax.Array], None]:
@@ -502,6 +522,7 @@ class JaxPPOController(SingleRowMixin):
         self._episodes = len(infos)
 
     def act_batch(self, observations: np.ndarray) -> np.ndarray:
+        """The policy's mean actions of a batch of observations, clipped to [-1, 1] (float32)."""
         obs = check_batch(observations, self._episodes)
         mean = np.asarray(self._act(self._network, jnp.asarray(obs, dtype=jnp.float32), self._stats))
         return np.clip(mean, -1.0, 1.0).astype(np.float32)
@@ -519,6 +540,7 @@ def shipped() -> JaxPPOController:
 
 # --- the command line ----------------------------------------------------------------------------------
 def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m subenv_agents.jax_ppo``: train, evaluate and write a model folder; the exit status."""
     parser = argparse.ArgumentParser(
         prog="python -m subenv_agents.jax_ppo", description=__doc__.split("\n\n")[0]
     )
@@ -615,7 +637,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def evaluation_of(controller: JaxPPOController, episodes: int) -> dict[str, Any]:
     """The controller and the ``reversal_aware`` baseline on the reversal scenarios, ``episodes`` each
-    (the harness of ``subenv evaluate``, seeds 10000 + i): ``{"episodes", "suite", "target_met", "target"}``."""
+    (the harness of ``subenv evaluate``, seeds 10000 + i): ``{"episodes", "suite", "target_met",
+    "target"}``."""
     from subenv.evaluation import evaluate, make_controller
 
     results = evaluate(
@@ -649,10 +672,10 @@ Gymnasium environment observes (no extra features); its observation statistics a
 
 - Command: `{record["command"]}`
 - {record["env_steps"]:,} env-steps: {config.num_updates} updates of {config.num_envs} environments x \
-{config.num_steps} steps, {config.update_epochs} epochs of {config.num_minibatches} minibatches each, Adam at \
-{config.lr:g}{" annealed to 0" if config.anneal_lr else ""}, gamma {config.gamma}, GAE lambda {config.gae_lambda}, \
-clip {config.clip_eps}, entropy coefficient {config.ent_coef}, hidden layers {list(config.hidden)} (tanh); \
-{rewards}.
+{config.num_steps} steps, {config.update_epochs} epochs of {config.num_minibatches} minibatches each, \
+Adam at {config.lr:g}{" annealed to 0" if config.anneal_lr else ""}, gamma {config.gamma}, \
+GAE lambda {config.gae_lambda}, clip {config.clip_eps}, entropy coefficient {config.ent_coef}, \
+hidden layers {list(config.hidden)} (tanh); {rewards}.
 - Episodes: a table of {config.episodes} episodes of the scenario, those of the seeds {config.seed} to \
 {config.seed + config.episodes - 1} (`reset(seed=...)` of the Gymnasium environment), reset from at random.
 - Wall time: {record["wall_time_s"]} s on {record["machine"]} ({record["device"]}), compilation included: \

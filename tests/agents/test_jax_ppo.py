@@ -19,7 +19,9 @@ from subenv_agents import jax_ppo
 from subenv_agents.jax_ppo import (
     JaxPPOController,
     PPOConfig,
+    Rollout,
     RunningStats,
+    advantages,
     load,
     make_train,
     policy_mean,
@@ -58,7 +60,7 @@ def test_training_runs_as_one_program_and_reports_every_update(trained):
     first = jax_ppo.init_network(jax.random.split(jax.random.key(0), 3)[1], 8, 2, TINY.hidden)
     assert any(
         not np.array_equal(np.asarray(a), np.asarray(b))  # (the updates changed the network)
-        for a, b in zip(jax.tree_util.tree_leaves(first), leaves)
+        for a, b in zip(jax.tree_util.tree_leaves(first), leaves, strict=True)
     )
     # The observation statistics are those of everything observed: the resets, then every step.
     assert float(state.obs_stats.count) == pytest.approx(32 * (1 + 2 * 16), rel=1e-6)
@@ -70,7 +72,9 @@ def test_a_saved_model_loads_and_acts_as_the_policy_mean(trained, tmp_path):
     folder = save(tmp_path / "model", TINY, state.network, state.obs_stats, {"env_steps": 1024})
     config, network, _ = load(folder)
     assert config == TINY
-    for a, b in zip(jax.tree_util.tree_leaves(network), jax.tree_util.tree_leaves(state.network)):
+    for a, b in zip(
+        jax.tree_util.tree_leaves(network), jax.tree_util.tree_leaves(state.network), strict=True
+    ):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
     controller = JaxPPOController(folder)
     assert (controller.name, controller.control, controller.alpha) == ("model", "independent", 0.0)
@@ -159,3 +163,28 @@ def test_a_model_trained_on_other_dynamics_is_refused_as_a_controller(trained):
     config = PPOConfig(**{**TINY.__dict__, "env_kwargs": {"control": "independent", "max_pitch_rad": 0.3}})
     with pytest.raises(ValueError, match=r"env_kwargs \['max_pitch_rad'\]"):
         JaxPPOController.of(config, state.network, state.obs_stats, "other")
+
+
+def test_a_truncated_episode_bootstraps_from_its_final_observations_value():
+    """Three steps of one environment: the first goes on, the second is truncated (the third is a new
+    episode's), the third terminated. Each bootstraps from where it led: the next step's value, the
+    final observation's value (gymnax 1.0's info["final_observation"]; before, the value of the state
+    the truncated step started from), nothing."""
+    column = lambda *values: jnp.asarray(values, dtype=jnp.float32)[:, None]  # noqa: E731 (a table's column)
+    rollout = Rollout(
+        obs=jnp.zeros((3, 1, 8)),
+        action=jnp.zeros((3, 1, 2)),
+        log_prob=column(0.0, 0.0, 0.0),
+        value=column(1.0, 2.0, 3.0),
+        reward=column(0.5, 0.25, 0.125),
+        terminated=jnp.asarray([[False], [False], [True]]),
+        done=jnp.asarray([[False], [True], [True]]),
+        final_value=column(9.0, 7.0, 5.0),
+    )
+    gamma, lam = 0.9, 0.8
+    adv, target = advantages(rollout, jnp.asarray([4.0], dtype=jnp.float32), gamma, lam)
+    third = 0.125 - 3.0
+    second = 0.25 + gamma * 7.0 - 2.0  # (the next episode's advantage does not run on into it)
+    first = 0.5 + gamma * 2.0 - 1.0 + gamma * lam * second
+    np.testing.assert_allclose(np.asarray(adv)[:, 0], [first, second, third], rtol=1e-6)
+    np.testing.assert_allclose(np.asarray(target)[:, 0], [first + 1.0, second + 2.0, third + 3.0], rtol=1e-6)
