@@ -20,6 +20,8 @@ accelerator that is the fast path; on a CPU it runs too (``benchmarks/jax_ppo.py
 
 ``python -m subenv_agents.jax_ppo --out DIR`` trains and writes a model folder (:func:`save`):
 ``network.npz``, ``config.json`` and ``train.json``, complete or absent (:mod:`subenv.atomic`).
+:func:`load` checks a folder whole (a damaged or inconsistent file is refused, by its name and the
+field).
 :class:`JaxPPOController` loads one as a controller of :mod:`subenv.evaluation`; the shipped one,
 ``subenv_agents/models/ppo_jax/``, is the ``ppo_jax`` entry point (``subenv evaluate``).
 
@@ -35,8 +37,11 @@ import math
 import os
 import platform
 import shlex
+import struct
 import sys
 import time
+import zipfile
+import zlib
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -47,7 +52,7 @@ import numpy as np
 import subenv.envs
 from subenv import _validation as check
 from subenv.atomic import atomic_output_dir, check_output_dir
-from subenv.envs.config import DivePlaneConfig
+from subenv.envs.config import OBSERVATION_NAMES, DivePlaneConfig
 from subenv.evaluation import SingleRowMixin, check_batch
 from subenv.extras import require
 from subenv.vehicles import Vehicle
@@ -85,6 +90,7 @@ __all__ = [
 
 _LOG_2PI = math.log(2.0 * math.pi)
 _OBS_CLIP = 10.0  # normalised observations are clipped to +-this (SB3's VecNormalize default)
+_FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -146,9 +152,13 @@ class PPOConfig:
         check.require(
             "hidden",
             self.hidden,
-            len(self.hidden) > 0 and all(isinstance(w, int) and w > 0 for w in self.hidden),
+            isinstance(self.hidden, tuple | list)
+            and len(self.hidden) > 0
+            and all(isinstance(w, int) and not isinstance(w, bool) and w > 0 for w in self.hidden),
             "a non-empty tuple of positive widths",
         )
+        for name in ("anneal_lr", "normalize_reward"):
+            check.require(name, getattr(self, name), isinstance(getattr(self, name), bool), "True or False")
         batch = self.num_envs * self.num_steps
         check.require(
             "num_minibatches",
@@ -163,12 +173,23 @@ class PPOConfig:
             f"at least num_envs * num_steps = {batch} (one update)",
         )
         object.__setattr__(self, "hidden", tuple(self.hidden))
+        check.require("env_kwargs", self.env_kwargs, isinstance(self.env_kwargs, Mapping), "a mapping")
         object.__setattr__(self, "env_kwargs", dict(self.env_kwargs))
-        check.require("env_id", self.env_id, self.env_id in subenv.envs.env_ids(), "a registered subenv id")
+        check.require(
+            "env_id",
+            self.env_id,
+            isinstance(self.env_id, str) and self.env_id in subenv.envs.env_ids(),
+            "a registered subenv id",
+        )
         try:  # (the environment's own checks, before anything is drawn or compiled)
             DivePlaneConfig(**{**gym.spec(self.env_id).kwargs, **self.env_kwargs})
         except TypeError as exc:
             raise ValueError(f"env_kwargs={self.env_kwargs!r} is invalid: {exc}") from None
+
+    @property
+    def n_actions(self) -> int:
+        """Components of the environment's action."""
+        return DivePlaneConfig(**{**gym.spec(self.env_id).kwargs, **self.env_kwargs}).n_actions
 
     @property
     def num_updates(self) -> int:
@@ -464,26 +485,139 @@ def save(
 
 
 def load(path: str | Path) -> tuple[PPOConfig, dict[str, Any], RunningStats]:
-    """A model folder's settings, network and observation statistics (:func:`save`)."""
+    """A model folder's settings, network and observation statistics (:func:`save`), checked whole.
+
+    Raises ``FileNotFoundError`` for a folder without the model's files, and ``ValueError`` naming the
+    file and the field for a damaged or inconsistent one: a file that does not read (truncated, not
+    JSON, not NumPy's archive), a setting :class:`PPOConfig` refuses, arrays missing or unknown to the
+    network ``config.json`` describes, of another shape, not floating point, NaN or infinite, large
+    enough that the network could overflow float32 for some observation (so a model that loads acts
+    with finite numbers on every observation), or variances of the observations that are not > 0.
+    """
     folder = Path(path)
     missing = [name for name in _FILES if not (folder / name).is_file()]
     if missing:
         raise FileNotFoundError(f"path={str(path)!r} is not a jax-ppo model folder: it lacks {missing}")
-    settings = json.loads((folder / "config.json").read_text())
-    config = PPOConfig(**{**settings, "hidden": tuple(settings["hidden"])})
-    with np.load(folder / "network.npz") as data:
-        arrays = {name: data[name] for name in data.files}
-    depth = len(config.hidden) + 1
-    network = {
-        part: [
-            {"w": jnp.asarray(arrays[f"{part}/{i}/w"]), "b": jnp.asarray(arrays[f"{part}/{i}/b"])}
-            for i in range(depth)
-        ]
-        for part in ("actor", "critic")
+    config = _load_config(folder / "config.json")
+    _read_json_object(folder / "train.json")  # (the training's record: not used here, but part of the model)
+    file = folder / "network.npz"
+    try:
+        data = np.load(file, allow_pickle=False)
+        if not isinstance(data, np.lib.npyio.NpzFile):
+            raise ValueError(f"it holds one array, not an archive of named arrays ({type(data).__name__})")
+        with data:
+            arrays = {name: data[name] for name in data.files}
+    # (a damaged archive fails in zipfile's, zlib's, struct's or NumPy's format's own ways)
+    except (
+        OSError,
+        ValueError,
+        EOFError,
+        KeyError,
+        MemoryError,
+        NotImplementedError,
+        struct.error,
+        zipfile.BadZipFile,
+        zlib.error,
+    ) as exc:
+        raise ValueError(f"{file} does not read as np.savez's arrays: {type(exc).__name__}: {exc}") from None
+    return config, *_network_of(arrays, config, file)
+
+
+def _read_json_object(file: Path) -> dict[str, Any]:
+    """The JSON object in ``file``, or ``ValueError`` naming it."""
+    try:
+        value = json.loads(file.read_bytes())
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{file} is not a JSON file: {exc}") from None
+    if not isinstance(value, dict):
+        raise ValueError(f"{file} is invalid: must hold a JSON object (it holds a {type(value).__name__})")
+    return value
+
+
+def _load_config(file: Path) -> PPOConfig:
+    """The :class:`PPOConfig` of a model's ``config.json``, checked as :class:`PPOConfig` checks its
+    fields."""
+    settings = _read_json_object(file)
+    known = [field.name for field in dataclasses.fields(PPOConfig)]
+    unknown = sorted(set(settings) - set(known))
+    if unknown:
+        raise ValueError(f"{file} is invalid: unknown settings {unknown} (known: {known})")
+    if isinstance(settings.get("hidden"), list):
+        settings["hidden"] = tuple(settings["hidden"])
+    try:
+        return PPOConfig(**settings)
+    except (ValueError, TypeError) as exc:
+        raise ValueError(f"{file} is invalid: {exc}") from None
+
+
+def _network_of(
+    arrays: Mapping[str, np.ndarray], config: PPOConfig, file: Path
+) -> tuple[dict[str, Any], RunningStats]:
+    """The network and the observation statistics of ``network.npz``'s arrays, checked against ``config``."""
+    obs_dim, act_dim = len(OBSERVATION_NAMES), config.n_actions
+    described = (
+        f"the network config.json describes: hidden={list(config.hidden)}, {act_dim} action components"
+    )
+    layers = {
+        "actor": (obs_dim, *config.hidden, act_dim),
+        "critic": (obs_dim, *config.hidden, 1),
     }
-    network["log_std"] = jnp.asarray(arrays["log_std"])
-    stats = RunningStats(jnp.asarray(arrays["obs_mean"]), jnp.asarray(arrays["obs_var"]), jnp.asarray(0.0))
-    return config, network, stats
+    shapes: dict[str, tuple[int, ...]] = {
+        "obs_mean": (obs_dim,),
+        "obs_var": (obs_dim,),
+        "log_std": (act_dim,),
+    }
+    for part, sizes in layers.items():
+        for i, (n_in, n_out) in enumerate(zip(sizes[:-1], sizes[1:], strict=True)):
+            shapes[f"{part}/{i}/w"], shapes[f"{part}/{i}/b"] = (n_in, n_out), (n_out,)
+    lacking, unknown = sorted(set(shapes) - set(arrays)), sorted(set(arrays) - set(shapes))
+    if lacking or unknown:
+        raise ValueError(
+            f"{file} does not hold {described}: "
+            + "; ".join(
+                f"{what} {names}" for what, names in (("it lacks", lacking), ("unknown", unknown)) if names
+            )
+        )
+    checked = {}
+    for name, shape in shapes.items():
+        array = arrays[name]
+        if array.dtype.kind != "f":
+            raise ValueError(f"{file}: {name} has dtype {array.dtype}: must be floating point")
+        if array.shape != shape:
+            raise ValueError(f"{file}: {name} has shape {array.shape}: must have shape {shape} ({described})")
+        # (the network computes in float32, the statistics in float64; what overflows is refused below)
+        with np.errstate(over="ignore", invalid="ignore"):
+            array = array.astype(np.float64 if name.startswith("obs_") else np.float32)
+        bad = int(np.count_nonzero(~np.isfinite(array)))
+        if bad:
+            raise ValueError(f"{file}: {name} has {bad} NaN or infinite values (as float32): must be finite")
+        checked[name] = array
+    if np.any(checked["obs_var"] <= 0.0):
+        raise ValueError(
+            f"{file}: obs_var={checked['obs_var'].tolist()} is invalid: must be > 0 (the variances of the "
+            "observations, by which they are normalised)"
+        )
+    for part, sizes in layers.items():
+        bound = _OBS_CLIP  # |input| of the first layer: the normalised observation, clipped
+        for i in range(len(sizes) - 1):
+            w, b = checked[f"{part}/{i}/w"].astype(np.float64), checked[f"{part}/{i}/b"].astype(np.float64)
+            largest = float(np.max(bound * np.abs(w).sum(axis=0) + np.abs(b)))
+            if not largest < _FLOAT32_MAX:
+                raise ValueError(
+                    f"{file}: {part}/{i}/w and {part}/{i}/b are invalid: they reach {largest:.3g} for some "
+                    f"observation, beyond float32's range: must keep |sum| below {_FLOAT32_MAX:.3g}"
+                )
+            bound = 1.0  # (tanh's outputs)
+    network: dict[str, Any] = {
+        part: [
+            {"w": jnp.asarray(checked[f"{part}/{i}/w"]), "b": jnp.asarray(checked[f"{part}/{i}/b"])}
+            for i in range(len(sizes) - 1)
+        ]
+        for part, sizes in layers.items()
+    }
+    network["log_std"] = jnp.asarray(checked["log_std"])
+    stats = RunningStats(jnp.asarray(checked["obs_mean"]), jnp.asarray(checked["obs_var"]), jnp.asarray(0.0))
+    return network, stats
 
 
 class JaxPPOController(SingleRowMixin):
