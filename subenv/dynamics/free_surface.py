@@ -67,7 +67,7 @@ import numpy as np
 
 from subenv import _validation as check
 from subenv._typing import ArrayLike, FloatArray
-from subenv.dynamics._jit import inline_kernel, kernel, rows
+from subenv.dynamics._jit import inline_kernel, kernel, maximum, rows
 from subenv.dynamics.hull import SOURCE_ROW, HullTable
 
 __all__ = [
@@ -150,7 +150,7 @@ def suction_point(
 def station_depth(depth: float, x: float, sin_theta: float, radius: float) -> float:
     """Depth [m] of the hull's sources at station ``x`` [m] (a station above the surface is taken at its
     radius)."""
-    return max(depth - x * sin_theta, radius)
+    return maximum(depth - x * sin_theta, radius)
 
 
 @inline_kernel
