@@ -54,15 +54,20 @@ def register_envs() -> None:
     keys = {scenario.env_id: key for key, scenario in registry_snapshot().items()}
     for env_id in env_ids():
         name = _HEADLINE_SCENARIO if env_id == HEADLINE_ID else keys[env_id]
-        if env_id in gym.registry:
-            del gym.registry[env_id]
-        gym.register(
-            id=env_id,
-            entry_point=ENTRY_POINT,
-            vector_entry_point=VECTOR_ENTRY_POINT,
-            kwargs={"scenario": name},
-            max_episode_steps=_max_steps(registry_snapshot()[name]),
-        )
+        _register(env_id, {"scenario": name}, _max_steps(registry_snapshot()[name]))
+
+
+def _register(env_id: str, kwargs: dict[str, Any], max_episode_steps: int) -> None:
+    """(Re-)register ``env_id``: the single and the native vector environment with ``kwargs``."""
+    if env_id in gym.registry:
+        del gym.registry[env_id]
+    gym.register(
+        id=env_id,
+        entry_point=ENTRY_POINT,
+        vector_entry_point=VECTOR_ENTRY_POINT,
+        kwargs=kwargs,
+        max_episode_steps=max_episode_steps,
+    )
 
 
 def register_env(
@@ -140,13 +145,5 @@ def register_env(
         raise ValueError(
             f"max_episode_steps={max_episode_steps!r} is invalid: must be None or an integer >= 1"
         )
-    if env_id in gym.registry:
-        del gym.registry[env_id]
-    gym.register(
-        id=env_id,
-        entry_point=ENTRY_POINT,
-        vector_entry_point=VECTOR_ENTRY_POINT,
-        kwargs={"scenario": scenario, **kwargs},
-        max_episode_steps=max_episode_steps,
-    )
+    _register(env_id, {"scenario": scenario, **kwargs}, max_episode_steps)
     return gym.spec(env_id)
