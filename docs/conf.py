@@ -8,7 +8,7 @@ The pages are Markdown (MyST). Some are generated at build time, before Sphinx r
   (``_ext/envpages.py``);
 - ``reproduction/``: the reproduction report of Riedel (1993), for SUBOFF and the REMUS 100, with its
   figures (``_ext/reproduction.py``);
-- ``performance/``: the figures of the benchmarks' JSON records in ``benchmarks/results/``
+- ``performance/``: the figures of the benchmarks' JSON records in ``benchmarks/records/``
   (``_ext/performance.py``).
 
 The design note ``design.md`` says why Sphinx, furo and MyST.
@@ -52,8 +52,8 @@ napoleon_numpy_docstring = True
 autodoc_member_order = "bysource"
 # Each object where it is defined: a module's members, not what it imports (its __all__ may re-export).
 autodoc_default_options = {"ignore-module-all": True}
-autodoc_typehints = "description"
-autodoc_typehints_format = "short"
+# The numpydoc sections give the types in words; annotations (FloatArray's expansion) would repeat them.
+autodoc_typehints = "none"
 autodoc_preserve_defaults = True
 
 html_theme = "furo"

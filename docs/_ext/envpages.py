@@ -103,13 +103,21 @@ def _value(value: Any) -> str:
     return f"{value:g}" if isinstance(value, float) else str(value)
 
 
+MIXTURE_FIELDS = ("z_GB_scale", "crossflow_drag", "sensor_noise", "disturbance_std_N", "reference_length_m")
+"""What a mixture applies on top of its component's draw (:class:`~subenv.scenarios.Scenario`'s docstring);
+its other fields are its components'."""
+
+
 def scenario_table(scenario: Scenario) -> str:
-    """The scenario's draw: every field that differs from :class:`Scenario`'s default, described."""
+    """The scenario's draw: every field that differs from :class:`Scenario`'s default (a mixture's:
+    those of :data:`MIXTURE_FIELDS`), described."""
     described = attribute_descriptions(Scenario)
     rows = ["| field | value | meaning |", "|---|---|---|"]
     for field in dataclasses.fields(Scenario):
         value = getattr(scenario, field.name)
-        if field.name in ("name", "description") or value == field.default:
+        if field.name in ("name", "description", "components") or value == field.default:
+            continue
+        if scenario.components and field.name not in MIXTURE_FIELDS:
             continue
         meaning = described.get(field.name, "").replace("|", "\\|")
         rows.append(f"| `{field.name}` | {_value(value).replace('|', chr(92) + '|')} | {to_myst(meaning)} |")
@@ -173,7 +181,8 @@ def env_page(env_id: str, animation: str) -> str:
         "|   |   |",
         "|---|---|",
         f'| Action Space | `{action_space}` (`control="dual"`) |',
-        f"| Observation Space | `{re.sub(' +', ' ', repr(observation_space))}` |",
+        f"| Observation Space | `Box(shape={observation_space.shape}, {observation_space.dtype})`, "
+        "the bounds in [its table](#observation-space) |",
         f'| import | `gym.make("{env_id}")` after `import subenv` |',
         f"| scenario | `{kwargs}` |",
         f"| `max_episode_steps` | {spec.max_episode_steps} (at `dt` = {base.dt:g} s) |",

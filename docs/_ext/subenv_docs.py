@@ -61,11 +61,17 @@ def generate(folder: Path, inputs: Iterable[Path], write: Callable[[Path], Any])
 
 def _generate_all(app: Sphinx) -> None:
     import envpages
+    import performance
     import reproduction
 
     ext = DOCS / "_ext"
     generate(DOCS / "environments", [ext / "envpages.py"], envpages.write_pages)
     generate(DOCS / "reproduction", [ext / "reproduction.py"], reproduction.write_pages)
+    generate(
+        DOCS / "performance",
+        [ext / "performance.py", ROOT / "benchmarks" / "records"],
+        performance.write_pages,
+    )
 
 
 _MISSING = object()
@@ -159,6 +165,8 @@ def _formula_blocks(lines: list[str]) -> list[str]:
 def _docstring(app: Sphinx, what: str, name: str, obj: Any, options: Any, lines: list[str]) -> None:
     """A docstring as reST. One written in Markdown (the environment's, with Gymnasium's ``## Section``
     headings) is the environments' pages' source: in the API reference it points there instead."""
+    if lines and lines[0].startswith("Alias for field number"):  # (a named tuple's field: its name says it)
+        lines[:] = []
     if any(line.startswith("## ") for line in lines):
         lines[:] = [lines[0], "", "Its documentation, section by section: :doc:`/environments/index`.", ""]
     lines[:] = _formula_blocks([_escape_bars(line) for line in lines])
