@@ -214,6 +214,11 @@ def candidates() -> dict[str, Candidate]:
             note="LowSpeed, ordered 8 m deeper at 300 s",
         ),
         Candidate(
+            _stepped(low_speed, "HardStepLowBig48", big, speed_ratio=(0.4, 0.8)),
+            depth_step=big,
+            note="LowSpeed at 0.4-0.8 u_cr, ordered 8 m deeper at 300 s",
+        ),
+        Candidate(
             _stepped(near, "HardStepNearBig", big),
             depth_step=big,
             note="NearCritical, ordered 8 m deeper at 300 s",
@@ -297,6 +302,50 @@ class OrderedDepthStep:
         return action
 
 
+class PlanReplay:
+    """A batch controller that plays stored plans (one per episode, in the order of the seeds run; float32
+    actions, one row per step), each held at its last action past its end: the harness's check of the
+    oracle's certificates (``--check-plans``)."""
+
+    name, control, alpha = "oracle_plan", "independent", 0.0
+
+    def __init__(self, plans: Sequence[np.ndarray]) -> None:
+        self.plans = [np.asarray(p, dtype=np.float32) for p in plans]
+        self._steps = 0
+
+    def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
+        if len(infos) != len(self.plans):
+            raise ValueError(f"{len(infos)} episodes for {len(self.plans)} plans")
+        self._steps = 0
+
+    def act_batch(self, observations: np.ndarray) -> np.ndarray:
+        k = self._steps
+        self._steps += 1
+        return np.stack([p[min(k, len(p) - 1)] for p in self.plans])
+
+    def reset(self, info: Mapping[str, Any], vehicle: Vehicle) -> None:
+        self.reset_batch([info], vehicle)
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        action: np.ndarray = self.act_batch(np.asarray(observation)[None])[0]
+        return action
+
+
+def check_plans(candidate: Candidate, folder: str) -> list[dict[str, Any]]:
+    """Replay the oracle's plans of ``candidate`` (``<folder>/<candidate>.npz``, ``hard_oracle.py --plans``)
+    through the evaluation harness (the vector environment, the candidate's settings): one row per seed,
+    whether the plan won."""
+    register(candidate)
+    with np.load(f"{folder}/{candidate.name}.npz") as stored:
+        plans = {int(key.removeprefix("seed_")): stored[key] for key in stored.files}
+    seeds = sorted(plans)
+    with env_kwargs(candidate.env_kwargs):
+        results = run_episodes(PlanReplay([plans[s] for s in seeds]), candidate.name, seeds)
+    return [
+        {"candidate": candidate.name, "seed": r.seed, "achievable": bool(r.metrics.success)} for r in results
+    ]
+
+
 def controller(name: str, candidate: Candidate) -> BatchController:
     """The controller ``name`` for ``candidate``: ``mpc_informed`` is told its limits."""
     if name == "mpc_informed":
@@ -341,7 +390,9 @@ def run(candidate: Candidate, names: Sequence[str], seeds: Sequence[int]) -> lis
 
 
 def summary(rows: Sequence[Mapping[str, Any]], achievable: Mapping[str, Mapping[int, bool]]) -> str:
-    """Success over winnable (and achievable) episodes, per candidate and controller, as Markdown."""
+    """Success over winnable (and achievable) episodes, per candidate and controller, then over all the
+    candidates per controller (``mpc_informed`` counted as ``mpc`` where there was no limit to tell), and
+    the episodes a controller won that the oracle did not certify (its plan lost): Markdown."""
     lines = [
         "| candidate | controller | episodes | winnable | won / winnable | achievable | won / achievable |",
         "|---|---|---|---|---|---|---|",
@@ -349,34 +400,63 @@ def summary(rows: Sequence[Mapping[str, Any]], achievable: Mapping[str, Mapping[
     groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
     for row in rows:
         groups.setdefault((row["candidate"], row["controller"]), []).append(row)
-    for (cand, name), group in groups.items():
-        winnable = [r for r in group if r["winnable"]]
-        won_w = sum(r["success"] for r in winnable)
-        cells = [cand, name, str(len(group)), str(len(winnable)), _pct(won_w, len(winnable))]
-        certified = achievable.get(cand, {})
-        known = [r for r in group if r["seed"] in certified]
-        if known:
-            ach = [r for r in known if certified[r["seed"]]]
-            cells += [_pct(len(ach), len(known)), _pct(sum(r["success"] for r in ach), len(ach))]
-        else:
-            cells += ["", ""]
-        lines.append("| " + " | ".join(cells) + " |")
+    candidates_run = list(dict.fromkeys(cand for cand, _ in groups))
+    names = list(dict.fromkeys(name for _, name in groups))
+    for cand, name in groups:
+        lines.append(_line(cand, name, groups[cand, name], achievable.get(cand, {})))
+    for name in names:
+        # Every candidate's episodes of this controller, numbered afresh (seeds repeat across candidates).
+        pairs = [
+            (cand, row)
+            for cand in candidates_run
+            for row in groups.get(
+                (cand, name), groups.get((cand, "mpc"), []) if name == "mpc_informed" else []
+            )
+        ]
+        pooled = [dict(row, seed=k) for k, (_, row) in enumerate(pairs)]
+        certified = {
+            k: achievable[cand][row["seed"]]
+            for k, (cand, row) in enumerate(pairs)
+            if row["seed"] in achievable.get(cand, {})
+        }
+        lines.append(_line("all", name, pooled, certified))
+    unmatched = [
+        f"{r['candidate']} {r['seed']} {r['controller']}"
+        for r in rows
+        if r["success"] and achievable.get(r["candidate"], {}).get(r["seed"]) is False
+    ]
+    if achievable:
+        lines.append("")
+        lines.append(f"won by a controller, not certified by the oracle: {unmatched or 'none'}")
     return "\n".join(lines)
+
+
+def _line(cand: str, name: str, group: Sequence[Mapping[str, Any]], certified: Mapping[int, bool]) -> str:
+    winnable = [r for r in group if r["winnable"]]
+    won_w = sum(r["success"] for r in winnable)
+    cells = [cand, name, str(len(group)), str(len(winnable)), _pct(won_w, len(winnable))]
+    known = [r for r in group if r["seed"] in certified]
+    if known:
+        ach = [r for r in known if certified[r["seed"]]]
+        cells += [_pct(len(ach), len(known)), _pct(sum(r["success"] for r in ach), len(ach))]
+    else:
+        cells += ["", ""]
+    return "| " + " | ".join(cells) + " |"
 
 
 def _pct(k: int, n: int) -> str:
     return f"{k}/{n} ({100.0 * k / n:.0f}%)" if n else "0/0"
 
 
-def read_achievable(path: str | None) -> dict[str, dict[int, bool]]:
-    """Per candidate, per seed: whether the oracle's plan won on replay (``hard_oracle.py``'s JSON)."""
-    if path is None:
-        return {}
-    with open(path) as f:
-        data = json.load(f)
+def read_achievable(paths: str | None) -> dict[str, dict[int, bool]]:
+    """Per candidate, per seed: whether the oracle's plan won on replay (``hard_oracle.py``'s JSON files,
+    comma-separated; a later file's row for an episode replaces an earlier one's)."""
     found: dict[str, dict[int, bool]] = {}
-    for row in data["episodes"]:
-        found.setdefault(row["candidate"], {})[int(row["seed"])] = bool(row["achievable"])
+    for path in paths.split(",") if paths else []:
+        with open(path) as f:
+            data = json.load(f)
+        for row in data["episodes"]:
+            found.setdefault(row["candidate"], {})[int(row["seed"])] = bool(row["achievable"])
     return found
 
 
@@ -388,8 +468,23 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=20)
     parser.add_argument("--seed", type=int, default=DEFAULT_SEED)
     parser.add_argument("--out", help="write the per-episode rows here (JSON)")
-    parser.add_argument("--oracle", help="hard_oracle.py's JSON: success over achievable episodes too")
+    parser.add_argument(
+        "--oracle", help="hard_oracle.py's JSON files, comma-separated: success over achievable episodes too"
+    )
+    parser.add_argument(
+        "--check-plans",
+        metavar="FOLDER",
+        help="replay hard_oracle.py's plans (--plans FOLDER) through the harness and compare with --oracle",
+    )
     args = parser.parse_args()
+    if args.check_plans:
+        certified = read_achievable(args.oracle)
+        for cand in args.candidates.split(","):
+            replayed = check_plans(known[cand], args.check_plans)
+            agree = sum(r["achievable"] == certified.get(cand, {}).get(r["seed"]) for r in replayed)
+            won = sum(r["achievable"] for r in replayed)
+            print(f"{cand}: {won}/{len(replayed)} plans win in the harness; {agree} agree with --oracle")
+        return
     names = args.controllers.split(",")
     seeds = range(args.seed, args.seed + args.episodes)
     rows: list[dict[str, Any]] = []
