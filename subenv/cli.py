@@ -2,6 +2,8 @@
 
 ``subenv evaluate`` (the main job) compares the installed controllers on a suite of scenarios;
 ``subenv sweep`` runs them over a grid of the physics' parameters on Ray (:mod:`subenv.sweep`);
+``subenv analyze`` recomputes Riedel (1993)'s published numbers and the findings beyond them
+(:mod:`subenv.analysis.report`);
 ``subenv demo`` flies the thesis's pole-placement design (Riedel 1993 Ch. II.B, computed here from
 the linear model) once above and once below the critical speed, prints a summary and writes a plot.
 The command line is the composition root: it finds the controllers through their entry points
@@ -38,7 +40,7 @@ from subenv.vehicles import available_vehicles
 
 @dataclass
 class Run:
-    """One flight of the demonstration: its label, speed and recorded signals."""
+    """One episode of ``subenv demo``: its speed, traces and end."""
 
     label: str
     speed_mps: float
@@ -104,7 +106,7 @@ def _write_plot(runs: Sequence[Run], ucr: float, path: Path) -> None:
 
 
 def demo(args: argparse.Namespace) -> int:
-    """``subenv demo``: fly the thesis design above and below u_cr, print a summary, plot both."""
+    """``subenv demo``: the thesis controller above and below the critical speed."""
     env = gym.make(args.env)
     ucr = critical_speed(env.unwrapped.base_vehicle)  # type: ignore[attr-defined]
     env.close()
@@ -138,8 +140,8 @@ def demo(args: argparse.Namespace) -> int:
 
 
 def analyze(args: argparse.Namespace) -> int:
-    """``subenv analyze``: write the report that reproduces Riedel (1993)."""
-    from subenv.analysis.report import write_report
+    """``subenv analyze``: :func:`subenv.analysis.report.write_findings`, and its tables printed."""
+    from subenv.analysis import report
     from subenv.atomic import OutputDirError
     from subenv.vehicles import load_vehicle
 
@@ -147,13 +149,39 @@ def analyze(args: argparse.Namespace) -> int:
         vehicle = load_vehicle(args.vehicle)
     except (ValueError, OSError) as exc:
         raise SystemExit(f"subenv analyze: --vehicle {args.vehicle!r}: {exc}") from None
-    require("plot", "the report's figures", "matplotlib")
     try:
-        out = write_report(args.out, vehicle, overwrite=args.force)
+        found = report.write_findings(args.out, vehicle, overwrite=args.force)
     except (FileExistsError, OutputDirError) as exc:
         raise SystemExit(f"subenv analyze: --out: {exc}") from None
-    print((out / "report.md").read_text().split("## Figures")[0].rstrip())
-    print(f"\nreport written to {out}/report.md with {len(list(out.glob('*.png')))} figures")
+    header: tuple[str, ...]
+    cells: list[tuple[str, ...]]
+    if found.suboff_shape:
+        print(f"Riedel (1993)'s published numbers, recomputed for {found.vehicle}:\n")
+        header = ("quantity", "thesis value", "computed value", "difference", "unit", "note")
+        cells = [
+            (r.quantity, f"{r.thesis:.5g}", f"{r.computed:.5g}", f"{r.difference:+.3g}", r.unit, r.note)
+            for r in found.published
+        ]
+    else:
+        print(f"The critical speed and saturation of {found.vehicle} (the thesis studied SUBOFF):\n")
+        header = ("quantity", "value", "unit", "note")
+        cells = [(r.quantity, f"{r.computed:.5g}", r.unit, r.note) for r in found.numbers]
+    for row in (header, ("---",) * len(header), *cells):
+        print("| " + " | ".join(row) + " |")
+    hopf = found.hopf.point
+    print(
+        f"\nPlanes held at zero, level flight loses stability at u_H = {hopf.speed_mps:.4f} m/s "
+        f"({hopf.speed_mps / critical_speed(vehicle):.3f} u_cr; period {hopf.period_s:.1f} s, "
+        f"{hopf.criticality})"
+    )
+    near = found.surface.critical[0]
+    print(
+        f"Near the free surface the critical speed falls: {100 * near.shift:+.1f} % at {near.depth_m:.3g} m"
+    )
+    print(
+        f"\nfindings written to {Path(args.out) / report.REPORT_FILE}; the report with its figures is the "
+        "documentation's Reproduction page"
+    )
     return 0
 
 
@@ -302,7 +330,7 @@ def train(argv: Sequence[str]) -> int:
 
 
 def list_environments(args: argparse.Namespace) -> int:
-    """``subenv list``: the environment ids and their scenarios."""
+    """``subenv list``: every registered id and its scenario."""
     from subenv.scenarios import get_scenario, scenario_names
 
     for name in scenario_names():
@@ -556,9 +584,9 @@ def _parser() -> argparse.ArgumentParser:
         "--out", type=_path, default="results/demo.png", help="plot file (default: %(default)s)"
     )
     p_demo.add_argument("--no-plot", action="store_true", help="print the summary only")
-    p_analyze = sub.add_parser("analyze", help="write the report that reproduces Riedel (1993)")
+    p_analyze = sub.add_parser("analyze", help="recompute the numbers of Riedel (1993), into report.json")
     p_analyze.add_argument(
-        "--out", type=_path, default="results/analysis", help="report folder (default: %(default)s)"
+        "--out", type=_path, default="results/analysis", help="output folder (default: %(default)s)"
     )
     p_analyze.add_argument("--vehicle", default="suboff", help="vehicle name or file (default: %(default)s)")
     p_analyze.add_argument(

@@ -20,6 +20,8 @@ from hypothesis import strategies as st
 import subenv.analysis.report
 import subenv.cli
 import subenv.evaluation.comparison
+from subenv.analysis.free_surface import SurfaceCriticalSpeed
+from subenv.atomic import MARKER_FILE
 from subenv.cli import main
 from subenv.evaluation import controller
 
@@ -49,13 +51,47 @@ def test_list_names_every_id(capsys):
     assert "subenv/LowSpeed-v0" in text and "subenv/DivePlane-v0" in text
 
 
+def _stand_in_findings(monkeypatch, hopf) -> list[str]:  # type: ignore[no-untyped-def]
+    """Make ``reproduction(vehicle)`` return at once: the session's Hopf findings and a stand-in for the
+    rest. Returns the list of the vehicles it was called for."""
+    from subenv.analysis import report as report_module
+
+    surface = report_module.SurfaceFindings(
+        critical=(SurfaceCriticalSpeed(1.0, 0.57, 0.57, 0.58, 0.0, 0.0),),
+        held={},
+        suction_N=(),
+        growth_per_s=(),
+    )
+    calls = []
+
+    def quick(vehicle):  # type: ignore[no-untyped-def]
+        calls.append(vehicle.name)
+        return report_module.Reproduction(vehicle.name, True, (), (), hopf, surface)
+
+    monkeypatch.setattr(report_module, "reproduction", quick)
+    return calls
+
+
+def test_analyze_needs_no_matplotlib(tmp_path: Path, analysis_report, monkeypatch, capsys):
+    # Its findings are numbers (report.json); the figures are the documentation's.
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # as if not installed: `import matplotlib` fails
+    calls = _stand_in_findings(monkeypatch, analysis_report.hopf)
+    assert main(["analyze", "--out", str(tmp_path / "out")]) == 0
+    assert calls == ["suboff"] and (tmp_path / "out" / "report.json").is_file()
+    assert "findings written to" in capsys.readouterr().out
+
+
 def test_analyze_writes_the_report_and_refuses_to_overwrite(tmp_path: Path, analysis_report, monkeypatch):
     # `subenv analyze --out <folder>` into a folder that did not exist, once per session (tests/conftest.py).
+    from subenv.analysis import report as report_module
+
     out = analysis_report.folder
     assert analysis_report.exit_code == 0
     text = analysis_report.printed
-    assert "| quantity | thesis value | computed value | difference |" in text
-    assert (out / "report.md").is_file() and len(list(out.glob("*.png"))) == 16
+    assert "| quantity | thesis value | computed value | difference | unit | note |" in text
+    assert "| u_cr, eq. 3.9 closed form | 1.8979 | 1.8979 |" in text
+    assert f"level flight loses stability at u_H = {analysis_report.hopf.point.speed_mps:.4f} m/s" in text
+    assert sorted(p.name for p in out.iterdir()) == sorted([report_module.REPORT_FILE, MARKER_FILE])
     mask = os.umask(0)
     os.umask(mask)
     assert stat.S_IMODE(out.stat().st_mode) == 0o777 & ~mask  # the usual mode, not mkdtemp's 0o700
@@ -63,23 +99,16 @@ def test_analyze_writes_the_report_and_refuses_to_overwrite(tmp_path: Path, anal
         main(["analyze", "--out", str(out)])
     existing = tmp_path / "analysis"  # the shared report stays as it is: --force replaces a copy of it
     shutil.copytree(out, existing)
+    (existing / "notes.txt").write_text("a file the earlier report did not have")
     # --force replaces an earlier report (its marker file says so) through the same atomic replacement,
-    # without computing the report a second time (tens of seconds).
-    from subenv.analysis import report as report_module
-    from subenv.atomic import atomic_output_dir
-
-    calls = []
-
-    def quick(out_dir, vehicle=None, overwrite=False):  # type: ignore[no-untyped-def]
-        calls.append(overwrite)
-        with atomic_output_dir(out_dir, overwrite=overwrite, kind=report_module.REPORT_KIND) as folder:
-            (folder / "report.md").write_text("# replaced\n\n## Figures\n")
-        return Path(out_dir)
-
-    monkeypatch.setattr(report_module, "write_report", quick)
+    # without computing the findings a second time (tens of seconds).
+    calls = _stand_in_findings(monkeypatch, analysis_report.hopf)
     assert main(["analyze", "--out", str(existing), "--force"]) == 0
-    assert calls == [True] and (existing / "report.md").read_text().startswith("# replaced")
-    assert not list(existing.glob("*.png"))  # the earlier report was replaced, not written into
+    assert (
+        calls == ["suboff"]
+        and json.loads((existing / report_module.REPORT_FILE).read_text())["published"] == []
+    )
+    assert not (existing / "notes.txt").exists()  # the earlier report was replaced, not written into
 
 
 def test_evaluate_end_to_end_on_the_tiny_suite(tmp_path: Path, capsys):
@@ -382,8 +411,8 @@ def test_no_command_prints_the_help_as_a_usage_error(capsys):
 
 @pytest.mark.parametrize(
     "command",
-    [["demo"], ["analyze"], ["evaluate", "--suite", "tiny", "--controllers", "thesis"]],
-    ids=["demo", "analyze", "evaluate"],
+    [["demo"], ["evaluate", "--suite", "tiny", "--controllers", "thesis"]],
+    ids=["demo", "evaluate"],
 )
 def test_a_missing_matplotlib_is_one_line_naming_the_extra(tmp_path: Path, monkeypatch, no_work, command):
     monkeypatch.setitem(sys.modules, "matplotlib", None)  # as if not installed: `import matplotlib` fails

@@ -3,7 +3,7 @@
 A hull moving at speed u below the free surface draws the water over its top faster than under its
 keel; the pressure there drops and the hull is pulled up (and pitched) towards the surface. This
 module gives that force and moment as a function of depth, pitch and speed, for
-:func:`subenv.dynamics.rhs_point`, the one right-hand side, and (batched) for the analysis.
+:func:`subenv.dynamics.model.rhs_point`, the one right-hand side, and (batched) for the analysis.
 
 The model, and where it comes from
 ----------------------------------

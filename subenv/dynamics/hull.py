@@ -13,7 +13,7 @@ The integral is written once, for one state, in four steps compiled with numba (
 :mod:`subenv.dynamics._jit`): the root (:func:`crossflow_root`), its segment (:func:`hull_segment`),
 the moments there (:func:`moments_on_segment`) and the integrals from them
 (:func:`crossflow_from_moments`). :func:`crossflow_point` chains them, and the right-hand side
-(:func:`subenv.dynamics.rhs_point`) calls it; the block integrator
+(:func:`subenv.dynamics.model.rhs_point`) calls it; the block integrator
 (:func:`subenv.dynamics.integrate.control_period_lanes`) runs the same steps over a block of
 states, each as one loop. :func:`crossflow_integrals` is the batched form for NumPy callers.
 

@@ -7,7 +7,7 @@ accuracy tests in ``tests/dynamics/test_integrator.py``, which compare against
 
 :func:`rk4` integrates any batched right-hand side ``f(t, x)``: with
 :func:`subenv.dynamics.derivatives` it is the NumPy reference. :func:`control_period_lanes` is the
-same scheme, compiled, over one control period of :func:`subenv.dynamics.rhs_point` for a block of
+same scheme, compiled, over one control period of :func:`subenv.dynamics.model.rhs_point` for a block of
 up to :data:`LANES` states, one per column, so that the compiler turns each stage into SIMD code
 over the block; the environments integrate every step with it, one sub-environment or many. It
 performs the same floating-point operations in the same order as ``rk4`` over ``derivatives``, so
@@ -127,7 +127,7 @@ def set_lane(
     """Put one state's inputs of :func:`control_period_lanes` into column ``j`` of a block: the state
     (theta, w, q, depth), the period's start ``t0`` [s] and speed ``speed0 + speed_slope (t - t0)``
     [m/s], the planes and heave ``force`` held over the period, the packed model parameters
-    ``prm`` (:func:`subenv.dynamics.pack_params`), and for a lane in a sea the distance travelled at
+    ``prm`` (:func:`subenv.dynamics.model.pack_params`), and for a lane in a sea the distance travelled at
     ``t0`` [m] and the number of its waves (in row ``j`` of :func:`control_period_lanes`'s ``waves``)."""
     L = LANES
     block[LANE_PITCH * L + j] = theta
@@ -249,8 +249,8 @@ def _rhs_lanes(block: FloatArray, n: int, hull: FloatArray, waves: FloatArray, f
 def control_period_lanes(
     block: FloatArray, n: int, dt: float, substeps: int, hull: FloatArray, waves: FloatArray
 ) -> None:
-    """:func:`rk4` of :func:`~subenv.dynamics.rhs_point` over one control period ``dt`` with ``substeps``
-    steps, for columns 0 .. n-1 (n <= :data:`LANES`) of ``block``, in place.
+    """:func:`rk4` of :func:`~subenv.dynamics.model.rhs_point` over one control period ``dt`` with
+    ``substeps`` steps, for columns 0 .. n-1 (n <= :data:`LANES`) of ``block``, in place.
 
     ``block`` holds the inputs of each column in the ``LANE_*`` rows (:func:`set_lane`); the planes
     and the heave force are held, the speed follows each column's ramp; ``waves`` (shape (LANES,
