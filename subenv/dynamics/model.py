@@ -15,7 +15,7 @@ axes, states ``(..., 4)``, inputs and :class:`ModelParams` fields broadcast agai
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -156,10 +156,16 @@ def stack_params(params: list[ModelParams]) -> ModelParams:
 def pack_params(params: ModelParams) -> FloatArray:
     """The numeric fields of ``params`` as one array, shape ``(..., len(PARAM_FIELDS))``, for
     :func:`rhs_point`."""
-    fields = params[: len(PARAM_FIELDS)]
-    if not any(isinstance(f, np.ndarray) for f in fields):
+    fields: tuple[Any, ...] = params[: len(PARAM_FIELDS)]  # (all but hull)
+    shape = np.broadcast_shapes(*(np.shape(f) for f in fields))
+    if not shape:
         return np.array(fields, dtype=float)
-    return np.stack(np.broadcast_arrays(*(np.asarray(f, dtype=float) for f in fields)), axis=-1)
+    # Each field copied into its column, broadcast by the assignment (a vector environment's resets
+    # pack many loadings: one array op per field, where broadcast_arrays and stack took four).
+    packed = np.empty((*shape, len(fields)))
+    for k, field in enumerate(fields):
+        packed[..., k] = field
+    return packed
 
 
 def dual_plane_angles(delta: ArrayLike, alpha: ArrayLike) -> tuple[FloatArray, FloatArray]:

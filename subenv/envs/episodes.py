@@ -82,6 +82,11 @@ class LoadingKey(NamedTuple):
         }
 
 
+_LOADING_NAMES: Final = LoadingKey._fields[:4]
+"""The fields of a :class:`LoadingKey` that are :meth:`Vehicle.variant
+<subenv.vehicles.Vehicle.variant>`'s arguments."""
+
+
 class Loading(NamedTuple):
     """An episode's loading and what the transition needs of it; a batch's holds arrays, one value (or
     row) per episode."""
@@ -101,36 +106,83 @@ class Loadings:
         self.base = config.vehicle
         self.alpha = config.alpha
         self._found: dict[LoadingKey, Loading] = {}
-        self._checked: dict[str, tuple[float, float]] | None = None  # a box of loadings checked (_check)
+        # The box of a batch's loadings checked so far (_check): the least and largest of each field.
+        self._checked: np.ndarray | None = None
 
     def of(self, draw: EpisodeConfig) -> Loading:
         """The loading of an episode's draw, or of a batch's (:meth:`Scenario.sample_batch
         <subenv.scenarios.Scenario.sample_batch>`): then arrays, each element what one episode's draw
-        with that element's numbers gives, bit for bit; its vehicles are made on demand
-        (:meth:`vehicle`)."""
-        base = self.base
-        z_GB = draw.z_GB_m if draw.z_GB_m is not None else base.z_GB_m
-        free_surface = draw.free_surface or NO_FREE_SURFACE
-        key = LoadingKey(
-            z_GB * draw.z_GB_scale,
-            base.x_GB_m + draw.x_GB_m,
-            base.excess_buoyancy_N + draw.excess_buoyancy_N,
-            draw.crossflow_drag,
-            free_surface.suction_factor,
-        )
-        if any(isinstance(value, np.ndarray) for value in key):
-            self._check(key)
-            return self._loading(key, None, free_surface)
-        found = self._found.get(key)
-        if found is None:
-            if len(self._found) >= _LOADING_CACHE_SIZE:
-                self._found.clear()
-            found = self._found[key] = self._loading(key, self.vehicle(key), free_surface)
-        return found
+        with that element's numbers gives, bit for bit (:meth:`of_batch`)."""
+        key = self._key(draw)
+        sizes = [np.size(value) for value in key if isinstance(value, np.ndarray)]
+        return self.of_batch([draw], [max(sizes)])[0] if sizes else self._memoised(key, draw)
+
+    def of_batch(self, draws: Sequence[EpisodeConfig], sizes: Sequence[int]) -> list[Loading]:
+        """The loadings of a batch's draws (:meth:`Scenario.sample_batch
+        <subenv.scenarios.Scenario.sample_batch>`, draw ``k`` of ``sizes[k]`` episodes), each as
+        :meth:`of` gives it; the vehicles of those with a loading per episode are made on demand
+        (:meth:`vehicle`).
+
+        The draws with a loading per episode (of the mixture's components that a batch's resets picked)
+        are checked and reduced to parameters and critical speeds together, as one array of loadings
+        (one per free surface among them): a batch's Python work does not grow with its picks.
+        """
+        keys = [self._key(draw) for draw in draws]
+        found: list[Loading | None] = [None] * len(draws)
+        varied = []  # (the draws with a loading per episode)
+        for k, key in enumerate(keys):
+            if any(isinstance(value, np.ndarray) for value in key):
+                varied.append(k)
+            else:
+                found[k] = self._memoised(key, draws[k])
+        surfaces = {k: draws[k].free_surface or NO_FREE_SURFACE for k in varied}
+        unset = (None, None, None, self.base.crossflow_drag)  # (only C_D may be left as the vehicle's)
+        for surface in dict.fromkeys(surfaces.values()):  # (one, unless a mixture's components differ)
+            mine = [k for k in varied if surfaces[k] == surface]
+            bounds = np.cumsum([0, *(sizes[k] for k in mine)]).tolist()
+            columns = np.empty((len(_LOADING_NAMES), bounds[-1]))  # their loadings, draw after draw
+            for at, k in enumerate(mine):
+                for j, value in enumerate(keys[k][: len(_LOADING_NAMES)]):
+                    columns[j, bounds[at] : bounds[at + 1]] = value if value is not None else unset[j]
+            self._check(columns)
+            z_GB, x_GB, excess, drag = columns
+            whole = self._loading(LoadingKey(z_GB, x_GB, excess, drag, surface.suction_factor), None, surface)
+            for at, k in enumerate(mine):
+                part = slice(bounds[at], bounds[at + 1])
+                found[k] = Loading(
+                    keys[k],
+                    None,
+                    whole.params[part],
+                    whole.critical_speed_mps[part],
+                    whole.froude_scale_mps[part],
+                )
+        return [loading for loading in found if loading is not None]
 
     def vehicle(self, key: LoadingKey) -> Vehicle:
         """The vehicle of one episode's loading (checked: ``ValueError`` for an invalid one)."""
         return self.base.variant(**key.loading())
+
+    def _key(self, draw: EpisodeConfig) -> LoadingKey:
+        """The loading of ``draw`` (floats, or arrays over a batch's episodes)."""
+        base = self.base
+        z_GB = draw.z_GB_m if draw.z_GB_m is not None else base.z_GB_m
+        return LoadingKey(
+            z_GB * draw.z_GB_scale,
+            base.x_GB_m + draw.x_GB_m,
+            base.excess_buoyancy_N + draw.excess_buoyancy_N,
+            draw.crossflow_drag,
+            (draw.free_surface or NO_FREE_SURFACE).suction_factor,
+        )
+
+    def _memoised(self, key: LoadingKey, draw: EpisodeConfig) -> Loading:
+        """The loading of one episode's ``key`` (floats), its vehicle made and checked once."""
+        found = self._found.get(key)
+        if found is None:
+            if len(self._found) >= _LOADING_CACHE_SIZE:
+                self._found.clear()
+            free_surface = draw.free_surface or NO_FREE_SURFACE
+            found = self._found[key] = self._loading(key, self.vehicle(key), free_surface)
+        return found
 
     def _loading(self, key: LoadingKey, vehicle: Vehicle | None, free_surface: FreeSurface) -> Loading:
         """The numbers of ``key``'s loading (floats where ``vehicle`` is given, else arrays): each
@@ -146,21 +198,20 @@ class Loadings:
             return Loading(key, vehicle, params, float(ucr), float(froude))
         return Loading(key, None, params, ucr, froude)
 
-    def _check(self, key: LoadingKey) -> None:
-        """Check a batch's loadings as :meth:`vehicle` checks one: the box of the loadings checked so far
-        grows to hold them, and is checked again where it grows (:meth:`Vehicle.check_loadings
+    def _check(self, columns: np.ndarray) -> None:
+        """Check a batch's loadings (``columns``: a row per field of :data:`_LOADING_NAMES`) as
+        :meth:`vehicle` checks one: the box of the loadings checked so far grows to hold them, and is
+        checked again where it grows (:meth:`Vehicle.check_loadings
         <subenv.vehicles.Vehicle.check_loadings>`); within it, nothing is left to check."""
-        given = {name: value for name, value in key.loading().items() if value is not None}
-        box = {name: (float(np.min(value)), float(np.max(value))) for name, value in given.items()}
+        box = np.stack([columns.min(axis=1), columns.max(axis=1)], axis=1)  # (nan: outside any box)
         checked = self._checked
-        if checked is not None and checked.keys() == box.keys():
-            box = {
-                name: (min(low, checked[name][0]), max(high, checked[name][1]))
-                for name, (low, high) in box.items()
-            }
-            if box == checked:
+        if checked is not None:
+            if np.all(box[:, 0] >= checked[:, 0]) and np.all(box[:, 1] <= checked[:, 1]):
                 return
-        self.base.check_loadings(**{name: np.array(ends) for name, ends in box.items()})
+            box = np.stack(
+                [np.minimum(box[:, 0], checked[:, 0]), np.maximum(box[:, 1], checked[:, 1])], axis=1
+            )
+        self.base.check_loadings(**dict(zip(_LOADING_NAMES, box, strict=True)))
         self._checked = box
 
 
@@ -256,17 +307,24 @@ def draw_episode_batch(
     n = len(indices)
     picks, uniforms = np.empty(n, dtype=np.int64), np.empty((n, int(counts.max())))
     tr.draw_reset_numbers(rngs, indices, counts, picks, uniforms)
+    if len(counts) > 1:  # a mixture: the resets of each pick together
+        order = np.argsort(picks, kind="stable")
+        starts = [0, *(np.flatnonzero(np.diff(picks[order])) + 1).tolist()]
+        every_pick = [
+            (order[a:b], int(picks[order[a]])) for a, b in zip(starts, [*starts[1:], n], strict=True)
+        ]
+    else:
+        every_pick = [(np.arange(n), 0)]
     draws, stds = [], np.empty(n)
-    for pick in np.unique(picks).tolist():
-        rows = np.flatnonzero(picks == pick)
+    for rows, pick in every_pick:
         draw = for_vehicle(config, scenario.sample_batch(uniforms[rows, : counts[pick]], weight_N, pick))
         stds[rows] = draw.disturbance_std_N
-        draws.append((rows, draw))
+        draws.append(draw)
     disturbances = np.empty(n)
     tr.draw_initial_disturbances(rngs, indices, stds, disturbances)
     groups = []
-    for rows, draw in draws:
-        loading = loadings.of(draw)
+    loadings_drawn = loadings.of_batch(draws, [len(rows) for rows, _ in every_pick])
+    for (rows, _), draw, loading in zip(every_pick, draws, loadings_drawn, strict=True):
         episode, state = episode_fields(config, draw, loading, disturbances[rows], None)
         groups.append(EpisodeGroup(rows, draw, loading, episode, state))
     return EpisodeBatch(picks, uniforms, groups)

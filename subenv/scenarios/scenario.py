@@ -64,10 +64,19 @@ class _Draws:
     def values(self, units: Sequence[Any]) -> list[Any]:
         """The numbers for the ``units`` uniform in [0, 1), one per interval drawn, in order.
 
-        A unit may be an array (one number per episode of a batch): its interval's value is then an
-        array too, computed element for element as for one episode.
+        ``units`` may be an array of shape (intervals drawn, n), a row per interval (one number per
+        episode of a batch): each interval's value is then an array too, computed element for element
+        as for one episode (in one operation over the rows).
         """
         values: list[Any] = list(self.fixed)
+        if isinstance(units, np.ndarray) and units.ndim == 2:
+            if units.shape[0] != len(self.drawn):
+                raise ValueError(f"units has {units.shape[0]} rows: must have {len(self.drawn)}")
+            lows, spans = np.array([[low, span] for _, low, span in self.drawn]).reshape(-1, 2).T
+            units = lows[:, None] + spans[:, None] * units
+            for (j, _, _), unit in zip(self.drawn, units, strict=True):
+                values[j] = unit
+            return values
         for (j, low, span), unit in zip(self.drawn, units, strict=True):
             values[j] = low + span * unit
         return values
@@ -379,20 +388,20 @@ class Scenario:
             Its drawn fields are arrays of ``n``: row ``i`` is what :meth:`sample` draws with row
             ``i``'s numbers; the others are the scenario's (or the component's) values.
         """
-        counts = self._counts(pick)
+        count = self._uniforms_after(pick)
         uniforms = np.asarray(uniforms, dtype=float)
-        if uniforms.ndim != 2 or uniforms.shape[1] != counts[pick]:
-            raise ValueError(f"uniforms has shape {uniforms.shape}: must be (n, {counts[pick]})")
-        return self._from_uniforms(pick, list(uniforms.T), weight_N)
+        if uniforms.ndim != 2 or uniforms.shape[1] != count:
+            raise ValueError(f"uniforms has shape {uniforms.shape}: must be (n, {count})")
+        return self._from_uniforms(pick, uniforms.T, weight_N)
 
     def episode_from_uniforms(
         self, uniforms: Sequence[float], weight_N: float, pick: int = 0
     ) -> EpisodeConfig:
         """The episode :meth:`sample` draws with these numbers after ``pick`` (a row of
         :meth:`sample_batch`'s)."""
-        counts = self._counts(pick)
-        if len(uniforms) != counts[pick]:
-            raise ValueError(f"uniforms has {len(uniforms)} numbers: must have {counts[pick]}")
+        count = self._uniforms_after(pick)
+        if len(uniforms) != count:
+            raise ValueError(f"uniforms has {len(uniforms)} numbers: must have {count}")
         return self._from_uniforms(pick, [float(u) for u in uniforms], weight_N)
 
     @property
@@ -408,15 +417,7 @@ class Scenario:
 
         Raises ``ValueError`` for a scenario that does not draw in batches (:attr:`samples_in_batches`).
         """
-        if not self.samples_in_batches:
-            raise ValueError(
-                f"scenario {self.name!r} cannot draw in batches: a component of the mixture is a mixture "
-                f"({list(self.components)})"
-            )
-        if not self.components:
-            return (self.uniforms_per_episode,)
-        own = self.uniforms_per_episode
-        return tuple(get_scenario(name).uniforms_per_episode + own for name in self.components)
+        return tuple(self._uniforms_after(pick) for pick in range(max(len(self.components), 1)))
 
     @property
     def samples_in_batches(self) -> bool:
@@ -424,11 +425,19 @@ class Scenario:
         scenario, or a mixture of plain scenarios (as registered now)."""
         return not any(get_scenario(name).components for name in self.components)
 
-    def _counts(self, pick: int) -> tuple[int, ...]:
-        """:attr:`uniforms_per_pick`, with ``pick`` checked against it."""
-        counts = self.uniforms_per_pick
-        check.integer("pick", pick, 0, len(counts) - 1)
-        return counts
+    def _uniforms_after(self, pick: int) -> int:
+        """Element ``pick`` of :attr:`uniforms_per_pick`, ``pick`` checked (a batch's resets ask for the
+        picks they drew, not for every component's)."""
+        check.integer("pick", pick, 0, max(len(self.components), 1) - 1)
+        if not self.components:
+            return self.uniforms_per_episode
+        component = get_scenario(self.components[pick])
+        if component.components:
+            raise ValueError(
+                f"scenario {self.name!r} cannot draw in batches: a component of the mixture is a mixture "
+                f"({list(self.components)})"
+            )
+        return component.uniforms_per_episode + self.uniforms_per_episode
 
     def _from_uniforms(self, pick: int, units: Sequence[Any], weight_N: float) -> EpisodeConfig:
         """The episode :meth:`sample` draws with ``pick``, then these uniform numbers (floats or arrays)."""

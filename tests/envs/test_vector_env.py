@@ -180,7 +180,21 @@ _ONE_COMPONENT = Scenario(
     components=("BallastOffset",),
     z_GB_scale=(0.9, 1.1),
 )
-_BATCHES = (*scenario_names(), _DRAWS_ALL_BUT_THE_LOADING, _DRAWS_EVERYTHING, _ONE_COMPONENT)
+# A loading per episode in every component, whose free surfaces (and seas) differ: a batch computes the
+# loadings of each free surface together.
+_TWO_SURFACES = Scenario(
+    name="TwoSurfaces",
+    description="near the surface in a sea, or deep",
+    components=("PeriscopeDepthWaves", "BallastOffset", "Nominal", "PeriscopeDepth-v1"),
+    z_GB_scale=(0.9, 1.1),
+)
+_BATCHES = (
+    *scenario_names(),
+    _DRAWS_ALL_BUT_THE_LOADING,
+    _DRAWS_EVERYTHING,
+    _ONE_COMPONENT,
+    _TWO_SURFACES,
+)
 
 
 @numba.njit
