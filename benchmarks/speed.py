@@ -14,8 +14,9 @@ numbers depend on the machine; the ratios are what to compare):
 3. integrator cost: simulated seconds per wall second, the envs' compiled RK4 against
    ``rk4`` over ``derivatives`` and ``scipy.integrate.solve_ivp``;
    and where an env-step's time goes: the compiled step without resets and its parts (control
-   period, right-hand side, its sine and cosine, the hull integral), the resets, and the
-   ceiling the compiled step puts on two cores next to ``CartPoleVectorEnv``;
+   period, right-hand side, its sine and cosine, the hull integral), the resets (per episode, in
+   batches of 1 and 64, as ratios to Nominal-v0's), and the ceiling the compiled step puts on two
+   cores next to ``CartPoleVectorEnv``;
 4. peak memory at N = 4096 (a fresh process per environment);
 5. numba compile time: the first calls in a fresh process with an empty cache, then with the
    cache written by that process;
@@ -55,6 +56,8 @@ from subenv.dynamics import integrate as ig
 
 SUBENV_IDS = ("subenv/Nominal-v0", "subenv/DivePlane-v0")
 VECTOR_SIZES = (1, 64, 1024, 4096)
+RESET_BATCHES = (1, 64)
+"""The batch sizes of the resets measured (per episode, as a ratio to Nominal-v0's)."""
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -91,7 +94,8 @@ def control_periods_in_blocks(x: np.ndarray, prm: np.ndarray, hull: np.ndarray, 
 
 # --- timing ----------------------------------------------------------------------------------
 def best_rate(run: Callable[[int], None], per_call: int, seconds: float, repeats: int) -> float:
-    """Best over ``repeats`` of (env-steps per second) for ``run(k)``, which makes call k, ``per_call`` env-steps."""
+    """Best over ``repeats`` of (env-steps per second) for ``run(k)``, which makes call k, ``per_call``
+    env-steps."""
     best = 0.0
     calls_per_check = max(1, 4096 // per_call)
     for _ in range(repeats):
@@ -363,7 +367,7 @@ def cost_table(seconds: float) -> list[str]:
     lines = ["| on one thread, N = 4096 | ns |", "|---|---:|"]
     kernel: dict[str, float] = {}
     two_threads: dict[str, float] = {}
-    resets: dict[str, tuple[float, float]] = {}
+    resets: dict[str, tuple[float, dict[int, float]]] = {}
     for env_id in SUBENV_IDS:
         env = gym.make_vec(env_id, num_envs=n, threads=1)
         env.action_space.seed(0)
@@ -391,25 +395,31 @@ def cost_table(seconds: float) -> list[str]:
             report,
         )
 
-        def step() -> None:
-            state[:] = vec._state  # the same states every time (no episode ends inside the timing)
+        def step(state: np.ndarray = state, start: np.ndarray = vec._state, args: tuple = args) -> None:
+            state[:] = start  # the same states every time (no episode ends inside the timing)
             tr.step(*args)
 
-        copy_ns = ns_per_item(lambda: state.__setitem__(slice(None), vec._state), n)
+        copy_ns = ns_per_item(functools.partial(state.__setitem__, slice(None), vec._state), n)
         kernel[env_id] = ns_per_item(step, n) - copy_ns
 
         # The same steps shared among two of numba's threads, as the vector env shares them with threads=2:
         # what two cores make of the kernel alone.
-        def on_two_threads() -> None:
-            state[:] = vec._state
+        def on_two_threads(
+            state: np.ndarray = state, start: np.ndarray = vec._state, args: tuple = args
+        ) -> None:
+            state[:] = start
             tr.step_parallel(*args)
 
         before = numba.get_num_threads()
         numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
         two_threads[env_id] = ns_per_item(on_two_threads, n) - copy_ns
         numba.set_num_threads(before)
-        index = np.arange(64)
-        reset_ns = ns_per_item(lambda: vec._reset_envs(index, {}, report), 64)
+        # A running vector env resets the few sub-environments whose episodes ended at a step (a batch's
+        # fixed cost matters), a first reset all of them: per episode, in batches of each size.
+        reset_ns = {
+            size: ns_per_item(functools.partial(vec._reset_envs, np.arange(size), {}, report), size)
+            for size in RESET_BATCHES
+        }
         resets[env_id] = (ends / (200 * n), reset_ns)
         env.close()
     for env_id in SUBENV_IDS:
@@ -443,15 +453,19 @@ def cost_table(seconds: float) -> list[str]:
         ("the exact hull drag integral, one state (`crossflow_point`)", drag, per_state, ".1f"),
     )
     for label, fn, args, fmt in parts:
-        lines.append(f"| {label} | {ns_per_item(lambda: fn(*args), n):{fmt}} |")
+        lines.append(f"| {label} | {ns_per_item(functools.partial(fn, *args), n):{fmt}} |")
+    nominal_reset_ns = resets[SUBENV_IDS[0]][1]
     for env_id in SUBENV_IDS:
         rate, reset_ns = resets[env_id]
+        for size in RESET_BATCHES:
+            lines.append(
+                f"| {env_id}: a reset in a batch of {size} (draw, loading, records, observation), per "
+                f"episode; x {SUBENV_IDS[0]}'s: {reset_ns[size] / nominal_reset_ns[size]:.1f} "
+                f"| {reset_ns[size]:,.0f} |"
+            )
         lines.append(
-            f"| {env_id}: one reset of 64 at once (draw, loading, records, observation) | {reset_ns:,.0f} |"
-        )
-        lines.append(
-            f"| {env_id}: resets per env-step with random actions: {rate:.4f}, so per env-step | "
-            f"{rate * reset_ns:.0f} |"
+            f"| {env_id}: resets per env-step with random actions: {rate:.4f}, so per env-step (batches "
+            f"of {RESET_BATCHES[-1]}) | {rate * reset_ns[RESET_BATCHES[-1]]:.0f} |"
         )
     cartpole = CartPoleVectorEnv(num_envs=n)
     cartpole_rate = vector_env_rate(cartpole, seconds, 3)
@@ -466,7 +480,7 @@ def cost_table(seconds: float) -> list[str]:
     lines.append("|---|---:|---:|---:|---:|")
     for env_id in SUBENV_IDS:
         t2_s = two_threads[env_id] * 1e-9
-        r_s = resets[env_id][0] * resets[env_id][1] * 1e-9
+        r_s = resets[env_id][0] * resets[env_id][1][RESET_BATCHES[-1]] * 1e-9
         alone, with_resets = 1 / t2_s, 1 / (t2_s + r_s)
         lines.append(
             f"| {env_id} | {alone:,.0f} | {alone / cartpole_rate:.2f} | {with_resets:,.0f} "
@@ -543,7 +557,8 @@ from subenv.dynamics import derivatives, model_params
 t1 = time.perf_counter()
 env = gym.make("subenv/DivePlane-v0"); env.reset(seed=0); env.step(np.zeros(1, dtype=np.float32))
 t2 = time.perf_counter()
-venv = gym.make_vec("subenv/Nominal-v0", num_envs=8, threads=2); venv.reset(seed=0); venv.step(np.zeros((8, 1)))
+venv = gym.make_vec("subenv/Nominal-v0", num_envs=8, threads=2)
+venv.reset(seed=0); venv.step(np.zeros((8, 1)))
 t3 = time.perf_counter()
 derivatives(np.zeros(4), 1.0, 0.0, 0.0, model_params(subenv.load_vehicle("suboff")))
 t4 = time.perf_counter()

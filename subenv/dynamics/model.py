@@ -157,9 +157,9 @@ def pack_params(params: ModelParams) -> FloatArray:
     """The numeric fields of ``params`` as one array, shape ``(..., len(PARAM_FIELDS))``, for
     :func:`rhs_point`."""
     fields: tuple[Any, ...] = params[: len(PARAM_FIELDS)]  # (all but hull)
-    shape = np.broadcast_shapes(*(np.shape(f) for f in fields))
-    if not shape:
+    if not any(isinstance(f, np.ndarray) for f in fields):
         return np.array(fields, dtype=float)
+    shape = np.broadcast_shapes(*(np.shape(f) for f in fields))
     # Each field copied into its column, broadcast by the assignment (a vector environment's resets
     # pack many loadings: one array op per field, where broadcast_arrays and stack took four).
     packed = np.empty((*shape, len(fields)))

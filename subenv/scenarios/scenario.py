@@ -61,6 +61,13 @@ class _Draws:
         """One number per interval, in order."""
         return self.values(rng.random(len(self.drawn)).tolist()) if self.drawn else list(self.fixed)
 
+    @cached_property
+    def _ends(self) -> np.ndarray:
+        """The low ends and the spans of the intervals drawn, shape (2, intervals drawn, 1)."""
+        return np.array([[low for _, low, _ in self.drawn], [span for _, _, span in self.drawn]]).reshape(
+            2, -1, 1
+        )
+
     def values(self, units: Sequence[Any]) -> list[Any]:
         """The numbers for the ``units`` uniform in [0, 1), one per interval drawn, in order.
 
@@ -72,8 +79,8 @@ class _Draws:
         if isinstance(units, np.ndarray) and units.ndim == 2:
             if units.shape[0] != len(self.drawn):
                 raise ValueError(f"units has {units.shape[0]} rows: must have {len(self.drawn)}")
-            lows, spans = np.array([[low, span] for _, low, span in self.drawn]).reshape(-1, 2).T
-            units = lows[:, None] + spans[:, None] * units
+            lows, spans = self._ends
+            units = lows + spans * units
             for (j, _, _), unit in zip(self.drawn, units, strict=True):
                 values[j] = unit
             return values
@@ -428,7 +435,9 @@ class Scenario:
     def _uniforms_after(self, pick: int) -> int:
         """Element ``pick`` of :attr:`uniforms_per_pick`, ``pick`` checked (a batch's resets ask for the
         picks they drew, not for every component's)."""
-        check.integer("pick", pick, 0, max(len(self.components), 1) - 1)
+        choices = max(len(self.components), 1)
+        if not (type(pick) is int and 0 <= pick < choices):  # (checked: the message names what is allowed)
+            check.integer("pick", pick, 0, choices - 1)
         if not self.components:
             return self.uniforms_per_episode
         component = get_scenario(self.components[pick])
