@@ -437,6 +437,74 @@ def test_a_damaged_model_folder_is_refused_naming_the_file_and_field(model_folde
         JaxPPOController(folder)
 
 
+@pytest.fixture(scope="module")
+def memory_folder(tmp_path_factory):
+    """A model folder of MEMORY's network: a GRU of 8 units, the integral observed (not trained)."""
+    network = init_network(jax.random.key(0), 9, 2, MEMORY.hidden, memory=8)
+    stats = RunningStats.empty((9,)).update(jnp.asarray(np.random.default_rng(0).normal(size=(64, 9))))
+    return save(tmp_path_factory.mktemp("models") / "memory", MEMORY, network, stats, {"env_steps": 0})
+
+
+MEMORY_DAMAGE = {
+    "settings without the memory": (
+        ("setting", "memory", 0),
+        r"network\.npz does not hold the network config\.json describes: hidden=\[16, 16\], 2 action "
+        r"components: unknown \['embed/b', 'embed/w', 'gru/bhn', 'gru/bi', 'gru/wh', 'gru/wi'\]",
+    ),
+    "a memory of another width": (
+        ("setting", "memory", 4),
+        r"network\.npz: actor/0/w has shape \(17, 16\): must have shape \(13, 16\)",
+    ),
+    "a GRU weight's shape": (
+        ("array", "gru/wh", np.zeros((8, 16), np.float32)),
+        r"network\.npz: gru/wh has shape \(8, 16\): must have shape \(8, 24\)",
+    ),
+    "NaN in the GRU": (
+        ("array", "gru/bhn", np.full(8, np.nan, np.float32)),
+        r"network\.npz: gru/bhn has 8 NaN or infinite",
+    ),
+    "GRU weights that overflow": (
+        ("array", "gru/wi", np.full((8, 24), 5e37, np.float32)),  # (8 x 5e37 > 3.4e38)
+        r"network\.npz: gru/wi and gru/wh and gru/bi and gru/bhn are invalid: .* beyond float32's range",
+    ),
+    "an embedding that overflows": (
+        ("array", "embed/w", np.full((9, 8), 1e37, np.float32)),  # (9 x 10 x 1e37 > 3.4e38)
+        r"network\.npz: embed/w and embed/b are invalid: .* beyond float32's range",
+    ),
+}
+
+
+def test_a_model_with_memory_loads_whole_and_acts_with_finite_numbers(memory_folder):
+    config, network, stats = load(memory_folder)
+    assert config == MEMORY and sorted(network["gru"]) == ["bhn", "bi", "wh", "wi"]
+    high = np.finfo(np.float32).max
+    obs = jnp.asarray(np.stack([np.zeros(9), np.full(9, high), np.full(9, -high)]), jnp.float32)
+    memory, mean = policy_step(network, stats, jnp.ones((3, 8)), obs)
+    assert np.all(np.isfinite(np.asarray(mean))) and np.all(np.abs(np.asarray(memory)) <= 1.0)
+
+
+@pytest.mark.parametrize("name", list(MEMORY_DAMAGE))
+def test_a_damaged_model_folder_with_memory_is_refused_naming_the_file_and_field(
+    memory_folder, tmp_path, name
+):
+    folder = Path(shutil.copytree(memory_folder, tmp_path / "model"))
+    damage, match = MEMORY_DAMAGE[name]
+    _damage(folder, *damage)
+    with pytest.raises(ValueError, match=match):
+        load(folder)
+    with pytest.raises(ValueError, match=match):
+        JaxPPOController(folder)
+
+
+def test_a_model_with_memory_lacking_an_array_is_refused_naming_it(memory_folder, tmp_path):
+    folder = Path(shutil.copytree(memory_folder, tmp_path / "model"))
+    arrays = _arrays(folder)
+    del arrays["gru/bhn"]
+    np.savez(folder / "network.npz", **arrays)
+    with pytest.raises(ValueError, match=r"memory=8, 2 action components: it lacks \['gru/bhn'\]"):
+        load(folder)
+
+
 def test_the_shipped_model_loads_as_it_was_saved():
     config, network, stats = load(jax_ppo.shipped_folder())
     arrays = _arrays(jax_ppo.shipped_folder())
