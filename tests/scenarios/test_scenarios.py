@@ -56,13 +56,13 @@ def test_speeds_are_placed_relative_to_the_critical_speed(name, low, high):
 
 def test_relative_speeds_follow_the_plane_allocation():
     """With alpha = -1 the critical speed is lower (Fig. 3-9); LowSpeed stays below it."""
-    for _, vehicle, info, env in _episodes("LowSpeed", 5, alpha=-1.0):
+    for _, vehicle, info, _env in _episodes("LowSpeed", 5, alpha=-1.0):
         assert info["critical_speed_mps"] == pytest.approx(subenv.analysis.critical_speed(vehicle, -1.0))
         assert info["speed_mps"] < info["critical_speed_mps"] < 0.5
 
 
 def test_periscope_depth_is_near_the_surface_and_light():
-    for episode, vehicle, info, _ in _episodes("PeriscopeDepth", 10):
+    for _episode, vehicle, info, _ in _episodes("PeriscopeDepth", 10):
         assert 1.0 <= info["depth_command_m"] <= 1.2
         assert 2e-4 <= vehicle.excess_buoyancy_N / vehicle.weight_N <= 1e-3
 
@@ -103,7 +103,7 @@ def test_randomized_draws_from_every_scenario_and_randomises_the_loading():
     assert all(e.sensor_noise and e.disturbance_std_N > 0 for e, *_ in episodes)
     # Every component scenario shows up: recognise them by their signatures.
     kinds = collections.Counter()
-    for episode, vehicle, info, _ in episodes:
+    for episode, vehicle, _info, _ in episodes:
         if len(episode.speed_knots) > 1:
             kinds["SpeedTransient"] += 1
         elif vehicle.excess_buoyancy_N > 0:
@@ -202,6 +202,32 @@ def test_a_draw_is_its_uniform_numbers_mapped_onto_the_intervals() -> None:
         scenario.episode_from_uniforms([0.5, 0.5], 1000.0)
 
 
+@pytest.mark.parametrize("name", ["Randomized", "Mixed"])
+def test_a_mixture_s_draw_is_its_pick_and_then_uniform_numbers(name) -> None:
+    # A mixture's draw: rng.integers(len(components)), then its component's numbers and its own, all
+    # uniform (rng.random(k)), which episode_from_uniforms and sample_batch (a vector env's resets) map
+    # as sample() does: the episode of a pick and numbers, element for element in a batch.
+    scenario = get_scenario(name)
+    counts = scenario.uniforms_per_pick
+    rows = collections.defaultdict(list)
+    for seed in range(60):
+        rng, twin = np.random.default_rng(seed), np.random.default_rng(seed)
+        pick = int(twin.integers(len(counts)))
+        uniforms = twin.random(counts[pick])
+        one = scenario.sample(rng, 1000.0)
+        assert one == scenario.episode_from_uniforms(uniforms, 1000.0, pick)
+        assert rng.bit_generator.state == twin.bit_generator.state
+        rows[pick].append((uniforms, one))
+    assert len(rows) == len(counts)  # every component picked
+    for pick, drawn in rows.items():
+        batch = scenario.sample_batch(np.array([u for u, _ in drawn]), 1000.0, pick)
+        for i, (_, one) in enumerate(drawn):
+            assert batch.z_GB_scale[i] == one.z_GB_scale and batch.crossflow_drag[i] == one.crossflow_drag
+            assert np.broadcast_to(batch.x_GB_m, len(drawn))[i] == one.x_GB_m
+            assert batch.depth_command_m[i] == one.depth_command_m
+        assert (batch.sensor_noise, batch.disturbance_std_N) == (one.sensor_noise, one.disturbance_std_N)
+
+
 _ALL_RANDOM = Scenario(
     # Every quantity drawn, from pairwise disjoint intervals: a value landing in another's field shows.
     name="AllRandom",
@@ -240,7 +266,8 @@ def test_sample_puts_every_draw_in_its_place() -> None:
 
 
 def test_sample_draws_one_number_per_random_quantity() -> None:
-    # The 15 random quantities of AllRandom (the sign of x_GB is one), and Nominal's 3 (command, offset, pitch).
+    # The 15 random quantities of AllRandom (the sign of x_GB is one), and Nominal's 3 (command, offset,
+    # pitch).
     for scenario, expected in ((_ALL_RANDOM, 15), (get_scenario("Nominal"), 3)):
         rng, twin = np.random.default_rng(5), np.random.default_rng(5)
         for _ in range(20):
