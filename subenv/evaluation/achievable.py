@@ -167,7 +167,8 @@ def plan_sha256(actions: np.ndarray) -> str:
 
 class PlanReplay:
     """A batch controller that plays stored plans, one per episode in the order of the seeds run (float32
-    actions, one row per step, independent planes), each held at its last action past its end.
+    actions, one row per step, independent planes), each held at its last action past its end. Run one
+    episode at a time (``reset``, ``act``), each reset takes the next plan.
 
     How a certificate is checked: ``run_episodes(PlanReplay(plans), env_id, seeds)`` replays them in the
     harness's own environments; the episodes the plans win are the achievable ones.
@@ -180,23 +181,28 @@ class PlanReplay:
         for p in self.plans:
             if p.ndim != 2 or p.shape[1] != 2 or len(p) == 0 or not np.isfinite(p).all():
                 raise ValueError(f"a plan must be a finite (steps, 2) array, not one of shape {p.shape}")
+        self._playing = self.plans
+        self._next = 0  # (the plan the next one-episode reset plays)
         self._steps = 0
 
     def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
         """Start the plans again from their first action (one plan per episode)."""
         if len(infos) != len(self.plans):
             raise ValueError(f"{len(infos)} episodes for {len(self.plans)} plans: one plan per episode")
-        self._steps = 0
+        self._playing, self._steps = self.plans, 0
 
     def act_batch(self, observations: np.ndarray) -> np.ndarray:
         """The plans' actions of this step."""
         k = self._steps
         self._steps += 1
-        return np.stack([p[min(k, len(p) - 1)] for p in self.plans])
+        return np.stack([p[min(k, len(p) - 1)] for p in self._playing])
 
     def reset(self, info: Mapping[str, Any], vehicle: Vehicle) -> None:
-        """One episode: :meth:`reset_batch` of one."""
-        self.reset_batch([info], vehicle)
+        """One episode: the next plan."""
+        if self._next >= len(self.plans):
+            raise ValueError(f"episode {self._next + 1} for {len(self.plans)} plans: one plan per episode")
+        self._playing, self._steps = self.plans[self._next : self._next + 1], 0
+        self._next += 1
 
     def act(self, observation: np.ndarray) -> np.ndarray:
         """One episode: :meth:`act_batch` of one."""

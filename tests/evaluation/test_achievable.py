@@ -63,14 +63,16 @@ def test_the_hard_suite_is_scored_over_the_achievable_episodes() -> None:
     flags = certified_ids()[get_scenario("HardGusts").env_id].episodes
     lost = min(s for s, f in flags.items() if not f.achievable)
     seeds = [DEFAULT_SEED, lost]
-    (won, not_certified) = run_episodes(
-        PlanReplay([_stored("HardGusts").get(s, np.zeros((1, 2))) for s in seeds]),
-        "HardGusts",
-        seeds,
-        scored_by="achievable",
-    )
-    assert (won.scored, not_certified.scored) == (True, False)
-    assert not not_certified.counts and won.counts
+    for batched in (True, False):  # (the vector environment's path, and one episode at a time)
+        (won, not_certified) = run_episodes(
+            PlanReplay([_stored("HardGusts")[s] for s in seeds]),
+            "HardGusts",
+            seeds,
+            scored_by="achievable",
+            batched=batched,
+        )
+        assert (won.scored, not_certified.scored) == (True, False)
+        assert not not_certified.counts and won.counts
     other = run_episodes(
         PlanReplay([np.zeros((1, 2))]),
         "HardGusts",
