@@ -120,3 +120,21 @@ def test_evaluate_runs_each_suite_named_into_its_own_leaderboard(tmp_path: Path,
     assert board in capsys.readouterr().out
     runs = {name: json.loads((out / name / "run.json").read_text("utf-8")) for name in ("tiny", "hard")}
     assert runs["hard"]["scored_by"] == "achievable" and runs["tiny"]["scored_by"] == "winnable"
+
+
+def test_the_hard_suite_runs_each_informed_controller_told_and_untold(tmp_path: Path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """With no controllers named, the Hard suite runs ``mpc`` told its limits and ``mpc:uninformed``; the
+    default suite does not twin; ``subenv evaluate`` with no --suite runs both tracks."""
+    import subenv.evaluation
+    from subenv.cli import main
+    from subenv.evaluation.plan import resolve
+
+    names = [c.name for c in resolve(None, "hard").controllers]
+    assert names.index("mpc:uninformed") == names.index("mpc") + 1
+    assert not any(n.endswith(":uninformed") for n in (c.name for c in resolve(None, "default").controllers))
+    asked = []
+    monkeypatch.setattr(
+        subenv.evaluation, "run_benchmark", lambda c, suites, *a, **k: asked.append(suites) or []
+    )
+    main(["evaluate", "--no-progress", "--out", str(tmp_path / "x")])
+    assert asked == [["default", "hard"]]
