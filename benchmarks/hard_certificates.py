@@ -88,6 +88,8 @@ def main() -> None:
     parser.add_argument("--stages", default="", help="comma-separated hard_oracle.py JSON files")
     parser.add_argument("--compute", action="store_true", help="search the plans the folders lack")
     parser.add_argument("--sample", type=int, default=2, help="plans kept in tests/data per scenario")
+    parser.add_argument("--out", help="the flags' file (default: the package's)")
+    parser.add_argument("--sample-dir", default=SAMPLE_DIR, help="the sampled plans' folder")
     args = parser.parse_args()
     suite = get_suite(args.suite)
     episodes = args.episodes or suite.episodes
@@ -129,15 +131,15 @@ def main() -> None:
         sample = {f"seed_{s}": plans[s] for s in seeds[: args.sample] + lost[:1]}
         buffer = io.BytesIO()
         np.savez_compressed(buffer, **sample)
-        os.makedirs(SAMPLE_DIR, exist_ok=True)
-        atomic_write_bytes(os.path.join(SAMPLE_DIR, f"{name}.npz"), buffer.getvalue())
+        os.makedirs(args.sample_dir, exist_ok=True)
+        atomic_write_bytes(os.path.join(args.sample_dir, f"{name}.npz"), buffer.getvalue())
     data = {
         "format": CERTIFICATE_FORMAT,
         "suite": suite.name,
         "oracle": "subenv_baselines.oracle.certify, OracleSettings(preview_orders=False), independent planes",
         "ids": ids,
     }
-    out = os.path.join(ROOT, *DATA_PACKAGE.split("."), f"achievable-{suite.name}.json")
+    out = args.out or os.path.join(ROOT, *DATA_PACKAGE.split("."), f"achievable-{suite.name}.json")
     atomic_write_text(out, json.dumps(data, indent=1) + "\n")
     print(f"written: {out}")
 
