@@ -157,6 +157,7 @@ def analysis_report(tmp_path_factory: pytest.TempPathFactory) -> AnalysisReport:
     The Hopf findings the report computes (``hopf_findings(vehicle)``, half of its time) are kept as they
     were returned, for tests/analysis/test_hopf.py, which would otherwise compute them again.
     """
+    pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")  # (the report's figures)
     import subenv.analysis.report
     from subenv import load_vehicle
     from subenv.cli import main

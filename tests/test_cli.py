@@ -25,6 +25,7 @@ from subenv.evaluation import controller
 
 
 def test_demo_prints_the_summary_and_writes_the_plot(tmp_path: Path, capsys):
+    pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")
     out = tmp_path / "figs" / "demo.png"
     assert main(["demo", "--out", str(out)]) == 0
     text = capsys.readouterr().out
@@ -83,6 +84,7 @@ def test_analyze_writes_the_report_and_refuses_to_overwrite(tmp_path: Path, anal
 
 
 def test_evaluate_end_to_end_on_the_tiny_suite(tmp_path: Path, capsys):
+    pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")
     out = tmp_path / "eval"
     assert (
         main(
@@ -112,6 +114,7 @@ def test_evaluate_end_to_end_on_the_tiny_suite(tmp_path: Path, capsys):
 
 
 def test_evaluate_rejects_unknown_names(tmp_path: Path):
+    pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")
     with pytest.raises(SystemExit, match=r"controller='pid' is unknown: must be one of \[") as error:
         main(["evaluate", "--controllers", "pid", "--out", str(tmp_path / "x"), "--no-progress"])
     assert all(f"'{name}'" in str(error.value) for name in ("thesis", "scheduled", "lqr", "reversal_aware"))
@@ -151,6 +154,7 @@ EVALUATE = ["evaluate", "--suite", "tiny", "--episodes", "1", "--controllers", "
 def test_an_output_folder_that_cannot_be_written_is_refused_before_any_work(
     tmp_path: Path, monkeypatch, no_work, command
 ):
+    pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")
     (tmp_path / "afile").write_text("x")
     with pytest.raises(
         SystemExit,
@@ -171,6 +175,7 @@ def test_an_output_folder_that_cannot_be_written_is_refused_before_any_work(
 
 @pytest.mark.parametrize("command", [EVALUATE, ["analyze"]], ids=["evaluate", "analyze"])
 def test_force_replaces_only_an_earlier_result_of_the_command(tmp_path: Path, no_work, command):
+    pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")
     project = tmp_path / "project"
     (project / ".git").mkdir(parents=True)
     (project / "src").mkdir()
@@ -249,6 +254,7 @@ def test_an_empty_out_is_refused_by_every_command(capsys, no_work, command):
 
 
 def test_evaluate_takes_scenario_names_for_the_suite(tmp_path: Path, capsys):
+    pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")
     out = tmp_path / "eval"
     assert (
         main(

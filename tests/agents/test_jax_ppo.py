@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-pytest.importorskip("optax")  # the jax-rl extra (in dev)
+pytest.importorskip("optax", reason="the 'jax-rl' extra is not installed")
 
 import gymnasium as gym
 import jax

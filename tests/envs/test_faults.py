@@ -310,6 +310,7 @@ def test_the_vector_env_renders_one_frame_per_sub_environment_for_gymnasiums_wra
 
 
 def test_render_gives_each_sub_environment_its_own_frame():
+    pytest.importorskip("pygame", reason="the 'render' extra is not installed")
     env = DivePlaneVectorEnv(num_envs=3, scenario="Randomized", render_mode="rgb_array")
     env.reset(seed=0)
     env.step(np.zeros((3, 1)))

@@ -115,7 +115,7 @@ def test_a_batch_of_the_wrong_size_is_refused(name: str, suboff: Vehicle) -> Non
 
 @pytest.mark.parametrize("name", ["ppo", "sac"])
 def test_the_shipped_agents_get_the_one_at_a_time_results(name: str) -> None:
-    pytest.importorskip("stable_baselines3")
+    pytest.importorskip("stable_baselines3", reason="the 'rl' extra is not installed")
     from subenv_agents import shipped_models
     from subenv_agents.controller import AgentController
 

@@ -19,7 +19,7 @@ from subenv.evaluation.plots import (
 from subenv.evaluation.results import representative_episodes
 from subenv.evaluation.rollout import TrajectoryRecorder
 
-pytest.importorskip("matplotlib")
+pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")
 
 
 def _trajectory_of(small_run):

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-jax = pytest.importorskip("jax")  # the jax extra (in dev)
+jax = pytest.importorskip("jax", reason="the 'jax' extra is not installed")
 
 import jax.numpy as jnp
 

@@ -6,7 +6,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-jax = pytest.importorskip("jax")  # the jax extra (in dev)
+jax = pytest.importorskip("jax", reason="the 'jax' extra is not installed")
 
 import jax.numpy as jnp
 from gymnasium.utils import seeding
