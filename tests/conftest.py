@@ -5,6 +5,8 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import subprocess
+import sys
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -46,6 +48,46 @@ def pytest_configure(config: pytest.Config) -> None:
     pyproject = tomllib.loads((Path(__file__).resolve().parents[1] / "pyproject.toml").read_text())
     declared = pyproject["project"]["entry-points"][ENTRY_POINT_GROUP]
     discover_controllers(EntryPoint(name, value, ENTRY_POINT_GROUP) for name, value in declared.items())
+
+
+# Until the compiled kernels are in numba's on-disk cache (a fresh checkout, an edit of their sources), the
+# first call of each in a process compiles it, 10-20 s on a quiet core for the environments' step. Each
+# pytest-xdist worker would compile those its first tests call, both workers the same ones at once, and so
+# would a test's subprocess that starts before they are cached. So a run with workers compiles them first,
+# once, before the workers start: in two processes, one half each, for two cores; every process then loads
+# them. (tests/dynamics/test_model.py and tests/test_packaging.py compile in caches of their own, on purpose.)
+_WARM_UP = (
+    # The environments' step as gym.make builds them, and the vector environment's on two threads.
+    """
+import numpy as np, gymnasium as gym, subenv
+env = gym.make("subenv/DivePlane-v0"); env.reset(seed=0); env.step(np.zeros(1, dtype=np.float32))
+vec = gym.make_vec("subenv/Nominal-v0", num_envs=4, threads=2); vec.reset(seed=0); vec.step(np.zeros((4, 1)))
+""",
+    # The step of a copied environment (its arrays come back writable: numba compiles another signature),
+    # and the batched right-hand side and hull integrals, for one state and for rows of them.
+    """
+import copy, numpy as np, gymnasium as gym, subenv
+from subenv.dynamics import crossflow_integrals, derivatives, model_params
+from subenv.dynamics.free_surface import suction
+env = copy.deepcopy(gym.make("subenv/DivePlane-v0"))
+env.reset(seed=0); env.step(np.zeros(1, dtype=np.float32))
+params, x = model_params(subenv.load_vehicle("suboff")), np.linspace(-1.0, 1.0, 7)
+derivatives(np.zeros(4), 1.0, 0.0, 0.0, params)
+derivatives(np.stack([0.1 * x, 0.05 * x, 0.01 * x, 10 + x], axis=-1), 1.2, 0.05 * x, -0.02, params)
+crossflow_integrals(params.hull, 0.05 * x, 0.01 * x)
+suction(params.hull, 0.1 * x, 1.0 + 0.2 * x, 1.0, 1000.0)
+""",
+)
+
+
+def pytest_sessionstart(session: pytest.Session) -> None:
+    # (before pytest-xdist's own, which starts the workers: it is trylast)
+    config = session.config
+    if config.getoption("numprocesses", None) and not config.option.collectonly:
+        # (Their stderr is the session's: where they compile, subenv says so there, once each.)
+        processes = [subprocess.Popen([sys.executable, "-c", program]) for program in _WARM_UP]
+        for process in processes:  # (one that fails leaves the compiling to the tests, which report why)
+            process.wait()
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
