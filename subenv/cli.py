@@ -1,7 +1,9 @@
 """The ``subenv`` command line: the submarine depth-control benchmark's commands.
 
-``subenv evaluate`` (the main job) compares the installed controllers on a suite of scenarios; ``subenv sweep``
-runs them over a grid of the physics' parameters on Ray (:mod:`subenv.sweep`);
+``subenv evaluate`` (the main job) compares the installed controllers on a suite of scenarios;
+``subenv sweep`` runs them over a grid of the physics' parameters on Ray (:mod:`subenv.sweep`);
+``subenv analyze`` recomputes Riedel (1993)'s published numbers and the findings beyond them
+(:mod:`subenv.analysis.report`);
 ``subenv demo`` flies the thesis's pole-placement design (Riedel 1993 Ch. II.B, computed here from
 the linear model) once above and once below the critical speed, prints a summary and writes a plot.
 The command line is the composition root: it finds the controllers through their entry points
@@ -14,6 +16,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import importlib.util
+import json
 import math
 import sys
 import time
@@ -37,6 +40,8 @@ from subenv.vehicles import available_vehicles
 
 @dataclass
 class Run:
+    """One episode of ``subenv demo``: its speed, traces and end."""
+
     label: str
     speed_mps: float
     times: np.ndarray
@@ -101,6 +106,7 @@ def _write_plot(runs: Sequence[Run], ucr: float, path: Path) -> None:
 
 
 def demo(args: argparse.Namespace) -> int:
+    """``subenv demo``: the thesis controller above and below the critical speed."""
     env = gym.make(args.env)
     ucr = critical_speed(env.unwrapped.base_vehicle)  # type: ignore[attr-defined]
     env.close()
@@ -134,7 +140,8 @@ def demo(args: argparse.Namespace) -> int:
 
 
 def analyze(args: argparse.Namespace) -> int:
-    from subenv.analysis.report import write_report
+    """``subenv analyze``: :func:`subenv.analysis.report.write_findings`, and its tables printed."""
+    from subenv.analysis import report
     from subenv.atomic import OutputDirError
     from subenv.vehicles import load_vehicle
 
@@ -142,13 +149,39 @@ def analyze(args: argparse.Namespace) -> int:
         vehicle = load_vehicle(args.vehicle)
     except (ValueError, OSError) as exc:
         raise SystemExit(f"subenv analyze: --vehicle {args.vehicle!r}: {exc}") from None
-    require("plot", "the report's figures", "matplotlib")
     try:
-        out = write_report(args.out, vehicle, overwrite=args.force)
+        found = report.write_findings(args.out, vehicle, overwrite=args.force)
     except (FileExistsError, OutputDirError) as exc:
         raise SystemExit(f"subenv analyze: --out: {exc}") from None
-    print((out / "report.md").read_text().split("## Figures")[0].rstrip())
-    print(f"\nreport written to {out}/report.md with {len(list(out.glob('*.png')))} figures")
+    header: tuple[str, ...]
+    cells: list[tuple[str, ...]]
+    if found.suboff_shape:
+        print(f"Riedel (1993)'s published numbers, recomputed for {found.vehicle}:\n")
+        header = ("quantity", "thesis value", "computed value", "difference", "unit", "note")
+        cells = [
+            (r.quantity, f"{r.thesis:.5g}", f"{r.computed:.5g}", f"{r.difference:+.3g}", r.unit, r.note)
+            for r in found.published
+        ]
+    else:
+        print(f"The critical speed and saturation of {found.vehicle} (the thesis studied SUBOFF):\n")
+        header = ("quantity", "value", "unit", "note")
+        cells = [(r.quantity, f"{r.computed:.5g}", r.unit, r.note) for r in found.numbers]
+    for row in (header, ("---",) * len(header), *cells):
+        print("| " + " | ".join(row) + " |")
+    hopf = found.hopf.point
+    print(
+        f"\nPlanes held at zero, level flight loses stability at u_H = {hopf.speed_mps:.4f} m/s "
+        f"({hopf.speed_mps / critical_speed(vehicle):.3f} u_cr; period {hopf.period_s:.1f} s, "
+        f"{hopf.criticality})"
+    )
+    near = found.surface.critical[0]
+    print(
+        f"Near the free surface the critical speed falls: {100 * near.shift:+.1f} % at {near.depth_m:.3g} m"
+    )
+    print(
+        f"\nfindings written to {Path(args.out) / report.REPORT_FILE}; the report with its figures is the "
+        "documentation's Reproduction page"
+    )
     return 0
 
 
@@ -205,8 +238,8 @@ def _installed_controllers(requested: Sequence[str] | None) -> None:
 
 
 def _note_other_vehicle(vehicle_name: str, controllers: Sequence[str] | None) -> None:
-    """On a vehicle of another length the comparison is Froude-scaled, but the agents are not; on one without bow
-    planes the controllers that move them are left out of the default comparison."""
+    """On a vehicle of another length the comparison is Froude-scaled, but the agents are not; on one
+    without bow planes the controllers that move them are left out of the default comparison."""
     from subenv.evaluation.rollout import needs_bow_planes, resolve_controllers
     from subenv.thesis import reference_length_ratio
     from subenv.vehicles import load_vehicle
@@ -226,17 +259,18 @@ def _note_other_vehicle(vehicle_name: str, controllers: Sequence[str] | None) ->
     if ratio != 1.0:
         print(
             f"(--vehicle {vehicle_name}: the scenarios, the success criterion and the classical baselines' "
-            f"designs are Froude-scaled to its {vehicle.length_m:.4g} m (x{ratio:.4g}); the trained agents are "
-            "SUBOFF's and only run there as they were trained)",
+            f"designs are Froude-scaled to its {vehicle.length_m:.4g} m (x{ratio:.4g}); the trained agents "
+            "are SUBOFF's and only run there as they were trained)",
             file=sys.stderr,
         )
 
 
 def evaluate(args: argparse.Namespace) -> int:
+    """``subenv evaluate``: 0 when every controller ran every episode; 1 when one failed (the others'
+    results are written, and each failure is a line on stderr)."""
     from subenv.atomic import OutputDirError
     from subenv.evaluation import (
         DEFAULT_SEED,
-        DEFAULT_SUITE,
         ENTRY_POINT_GROUP,
         controller_names,
         run_comparison,
@@ -254,7 +288,6 @@ def evaluate(args: argparse.Namespace) -> int:
             f"subenv evaluate: no controllers are registered: install a package that declares some "
             f"in the {ENTRY_POINT_GROUP!r} entry-point group, or see --plugins"
         )
-    suite = DEFAULT_SUITE if args.suite is None else args.suite[0] if len(args.suite) == 1 else args.suite
     _note_other_vehicle(args.vehicle, args.controllers)
     if not args.no_plots:
         require("plot", "the plots (or pass --no-plots)", "matplotlib")
@@ -262,7 +295,7 @@ def evaluate(args: argparse.Namespace) -> int:
     try:
         comparison = run_comparison(
             args.controllers,
-            suite,
+            args.suite,  # (None: the default suite)
             args.episodes,
             out,
             overwrite=args.force,
@@ -270,6 +303,7 @@ def evaluate(args: argparse.Namespace) -> int:
             progress=not args.no_progress,
             plots=not args.no_plots,
             vehicle=args.vehicle,
+            env_kwargs=args.env_kwargs,
         )
     except (FileExistsError, OutputDirError) as exc:
         raise SystemExit(f"subenv evaluate: --out: {exc}") from None
@@ -277,19 +311,26 @@ def evaluate(args: argparse.Namespace) -> int:
         raise SystemExit(f"subenv evaluate: {exc}") from None
     print(comparison.leaderboard)
     print(
-        f"\n{len(comparison.results)} episodes in {comparison.elapsed_s:.1f} s; results in {comparison.out_dir}/"
+        f"\n{len(comparison.results)} episodes in {comparison.elapsed_s:.1f} s; "
+        f"results in {comparison.out_dir}/"
     )
-    return 0
+    # A failed controller cost the others nothing (their results are written); the run still did not do
+    # what was asked: each failure on one line, and a non-zero status.
+    for failure in comparison.failures:
+        print(f"subenv evaluate: {failure.message}", file=sys.stderr)
+    return 1 if comparison.failures else 0
 
 
 def train(argv: Sequence[str]) -> int:
-    """``subenv train ...`` is ``python -m subenv_agents.train ...`` (imported by name: the composition root)."""
+    """``subenv train ...`` is ``python -m subenv_agents.train ...`` (imported by name: the composition
+    root)."""
     require("rl", "subenv train", "stable_baselines3", "yaml")
     module = importlib.import_module("subenv_agents.train")
     return int(module.main(list(argv)))
 
 
 def list_environments(args: argparse.Namespace) -> int:
+    """``subenv list``: every registered id and its scenario."""
     from subenv.scenarios import get_scenario, scenario_names
 
     for name in scenario_names():
@@ -327,7 +368,8 @@ def _grid_axis(text: str) -> tuple[str, tuple[float, ...]]:
 
 
 _PRINTED_POINTS = 60
-"""A sweep with more grid points x controllers than this prints one line per controller (the table is in success.md)."""
+"""A sweep with more grid points x controllers than this prints one line per controller (the table is
+in success.md)."""
 
 DEFAULT_MAPS: dict[str, list[tuple[str, tuple[float, ...]]]] = {
     "x_GB": [
@@ -344,6 +386,7 @@ DEFAULT_MAPS: dict[str, list[tuple[str, tuple[float, ...]]]] = {
 
 
 def sweep(args: argparse.Namespace) -> int:
+    """``subenv sweep``: run (or resume) the sweep, or the default maps' two; 130 when interrupted."""
     from subenv.evaluation.rollout import resolve_controllers
     from subenv.sweep import SweepSpec
     from subenv.vehicles import load_vehicle
@@ -372,25 +415,33 @@ def sweep(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise SystemExit(f"subenv sweep: {exc}") from None
     out = Path(args.out or f"results/sweep/{time.strftime('%Y%m%d-%H%M%S')}")
-    for name, spec in specs.items():
-        if len(specs) > 1:
-            print(
-                f"## {name}: " + " x ".join(f"{axis} ({len(values)})" for axis, values in spec.grid),
-                flush=True,
-            )
-        _sweep_one(spec, out / name if name else out, args)
+    try:
+        for name, spec in specs.items():
+            if len(specs) > 1:
+                print(
+                    f"## {name}: " + " x ".join(f"{axis} ({len(values)})" for axis, values in spec.grid),
+                    flush=True,
+                )
+            _sweep_one(spec, out / name if name else out, args)
+    except KeyboardInterrupt:  # (Ray is stopped by then; the finished chunks are on disk)
+        print(
+            f"subenv sweep: interrupted; the same command resumes it from the finished chunks in {out}",
+            file=sys.stderr,
+        )
+        return 130  # (128 + SIGINT, as a shell reports a command ended by Ctrl-C)
     return 0
 
 
 def _sweep_one(spec: Any, out: Path, args: argparse.Namespace) -> None:
     """Run (or resume) one sweep, print its success per grid point, draw its maps."""
+    from subenv.atomic import OutputDirError
     from subenv.sweep import run_sweep
 
     try:
         path = run_sweep(
             spec, out, address=args.address, num_cpus=args.num_cpus, progress=not args.no_progress
         )
-    except FileExistsError as exc:
+    except (FileExistsError, OutputDirError) as exc:
         raise SystemExit(f"subenv sweep: --out: {exc}") from None
     import pyarrow.parquet as pq
 
@@ -443,6 +494,20 @@ def _names(text: str) -> list[str]:
     return names
 
 
+def _json_object(text: str) -> dict[str, Any]:
+    """A JSON object (``--env-kwargs``); argparse reports a ValueError's type as the usage error."""
+    try:
+        value = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise argparse.ArgumentTypeError(f"invalid value {text!r}: not JSON ({exc.msg})") from None
+    if not isinstance(value, dict):
+        raise argparse.ArgumentTypeError(
+            f"invalid value {text!r}: must be a JSON object of the environment's arguments, e.g. "
+            "'{\"plane_rate_limit_radps\": 0.05}'"
+        )
+    return value
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="subenv",
@@ -492,6 +557,14 @@ def _parser() -> argparse.ArgumentParser:
         help="vehicle name or file (default: %(default)s); the scenarios are Froude-scaled to "
         "its length (shipped: " + ", ".join(available_vehicles()) + ")",
     )
+    p_eval.add_argument(
+        "--env-kwargs",
+        type=_json_object,
+        metavar="JSON",
+        help="the environments' other arguments, a JSON object, e.g. '{\"plane_rate_limit_radps\": 0.05}' "
+        "(checked by the environment before anything runs; recorded in run.json; a controller that takes "
+        "them, such as mpc, is told them: name it <name>:uninformed to run it untold)",
+    )
     p_eval.add_argument("--list", action="store_true", help="list the controllers and suites, and exit")
     p_demo = sub.add_parser("demo", help="fly the thesis controller above and below the critical speed")
     p_demo.add_argument("--env", default="subenv/Nominal-v0", help="environment id (default: %(default)s)")
@@ -511,9 +584,9 @@ def _parser() -> argparse.ArgumentParser:
         "--out", type=_path, default="results/demo.png", help="plot file (default: %(default)s)"
     )
     p_demo.add_argument("--no-plot", action="store_true", help="print the summary only")
-    p_analyze = sub.add_parser("analyze", help="write the report that reproduces Riedel (1993)")
+    p_analyze = sub.add_parser("analyze", help="recompute the numbers of Riedel (1993), into report.json")
     p_analyze.add_argument(
-        "--out", type=_path, default="results/analysis", help="report folder (default: %(default)s)"
+        "--out", type=_path, default="results/analysis", help="output folder (default: %(default)s)"
     )
     p_analyze.add_argument("--vehicle", default="suboff", help="vehicle name or file (default: %(default)s)")
     p_analyze.add_argument(

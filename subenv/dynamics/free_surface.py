@@ -3,7 +3,7 @@
 A hull moving at speed u below the free surface draws the water over its top faster than under its
 keel; the pressure there drops and the hull is pulled up (and pitched) towards the surface. This
 module gives that force and moment as a function of depth, pitch and speed, for
-:func:`subenv.dynamics.rhs_point`, the one right-hand side, and (batched) for the analysis.
+:func:`subenv.dynamics.model.rhs_point`, the one right-hand side, and (batched) for the analysis.
 
 The model, and where it comes from
 ----------------------------------
@@ -22,8 +22,9 @@ first-order slender-body heave force and pitch moment for the same image system 
 boundary, the sea floor). This is the model here.
 
 *The force: Lagally's theorem.* A source of strength m in an outer flow of velocity V feels the
-force -rho m V (Lagally's theorem; Newman 1977 ch. 4; Milne-Thomson 1968, *Theoretical Hydrodynamics*). The outer
-flow at the hull's sources is the image line's, so the upward force per unit length at station x is
+force -rho m V (Lagally's theorem; Newman 1977 ch. 4; Milne-Thomson 1968, *Theoretical
+Hydrodynamics*). The outer flow at the hull's sources is the image line's, so the upward force per
+unit length at station x is
 
     f(x) = rho m(x) int m(xi) (h(x) + h(xi)) / (4 pi r^3) dxi,
     r^2 = (x - xi)^2 cos^2(theta) + (h(x) + h(xi))^2,
@@ -60,32 +61,26 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Final
+from typing import Final
 
 import numpy as np
 
 from subenv import _validation as check
 from subenv._typing import ArrayLike, FloatArray
-from subenv.dynamics._jit import inline_kernel, kernel, rows
+from subenv.dynamics._jit import inline_kernel, kernel, maximum, rows
+from subenv.dynamics.hull import SOURCE_ROW, HullTable
 
 __all__ = [
     "NO_FREE_SURFACE",
-    "SOURCE_ROWS",
     "FreeSurface",
     "dipole_suction_N",
     "self_pair",
     "source_pair",
-    "source_rows",
     "station_depth",
     "suction",
     "suction_from_sums",
     "suction_point",
 ]
-
-SOURCE_ROWS: Final = 3
-"""Rows the hull table (:attr:`subenv.dynamics.HullTable.packed`) gives the hull's sources: one
-column per hull segment, where its sources are lumped, x [m], its change of cross-section S(x_aft) - S(x_fore)
-[m^2] (the segment's source strength per unit speed) and its mean radius [m]."""
 
 _FOUR_PI: Final = 4.0 * math.pi
 
@@ -113,29 +108,6 @@ NO_FREE_SURFACE: Final = FreeSurface(suction_factor=0.0)
 """Deep water: the model of Riedel (1993), with no free-surface force."""
 
 
-def source_rows(x_m: FloatArray, breadth_m: FloatArray) -> FloatArray:
-    """The hull's sources (:data:`SOURCE_ROWS` rows, one column per segment) from ascending stations
-    ``x_m`` and breadths ``breadth_m`` (circular sections of diameter b).
-
-    Each segment's sources are lumped into one of strength u (S(x_aft) - S(x_fore)), the flux the
-    segment's growth of cross-section pushes out (Newman 1977 ch. 7: m = -u dS/dx), at the centroid
-    of m over the segment: with b linear, dS/dx is proportional to b, so the centroid is that of b,
-    x_aft + dx (b_aft + 2 b_fore) / (3 (b_aft + b_fore)). The lumped sources then have the hull's
-    exact total (zero, for a closed hull) and dipole moment (-u V).
-    """
-    x = np.asarray(x_m, dtype=float)
-    b = np.asarray(breadth_m, dtype=float)
-    area = 0.25 * math.pi * b * b
-    rows = np.zeros((SOURCE_ROWS, x.size))
-    b0, b1, dx = b[:-1], b[1:], np.diff(x)
-    total = b0 + b1
-    share = np.divide(b0 + 2.0 * b1, 3.0 * total, out=np.full_like(total, 0.5), where=total > 0)
-    rows[0, :-1] = x[:-1] + dx * share
-    rows[1, :-1] = area[:-1] - area[1:]  # x ascending: segment i runs aft (x[i]) to fore (x[i+1])
-    rows[2, :-1] = 0.25 * (b[:-1] + b[1:])
-    return rows
-
-
 @inline_kernel
 def suction_point(
     theta: float, depth: float, u: float, rho_suction: float, hull: FloatArray, first_row: int
@@ -144,9 +116,10 @@ def suction_point(
     on the hull at pitch ``theta`` [rad], depth ``depth`` [m] and speed ``u`` [m/s].
 
     ``rho_suction`` is the water density times :attr:`FreeSurface.suction_factor` [kg/m^3] (0: no
-    free surface, and the force is exactly 0.0); ``hull`` holds the sources (:func:`source_rows`)
-    in rows ``first_row`` .. ``first_row + 2``. The Lagally force of the hull's sources in the flow
-    of their rigid-lid images (module docstring), summed over pairs of segments.
+    free surface, and the force is exactly 0.0); ``hull`` holds the sources
+    (:func:`subenv.dynamics.hull.source_rows`) in rows ``first_row`` .. ``first_row + 2``. The Lagally
+    force of the hull's sources in the flow of their rigid-lid images (module docstring), summed over
+    pairs of segments.
     """
     if rho_suction == 0.0:  # (deep water: the sum below would be zero, and is not computed)
         return 0.0, 0.0
@@ -175,8 +148,9 @@ def suction_point(
 # same terms over arrays of segments.
 @inline_kernel
 def station_depth(depth: float, x: float, sin_theta: float, radius: float) -> float:
-    """Depth [m] of the hull's sources at station ``x`` [m] (a station above the surface is taken at its radius)."""
-    return max(depth - x * sin_theta, radius)
+    """Depth [m] of the hull's sources at station ``x`` [m] (a station above the surface is taken at its
+    radius)."""
+    return maximum(depth - x * sin_theta, radius)
 
 
 @inline_kernel
@@ -198,7 +172,8 @@ def source_pair(xk: float, hk: float, sk: float, xm: float, hm: float, sm: float
 def suction_from_sums(
     force: float, moment: float, u: float, rho_suction: float, cos_theta: float
 ) -> tuple[float, float]:
-    """(Z_fs [N], M_fs [N m]) from the sums over the pairs (``force``: up positive; ``moment``: with x_k weights)."""
+    """(Z_fs [N], M_fs [N m]) from the sums over the pairs (``force``: up positive; ``moment``: with x_k
+    weights)."""
     scale = rho_suction * u * u / _FOUR_PI
     return -scale * force * cos_theta, scale * moment * cos_theta
 
@@ -220,7 +195,7 @@ def _suction_rows(
 
 
 def suction(
-    hull: Any, pitch_rad: ArrayLike, depth_m: ArrayLike, speed_mps: ArrayLike, rho_suction: ArrayLike
+    hull: HullTable, pitch_rad: ArrayLike, depth_m: ArrayLike, speed_mps: ArrayLike, rho_suction: ArrayLike
 ) -> tuple[FloatArray, FloatArray]:
     """:func:`suction_point` broadcast over arrays: (Z_fs [N], M_fs [N m]).
 
@@ -234,13 +209,10 @@ def suction(
         Water density times :attr:`FreeSurface.suction_factor` [kg/m^3]
         (:attr:`subenv.dynamics.ModelParams.rho_suction`).
     """
-    from subenv.dynamics.hull import SOURCE_ROW
-
     shape = np.broadcast_shapes(*(np.shape(a) for a in (pitch_rad, depth_m, speed_mps, rho_suction)))
     Z, M = np.empty(math.prod(shape)), np.empty(math.prod(shape))
-    _suction_rows(
-        *(rows(a, shape) for a in (pitch_rad, depth_m, speed_mps, rho_suction)), hull.packed, SOURCE_ROW, Z, M
-    )
+    theta, depth, u, rho = (rows(a, shape) for a in (pitch_rad, depth_m, speed_mps, rho_suction))
+    _suction_rows(theta, depth, u, rho, hull.packed, SOURCE_ROW, Z, M)
     return Z.reshape(shape), M.reshape(shape)
 
 

@@ -13,13 +13,17 @@ The integral is written once, for one state, in four steps compiled with numba (
 :mod:`subenv.dynamics._jit`): the root (:func:`crossflow_root`), its segment (:func:`hull_segment`),
 the moments there (:func:`moments_on_segment`) and the integrals from them
 (:func:`crossflow_from_moments`). :func:`crossflow_point` chains them, and the right-hand side
-(:func:`subenv.dynamics.rhs_point`) calls it; the block integrator
+(:func:`subenv.dynamics.model.rhs_point`) calls it; the block integrator
 (:func:`subenv.dynamics.integrate.control_period_lanes`) runs the same steps over a block of
 states, each as one loop. :func:`crossflow_integrals` is the batched form for NumPy callers.
+
+The hull's table (:attr:`HullTable.packed`) also holds its sources for the free surface's suction
+(:func:`source_rows`; :mod:`subenv.dynamics.free_surface` reads them there).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Final
@@ -27,11 +31,11 @@ from typing import Final
 import numpy as np
 
 from subenv._typing import FloatArray
-from subenv.dynamics._jit import inline_kernel, kernel, rows, select
-from subenv.dynamics.free_surface import SOURCE_ROWS, source_rows
+from subenv.dynamics._jit import clip, inline_kernel, kernel, rows, select
 
 __all__ = [
     "SOURCE_ROW",
+    "SOURCE_ROWS",
     "HullTable",
     "crossflow_from_moments",
     "crossflow_integrals",
@@ -40,11 +44,40 @@ __all__ = [
     "cumulative_moments_point",
     "hull_segment",
     "moments_on_segment",
+    "source_rows",
 ]
 
 
 SOURCE_ROW: Final = 7
-"""First row of the hull's sources in :attr:`HullTable.packed` (:func:`subenv.dynamics.free_surface.source_rows`)."""
+"""First row of the hull's sources in :attr:`HullTable.packed` (:func:`source_rows`)."""
+SOURCE_ROWS: Final = 3
+"""Rows the hull table (:attr:`HullTable.packed`) gives the hull's sources: one column per hull segment,
+where its sources are lumped, x [m], its change of cross-section S(x_aft) - S(x_fore) [m^2] (the
+segment's source strength per unit speed) and its mean radius [m]."""
+
+
+def source_rows(x_m: FloatArray, breadth_m: FloatArray) -> FloatArray:
+    """The hull's sources (:data:`SOURCE_ROWS` rows, one column per segment) from ascending stations
+    ``x_m`` and breadths ``breadth_m`` (circular sections of diameter b), for the free surface's suction
+    (:func:`subenv.dynamics.free_surface.suction_point`, which reads them from :attr:`HullTable.packed`).
+
+    Each segment's sources are lumped into one of strength u (S(x_aft) - S(x_fore)), the flux the
+    segment's growth of cross-section pushes out (Newman 1977 ch. 7: m = -u dS/dx), at the centroid
+    of m over the segment: with b linear, dS/dx is proportional to b, so the centroid is that of b,
+    x_aft + dx (b_aft + 2 b_fore) / (3 (b_aft + b_fore)). The lumped sources then have the hull's
+    exact total (zero, for a closed hull) and dipole moment (-u V).
+    """
+    x = np.asarray(x_m, dtype=float)
+    b = np.asarray(breadth_m, dtype=float)
+    area = 0.25 * math.pi * b * b
+    sources = np.zeros((SOURCE_ROWS, x.size))
+    b0, b1, dx = b[:-1], b[1:], np.diff(x)
+    total = b0 + b1
+    share = np.divide(b0 + 2.0 * b1, 3.0 * total, out=np.full_like(total, 0.5), where=total > 0)
+    sources[0, :-1] = x[:-1] + dx * share
+    sources[1, :-1] = area[:-1] - area[1:]  # x ascending: segment i runs aft (x[i]) to fore (x[i+1])
+    sources[2, :-1] = 0.25 * (b[:-1] + b[1:])
+    return sources
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,7 +116,7 @@ class HullTable:
 
         Row 0 is ``x``; rows 1 and 2 are ``c0`` and ``c1``; rows 3-6 are ``offset[k]`` with
         ``total[k]`` in the last column; rows 7-9 (:data:`SOURCE_ROW` on) the hull's sources for the
-        free-surface suction (:func:`subenv.dynamics.free_surface.source_rows`).
+        free-surface suction (:func:`source_rows`).
         """
         n = self.x.size
         packed = np.zeros((SOURCE_ROW + SOURCE_ROWS, n))
@@ -137,7 +170,7 @@ def moments_on_segment(
 def cumulative_moments_point(s: float, hull: FloatArray) -> tuple[float, float, float, float]:
     """C_0..C_3 at one position ``s`` [m] (clipped to the hull); ``hull`` is :attr:`HullTable.packed`."""
     n_seg = hull.shape[1] - 1
-    s = select(s == s, min(max(s, hull[0, 0]), hull[0, n_seg]), s)
+    s = select(s == s, clip(s, hull[0, 0], hull[0, n_seg]), s)
     i = hull_segment(s, hull)
     return moments_on_segment(s, hull[1, i], hull[2, i], hull[3, i], hull[4, i], hull[5, i], hull[6, i])
 
@@ -150,7 +183,7 @@ def crossflow_root(w: float, q: float, hull: FloatArray) -> float:
     # (w / 1.0 where q == 0, unused: no division by zero, which raises in a caller compiled with numba's
     # default error model, and whose inf would poison JAX's gradients through the select)
     root = select(q != 0, w / select(q != 0, q, 1.0), select(w >= 0, hi, lo))
-    return select(root == root, min(max(root, lo), hi), root)
+    return select(root == root, clip(root, lo, hi), root)
 
 
 @inline_kernel
@@ -170,7 +203,8 @@ def crossflow_from_moments(
 
 @inline_kernel
 def crossflow_point(w: float, q: float, hull: FloatArray) -> tuple[float, float]:
-    """Exact I_0, I_1 (see :func:`crossflow_integrals`) for one (w, q); ``hull`` is :attr:`HullTable.packed`."""
+    """Exact I_0, I_1 (see :func:`crossflow_integrals`) for one (w, q); ``hull`` is
+    :attr:`HullTable.packed`."""
     s = crossflow_root(w, q, hull)
     C0, C1, C2, C3 = cumulative_moments_point(s, hull)
     return crossflow_from_moments(w, q, C0, C1, C2, C3, hull)

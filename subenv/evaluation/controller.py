@@ -13,6 +13,14 @@ a controller without the batch methods is run one episode at a time. :class:`Sin
 gives a batch controller its single-episode ``reset`` and ``act``, so that there is one copy of
 the control law.
 
+A controller may also be told the environment's settings (:class:`InformedController`: an ``inform``
+method). The harness calls it before the episodes of each scenario with that scenario's settings (the
+planes' rate limit, the pitch limit, the control period, ...:
+:func:`subenv.evaluation.environments.env_settings`), so that a controller that designs for the limits
+(the MPC) meets the environment it runs in; a controller without the method is not told, and
+:func:`uninformed` runs one that has it without telling it. Whether a controller was told is in its
+results (``informed``) and its leaderboard row.
+
 Controllers come from other packages, never from ``subenv`` itself (which imports none of them):
 
 - an installed package declares each of its controllers in the ``subenv.controllers`` entry-point
@@ -42,13 +50,18 @@ __all__ = [
     "ENTRY_POINT_GROUP",
     "BatchController",
     "Controller",
+    "UNINFORMED_SUFFIX",
     "ControllerFactory",
+    "InformedController",
     "SingleRowMixin",
+    "Uninformed",
     "check_batch",
     "controller_names",
     "discover_controllers",
+    "informed",
     "make_controller",
     "register_controller",
+    "uninformed",
 ]
 
 ControlMode = Literal["dual", "independent"]
@@ -95,7 +108,8 @@ class BatchController(Controller, Protocol):
     """
 
     def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
-        """Start ``len(infos)`` episodes: ``infos[i]`` is episode i's reset ``info`` (as ``reset`` gets it)."""
+        """Start ``len(infos)`` episodes: ``infos[i]`` is episode i's reset ``info`` (as ``reset`` gets
+        it)."""
         ...
 
     def act_batch(self, observations: np.ndarray) -> np.ndarray:
@@ -104,13 +118,74 @@ class BatchController(Controller, Protocol):
         ...
 
 
+@runtime_checkable
+class InformedController(Controller, Protocol):
+    """A :class:`Controller` that is told the environment's settings before it runs a scenario."""
+
+    def inform(self, settings: Mapping[str, Any]) -> None:
+        """Take the settings of the environment the next episodes run in: every argument of
+        :class:`~subenv.envs.DivePlaneEnv` but the scenario, vehicle, control and alpha
+        (:func:`subenv.evaluation.environments.env_settings`: ``dt``, ``substeps``,
+        ``plane_rate_limit_radps``, ``max_pitch_rad``, ``max_depth_error_m`` (None: the environment's
+        default for the vehicle), ...), each with its value there."""
+        ...
+
+
+def informed(controller: Controller) -> bool:
+    """Whether the harness tells ``controller`` the environment's settings (it has ``inform``)."""
+    return isinstance(controller, InformedController)
+
+
+UNINFORMED_SUFFIX: Final = ":uninformed"
+"""The name of a controller run without being told the settings is its own with this suffix
+(``mpc:uninformed``); :func:`~subenv.evaluation.rollout.resolve_controllers` makes one from that name."""
+
+
+class Uninformed:
+    """``controller`` as it is, but never told the environment's settings (it keeps its own defaults).
+
+    Named ``<name>:uninformed``, so that it can run beside the informed original in one comparison; it
+    acts on batches when the original does.
+    """
+
+    def __init__(self, controller: Controller) -> None:
+        self.controller = controller
+        self.name = controller.name + UNINFORMED_SUFFIX
+        self.control = controller.control
+        self.alpha = controller.alpha
+
+    def reset(self, info: Mapping[str, Any], vehicle: Vehicle) -> None:
+        """The original's ``reset``."""
+        self.controller.reset(info, vehicle)
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        """The original's ``act``."""
+        return self.controller.act(observation)
+
+    def __getattr__(self, name: str) -> Any:
+        # The batch methods are the original's where it has them (so isinstance(..., BatchController)
+        # tells the truth); never its inform.
+        if name in ("reset_batch", "act_batch"):
+            return getattr(self.controller, name)
+        raise AttributeError(name)
+
+
+def uninformed(controller: Controller) -> Uninformed:
+    """``controller`` run without being told the environment's settings (:class:`Uninformed`)."""
+    if isinstance(controller, Uninformed):
+        return controller
+    return Uninformed(controller)
+
+
 class SingleRowMixin:
     """``reset`` and ``act`` of a :class:`BatchController` as batches of one row."""
 
     def reset(self, info: Mapping[str, Any], vehicle: Vehicle) -> None:
+        """``reset_batch([info], vehicle)``."""
         self.reset_batch([info], vehicle)  # type: ignore[attr-defined]
 
     def act(self, observation: np.ndarray) -> np.ndarray:
+        """The one row of ``act_batch`` on ``observation`` as a batch of one."""
         action: np.ndarray = self.act_batch(np.asarray(observation)[None])[0]  # type: ignore[attr-defined]
         return action
 
@@ -188,10 +263,29 @@ def controller_names() -> list[str]:
 
 
 def make_controller(name: str) -> Controller:
-    """A new controller by registered name; a ValueError lists the known names."""
+    """A new controller by registered name.
+
+    The name it is registered under is its identity: the results, the tables and the replays of the
+    plots know a controller by its ``name`` attribute, so a factory whose controller calls itself
+    anything else (a plugin declared as ``liar`` making a controller named ``lqr``, which would
+    publish rows under another controller's name) is refused.
+
+    Raises
+    ------
+    ValueError
+        ``name`` is not registered (the message lists the known names), or the controller's ``name``
+        attribute is not ``name``.
+    """
     _discover_once()
     try:
         factory = _REGISTRY[name]
     except KeyError:
         raise ValueError(f"controller={name!r} is unknown: must be one of {controller_names()}") from None
-    return factory()
+    controller = factory()
+    own = getattr(controller, "name", None)
+    if own != name:
+        raise ValueError(
+            f"controller {name!r} is invalid: its name attribute is {own!r}, and must be {name!r}, the name "
+            "it is registered under (results are published by name)"
+        )
+    return controller
