@@ -135,7 +135,10 @@ def stack_params(params: list[ModelParams]) -> ModelParams:
 
 
 def pack_params(params: ModelParams) -> FloatArray:
-    """The numeric fields of ``params`` as one array, shape ``(..., len(PARAM_FIELDS))``, for :func:`rhs_point`."""
+    """The numeric fields of ``params`` as one array, shape ``(..., len(PARAM_FIELDS))``.
+
+    The array is the ``prm`` argument of :func:`rhs_point`.
+    """
     fields = params[: len(PARAM_FIELDS)]
     if not any(isinstance(f, np.ndarray) for f in fields):
         return np.array(fields, dtype=float)
@@ -336,9 +339,14 @@ def derivatives(
     )
     states = rows(state, (*shape, 4)).reshape(-1, 4)
     out = np.empty((states.shape[0], 4))
+    speeds, sterns, bows, forces, moments = (rows(a, shape) for a in (speed, stern, bow, force, moment))
     _derivatives_rows(
         states,
-        *(rows(a, shape) for a in (speed, stern, bow, force, moment)),
+        speeds,
+        sterns,
+        bows,
+        forces,
+        moments,
         rows(prm, (*shape, prm.shape[-1])).reshape(-1, prm.shape[-1]),
         params.hull.packed,
         out,

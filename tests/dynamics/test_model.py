@@ -24,7 +24,7 @@ def test_batched_equals_one_at_a_time(suboff):
     stern, bow = rng.uniform(-0.4, 0.4, n), rng.uniform(-0.4, 0.4, n)
     vehicles = [
         suboff.variant(x_GB_m=float(x), excess_buoyancy_N=float(e), crossflow_drag=float(c))
-        for x, e, c in zip(rng.normal(0, 2e-3, n), rng.normal(0, 3, n), rng.uniform(0, 0.6, n))
+        for x, e, c in zip(rng.normal(0, 2e-3, n), rng.normal(0, 3, n), rng.uniform(0, 0.6, n), strict=True)
     ]
     batch = derivatives(states, speeds, stern, bow, stack_params([model_params(v) for v in vehicles]))
     for i, v in enumerate(vehicles):
