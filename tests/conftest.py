@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 import pytest
+from hypothesis import settings
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")  # pygame renders headless in tests
 os.environ.setdefault("MPLBACKEND", "Agg")
@@ -24,6 +25,13 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ["NUMBA_NUM_THREADS"] = str(
     max(2, int(os.environ.get("NUMBA_NUM_THREADS", "0") or 0), os.cpu_count() or 1)
 )
+
+# The property tests draw the same examples on every run and machine (from a seed made of each test's source,
+# so an edit of a test may draw others: keep a failure it found as an @example), keep no database of earlier
+# failures between runs, and set no time limit per example, which a busy machine would break. Explore with
+# fresh random examples by pytest --hypothesis-profile=default (Hypothesis' own settings).
+settings.register_profile("ci", derandomize=True, database=None, deadline=None)
+settings.load_profile("ci")
 
 _MEASURED: list[tuple[str, str]] = []
 
@@ -83,7 +91,9 @@ suction(params.hull, 0.1 * x, 1.0 + 0.2 * x, 1.0, 1000.0)
 def pytest_sessionstart(session: pytest.Session) -> None:
     # (before pytest-xdist's own, which starts the workers: it is trylast)
     config = session.config
-    if config.getoption("numprocesses", None) and not config.option.collectonly:
+    # (Only where there are kernels to compile: not in the projects that tests/test_conftest.py makes.)
+    checkout = (config.rootpath / "subenv" / "dynamics").is_dir()
+    if checkout and config.getoption("numprocesses", None) and not config.option.collectonly:
         # (Their stderr is the session's: where they compile, subenv says so there, once each.)
         processes = [subprocess.Popen([sys.executable, "-c", program]) for program in _WARM_UP]
         for process in processes:  # (one that fails leaves the compiling to the tests, which report why)
@@ -187,15 +197,14 @@ class AnalysisReport(NamedTuple):
 def analysis_report(tmp_path_factory: pytest.TempPathFactory) -> AnalysisReport:
     """The reproduction report of Riedel (1993), written once per session (tens of seconds).
 
-    ``subenv analyze --out <folder>`` writes it: the command calls ``write_report(folder,
-    load_vehicle("suboff"))``, so the tests of ``write_report`` (tests/analysis) and of the command
+    ``subenv analyze --out <folder>`` writes it: the command calls ``write_findings(folder,
+    load_vehicle("suboff"))``, so the tests of ``write_findings`` (tests/analysis) and of the command
     (tests/test_cli.py) share this one folder. Its parent holds nothing else. Tests read it and must
     not change it; one that needs an existing report to replace works on a copy.
 
     The Hopf findings the report computes (``hopf_findings(vehicle)``, half of its time) are kept as they
     were returned, for tests/analysis/test_hopf.py, which would otherwise compute them again.
     """
-    pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")  # (the report's figures)
     import subenv.analysis.report
     from subenv import load_vehicle
     from subenv.cli import main

@@ -234,7 +234,15 @@ def test_an_empty_out_folder_is_accepted(tmp_path: Path, monkeypatch, command, f
     monkeypatch.setattr(subenv.analysis.report, "reproduce_numbers", started)
     (tmp_path / "empty").mkdir()
     with pytest.raises(_WorkStarted):
-        main([*command, "--out", str(tmp_path / "empty"), *force])
+        main(
+            [
+                *command,
+                "--out",
+                str(tmp_path / "empty"),
+                *force,
+                *(["--no-plots"] if command == EVALUATE else []),
+            ]
+        )
     assert [p.name for p in tmp_path.iterdir()] == ["empty"] and not any((tmp_path / "empty").iterdir())
 
 
@@ -358,13 +366,7 @@ _WORDS = st.sampled_from(
 )
 
 
-@settings(
-    max_examples=60,
-    deadline=None,
-    derandomize=True,
-    database=None,
-    suppress_health_check=[HealthCheck.function_scoped_fixture],
-)
+@settings(max_examples=60, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(
     options=st.lists(
         st.tuples(
@@ -509,7 +511,7 @@ def test_evaluate_takes_a_vehicle_and_says_what_is_not_scaled(tmp_path: Path, ca
 )
 def test_evaluate_refuses_bad_env_kwargs_in_one_line_before_any_work(tmp_path: Path, no_work, value, message):
     with pytest.raises(SystemExit) as exit_:
-        main([*EVALUATE, "--env-kwargs", value, "--out", str(tmp_path / "out")])
+        main([*EVALUATE, "--no-plots", "--env-kwargs", value, "--out", str(tmp_path / "out")])
     assert str(exit_.value.code).startswith(message) and "\n" not in str(exit_.value.code)
     assert not (tmp_path / "out").exists()
 
@@ -525,6 +527,7 @@ def test_evaluate_env_kwargs_must_be_a_json_object(tmp_path: Path, capsys, no_wo
 
 
 def test_evaluate_passes_env_kwargs_to_the_environments_and_records_them(tmp_path: Path) -> None:
+    pytest.importorskip("daqp", reason="the 'mpc' extra is not installed")
     out = tmp_path / "out"
     settings = '{"plane_rate_limit_radps": 0.05, "max_pitch_rad": 0.4}'
     assert (
