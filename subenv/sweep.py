@@ -252,7 +252,8 @@ def run_sweep(
         Chunks done, and the time left, on stderr.
 
     Returns the path of ``results.parquet``. Raises ``FileExistsError`` if ``out_dir`` is a file or
-    holds another sweep (its ``sweep.json`` differs), ``OutputDirError`` if it cannot be created.
+    holds another sweep (its ``sweep.json`` differs) or files that are no sweep's (no ``sweep.json``),
+    ``OutputDirError`` if it cannot be created.
     """
     require("ray", "subenv sweep", "ray", "pyarrow")
     import ray
@@ -267,6 +268,12 @@ def run_sweep(
     if stored.exists() and stored.read_text() != wanted:
         raise FileExistsError(
             f"{str(out)!r} holds another sweep (its {_SPEC_FILE} differs): choose another folder"
+        )
+    if out.is_dir() and not stored.exists() and any(out.iterdir()):
+        # (a sweep writes its sweep.json first: a folder with files and without one is not a sweep's)
+        raise FileExistsError(
+            f"output folder {str(out)!r} holds files and no {_SPEC_FILE}: it is not a sweep's to resume; "
+            "choose an empty or new folder"
         )
     try:
         (out / _CHUNKS_DIR).mkdir(parents=True, exist_ok=True)

@@ -38,7 +38,8 @@ def test_the_readme_has_its_examples() -> None:
 
 
 def test_every_python_block_of_the_readme_runs(tmp_path, monkeypatch, capsys) -> None:
-    pytest.importorskip("stable_baselines3")  # (the agents' and SB3's blocks need the "rl" extra)
+    # (the agents' and SB3's blocks)
+    pytest.importorskip("stable_baselines3", reason="the 'rl' extra is not installed")
     monkeypatch.chdir(tmp_path)
     monkeypatch.syspath_prepend(str(tmp_path))
     # What the file registers on import is this test's only.

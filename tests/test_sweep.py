@@ -16,7 +16,7 @@ from subenv.scenarios import get_scenario
 from subenv.sweep import Chunk, SweepSpec, run_sweep
 
 ray = pytest.importorskip("ray", reason="the 'ray' extra is not installed")
-pq = pytest.importorskip("pyarrow.parquet")
+pq = pytest.importorskip("pyarrow.parquet", reason="the 'ray' extra is not installed")
 
 SPEC = SweepSpec(
     controllers=("lqr", "thesis"),
@@ -207,7 +207,7 @@ def test_the_command_line_sweeps_a_grid_and_prints_success_per_point(local_ray, 
 
 
 def test_performance_maps_are_drawn_from_a_two_axis_sweep(local_ray, tmp_path) -> None:  # type: ignore[no-untyped-def]
-    pytest.importorskip("matplotlib")
+    pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")
     from subenv.sweep import plot_performance_maps
 
     spec = SweepSpec(
@@ -221,3 +221,15 @@ def test_performance_maps_are_drawn_from_a_two_axis_sweep(local_ray, tmp_path) -
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     with pytest.raises(ValueError, match="needs grid_speed_ratio and one other grid axis"):
         plot_performance_maps(run_sweep(SPEC, tmp_path / "one-axis", progress=False), tmp_path / "no.png")
+
+
+def test_a_folder_of_other_files_is_refused_and_left_as_it_was(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    out = tmp_path / "mine"
+    out.mkdir()
+    (out / "notes.txt").write_text("mine")
+    spec = SweepSpec(controllers=("lqr",), scenarios=("LowSpeed",), grid=(), episodes=2)
+    with pytest.raises(
+        FileExistsError, match=r"holds files and no sweep\.json: it is not a sweep's to resume"
+    ):
+        run_sweep(spec, out, progress=False)
+    assert sorted(p.name for p in out.iterdir()) == ["notes.txt"]
