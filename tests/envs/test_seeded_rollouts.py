@@ -30,6 +30,8 @@ DIGESTS = {
     "subenv/Mixed-v0": "6d5dcd26c5f265b6",
     "subenv/PeriscopeDepth-v1": "3aa630265a7c8a5f",
     "subenv/PeriscopeDepthWaves-v0": "1e534e3e9bfb06ca",
+    "subenv/PeriscopeDepth-v2": "468daf294db3b53d",
+    "subenv/PeriscopeDepthWaves-v1": "83b8e7075b56cc12",
 }
 
 

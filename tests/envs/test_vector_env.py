@@ -169,6 +169,8 @@ _BATCH_READY = (
     "SpeedTransient",
     "PeriscopeDepth-v1",
     "PeriscopeDepthWaves",
+    "PeriscopeDepth-v2",
+    "PeriscopeDepthWaves-v1",
 )
 
 
