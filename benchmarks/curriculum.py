@@ -91,7 +91,7 @@ def main() -> None:
     )
     lines = [header, "|" + "---|" * (header.count("|") - 1)]
     totals: dict[bool, list[float]] = {False: [], True: []}
-    for (seed, curriculum), run in zip(jobs, runs):
+    for (seed, curriculum), run in zip(jobs, runs, strict=True):
         controller = AgentController(run, name=run.name)
         results = evaluate([controller], list(scenarios), episodes=args.episodes, progress=False)
         rows = {r["scenario"]: r for r in summarize(results)}
@@ -103,8 +103,8 @@ def main() -> None:
         lines.append(
             f"| {'with' if curriculum else 'without'} | {seed} | "
             + " | ".join(f"{100 * r:.0f}%" for r in rates)
-            + f" | {100 * np.mean(rates):.1f}% | {rms:.3f} | {record['final_stage'] if curriculum else '-'} | "
-            f"{advances} | {record['wall_time_s']:.0f} |"
+            + f" | {100 * np.mean(rates):.1f}% | {rms:.3f} | "
+            f"{record['final_stage'] if curriculum else '-'} | {advances} | {record['wall_time_s']:.0f} |"
         )
     table = "\n".join(lines)
     summary = (

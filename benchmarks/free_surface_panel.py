@@ -27,7 +27,8 @@ import math
 import numpy as np
 
 from subenv.dynamics import model_params
-from subenv.dynamics.free_surface import SOURCES_ONLY, FreeSurface, section_load, slender_points, suction
+from subenv.dynamics.free_surface import SOURCES_ONLY, FreeSurface, section_load, suction
+from subenv.dynamics.hull import slender_points
 from subenv.vehicles import load_vehicle
 
 RHO = 1000.0

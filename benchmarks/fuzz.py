@@ -164,8 +164,8 @@ def main(argv: list[str] | None = None) -> int:
     print()
     print(
         f"{totals['env_steps']:,} env-steps in {time.perf_counter() - start:.0f} s (and as many again in the "
-        f"second processes): {totals['non_finite']} non-finite outputs, {totals['outside_space']} observations "
-        f"outside the space. {'FAILED' if failed else 'All checks held.'}"
+        f"second processes): {totals['non_finite']} non-finite outputs, {totals['outside_space']} "
+        f"observations outside the space. {'FAILED' if failed else 'All checks held.'}"
     )
     return 1 if failed else 0
 

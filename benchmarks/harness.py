@@ -29,7 +29,7 @@ from pathlib import Path
 # are those its installation declares (entry points: ./dev reinstalls when pyproject.toml changes).
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
-from subenv.evaluation import EpisodeResult, controller_names, evaluate, get_suite
+from subenv.evaluation import EpisodeResult, controller_names, evaluate, get_suite  # noqa: E402 (after sys.path)
 
 
 def timed(
@@ -48,7 +48,9 @@ def _nan(value: object) -> bool:
 
 def same(a: EpisodeResult, b: EpisodeResult) -> bool:
     """Equal results, metrics included (NaN equal to NaN)."""
-    return all(x == y or (_nan(x) and _nan(y)) for x, y in zip(a.row().values(), b.row().values()))
+    return all(
+        x == y or (_nan(x) and _nan(y)) for x, y in zip(a.row().values(), b.row().values(), strict=True)
+    )
 
 
 def main() -> None:
@@ -73,11 +75,12 @@ def main() -> None:
     print(f"warm-up (loads or compiles the compiled physics): {time.perf_counter() - warm_start:.1f} s\n")
 
     print(
-        f"default suite, {len(scenarios)} scenarios; batched: {args.episodes} episodes per scenario; one at a "
-        f"time: the first {args.single_episodes}\n"
+        f"default suite, {len(scenarios)} scenarios; batched: {args.episodes} episodes per scenario; one at "
+        f"a time: the first {args.single_episodes}\n"
     )
     print(
-        "| controller | one at a time, episodes/s | batched, episodes/s | ratio | equal results on shared episodes |"
+        "| controller | one at a time, episodes/s | batched, episodes/s | ratio "
+        "| equal results on shared episodes |"
     )
     print("|---|---:|---:|---:|---|")
     totals = [0.0, 0, 0.0, 0]  # single seconds, episodes; batched seconds, episodes
@@ -97,7 +100,8 @@ def main() -> None:
         )
     single_rate, batched_rate = totals[1] / totals[0], totals[3] / totals[2]
     print(
-        f"| all (time-weighted) | {single_rate:.1f} | {batched_rate:.1f} | **{batched_rate / single_rate:.1f}x** | |"
+        f"| all (time-weighted) | {single_rate:.1f} | {batched_rate:.1f} "
+        f"| **{batched_rate / single_rate:.1f}x** | |"
     )
     default_episodes = len(names) * len(scenarios) * get_suite("default").episodes
     print(

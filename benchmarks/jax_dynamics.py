@@ -34,7 +34,8 @@ from subenv.dynamics.model import pack_params
 
 
 def best_of_three(run: Callable[[], object], items: int, seconds: float) -> float:
-    """The best rate of three runs of ``seconds`` each: ``items`` per call of ``run`` (after one call to warm up)."""
+    """The best rate of three runs of ``seconds`` each: ``items`` per call of ``run`` (after one call to
+    warm up)."""
     run()
     best = 0.0
     for _ in range(3):

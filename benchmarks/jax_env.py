@@ -101,7 +101,8 @@ def main() -> None:
         default = vector_rate(env_id, n, args.seconds, threads=None)
         rate, compile_s = jax_rate(env_id, n, args.scan, args.seconds)
         print(
-            f"| {env_id} | {one:,.0f} | {default:,.0f} | {rate:,.0f} | {rate / default:.3f} | {compile_s:.1f} |",
+            f"| {env_id} | {one:,.0f} | {default:,.0f} | {rate:,.0f} | {rate / default:.3f} "
+            f"| {compile_s:.1f} |",
             flush=True,
         )
 

@@ -119,7 +119,8 @@ def main() -> None:
     train = json.loads((folder / "train.json").read_text())
     stored = json.loads((folder / "evaluation.json").read_text())["suite"]["ppo"]
     print(
-        f"| SB3 PPO, this run | {sb3_steps:,} | {sb3_steps / sb3:.0f} | {sb3:,.0f} | (not evaluated: a rate only) |"
+        f"| SB3 PPO, this run | {sb3_steps:,} | {sb3_steps / sb3:.0f} | {sb3:,.0f} "
+        "| (not evaluated: a rate only) |"
     )
     print(
         f"| SB3 PPO, shipped `ppo` (its record) | {train['timesteps']:,} (its last run) | "

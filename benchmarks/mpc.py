@@ -21,7 +21,8 @@ from subenv_baselines.mpc import DepthMPC
 
 
 def _controller(name: str) -> Controller:
-    """The registered controller ``name``; the MPC from this checkout where the installed metadata predates it."""
+    """The registered controller ``name``; the MPC from this checkout where the installed metadata
+    predates it."""
     if name == "mpc" and name not in controller_names():
         return DepthMPC()
     return make_controller(name)

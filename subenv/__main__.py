@@ -1,3 +1,5 @@
+"""``python -m subenv``: the ``subenv`` command (:func:`subenv.cli.main`)."""
+
 import sys
 
 from subenv.cli import main

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import sys
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -17,12 +18,15 @@ __all__ = [
     "integer",
     "interval",
     "is_finite",
+    "is_integer",
     "is_number",
+    "mapping",
     "non_negative",
     "number",
     "positive",
     "real_array",
     "require",
+    "seed",
 ]
 
 
@@ -31,6 +35,11 @@ def is_number(value: Any) -> bool:
     return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(
         value, (bool, np.bool_)
     )
+
+
+def is_integer(value: Any) -> bool:
+    """An integer (Python or NumPy), not a bool."""
+    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
 
 
 def is_finite(value: Any) -> bool:
@@ -43,16 +52,20 @@ def is_finite(value: Any) -> bool:
         return False
 
 
-def require(name: str, value: Any, ok: bool, allowed: str) -> None:
+def require(name: str, value: Any, ok: bool | np.bool_, allowed: str) -> None:
     """Raise ``ValueError("{name}={value!r} is invalid: must be {allowed}")`` unless ``ok``."""
     if not ok:
         raise ValueError(f"{name}={_shown(value)} is invalid: must be {allowed}")
 
 
 def _shown(value: Any) -> str:
-    """``repr(value)``; an integer beyond the float range by its size (its repr may be thousands of digits)."""
+    """``repr(value)``; an integer beyond the float range by its size (its repr may be thousands of digits),
+    also in a list or tuple."""
     if isinstance(value, int) and not isinstance(value, bool) and abs(value) > sys.float_info.max:
         return f"<an integer of {value.bit_length()} bits>"
+    if type(value) in (list, tuple):
+        shown = ", ".join(_shown(v) for v in value)
+        return f"[{shown}]" if isinstance(value, list) else f"({shown}{',' if len(value) == 1 else ''})"
     return repr(value)
 
 
@@ -84,14 +97,26 @@ def non_negative(name: str, value: Any) -> float:
 
 def integer(name: str, value: Any, low: int, high: int | None = None) -> int:
     """An integer (Python or NumPy, not a bool) in [low, high]."""
-    ok = (
-        isinstance(value, (int, np.integer))
-        and not isinstance(value, (bool, np.bool_))
-        and low <= value
-        and (high is None or value <= high)
-    )
+    ok = is_integer(value) and low <= value and (high is None or value <= high)
     require(name, value, ok, f"an integer in [{low}, {high}]" if high is not None else f"an integer >= {low}")
     return int(value)
+
+
+def seed(name: str, value: Any) -> int | None:
+    """A seed of ``reset(seed=...)``: None, or an integer >= 0 (Python or NumPy, not a bool) as a Python int.
+
+    Gymnasium's ``np_random`` takes only a Python int >= 0 (it raises ``gymnasium.error.Error`` for a NumPy
+    integer and a negative one; a bool it takes as 0 or 1): the environments give it this one, so that
+    ``np.int64(3)`` draws what ``3`` draws.
+    """
+    require(name, value, value is None or (is_integer(value) and value >= 0), "None or an integer >= 0")
+    return None if value is None else int(value)
+
+
+def mapping(name: str, value: Any) -> dict[str, Any]:
+    """None (empty) or a mapping (a dict), as a new dict: ``reset(options=...)``."""
+    require(name, value, value is None or isinstance(value, Mapping), "None or a dict")
+    return dict(value) if value is not None else {}
 
 
 def interval(name: str, value: Any, low: float = -math.inf, high: float = math.inf) -> tuple[float, float]:

@@ -205,8 +205,8 @@ def _installed_controllers(requested: Sequence[str] | None) -> None:
 
 
 def _note_other_vehicle(vehicle_name: str, controllers: Sequence[str] | None) -> None:
-    """On a vehicle of another length the comparison is Froude-scaled, but the agents are not; on one without bow
-    planes the controllers that move them are left out of the default comparison."""
+    """On a vehicle of another length the comparison is Froude-scaled, but the agents are not; on one
+    without bow planes the controllers that move them are left out of the default comparison."""
     from subenv.evaluation.rollout import needs_bow_planes, resolve_controllers
     from subenv.thesis import reference_length_ratio
     from subenv.vehicles import load_vehicle
@@ -226,13 +226,15 @@ def _note_other_vehicle(vehicle_name: str, controllers: Sequence[str] | None) ->
     if ratio != 1.0:
         print(
             f"(--vehicle {vehicle_name}: the scenarios, the success criterion and the classical baselines' "
-            f"designs are Froude-scaled to its {vehicle.length_m:.4g} m (x{ratio:.4g}); the trained agents are "
-            "SUBOFF's and only run there as they were trained)",
+            f"designs are Froude-scaled to its {vehicle.length_m:.4g} m (x{ratio:.4g}); the trained agents "
+            "are SUBOFF's and only run there as they were trained)",
             file=sys.stderr,
         )
 
 
 def evaluate(args: argparse.Namespace) -> int:
+    """``subenv evaluate``: 0 when every controller ran every episode; 1 when one failed (the others'
+    results are written, and each failure is a line on stderr)."""
     from subenv.atomic import OutputDirError
     from subenv.evaluation import (
         DEFAULT_SEED,
@@ -277,9 +279,14 @@ def evaluate(args: argparse.Namespace) -> int:
         raise SystemExit(f"subenv evaluate: {exc}") from None
     print(comparison.leaderboard)
     print(
-        f"\n{len(comparison.results)} episodes in {comparison.elapsed_s:.1f} s; results in {comparison.out_dir}/"
+        f"\n{len(comparison.results)} episodes in {comparison.elapsed_s:.1f} s; "
+        f"results in {comparison.out_dir}/"
     )
-    return 0
+    # A failed controller cost the others nothing (their results are written); the run still did not do
+    # what was asked: each failure on one line, and a non-zero status.
+    for failure in comparison.failures:
+        print(f"subenv evaluate: {failure.message}", file=sys.stderr)
+    return 1 if comparison.failures else 0
 
 
 def train(argv: Sequence[str]) -> int:
@@ -327,7 +334,8 @@ def _grid_axis(text: str) -> tuple[str, tuple[float, ...]]:
 
 
 _PRINTED_POINTS = 60
-"""A sweep with more grid points x controllers than this prints one line per controller (the table is in success.md)."""
+"""A sweep with more grid points x controllers than this prints one line per controller (the table is
+in success.md)."""
 
 DEFAULT_MAPS: dict[str, list[tuple[str, tuple[float, ...]]]] = {
     "x_GB": [
@@ -344,6 +352,7 @@ DEFAULT_MAPS: dict[str, list[tuple[str, tuple[float, ...]]]] = {
 
 
 def sweep(args: argparse.Namespace) -> int:
+    """``subenv sweep``: run (or resume) the sweep, or the default maps' two; 130 when interrupted."""
     from subenv.evaluation.rollout import resolve_controllers
     from subenv.sweep import SweepSpec
     from subenv.vehicles import load_vehicle
@@ -372,25 +381,33 @@ def sweep(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise SystemExit(f"subenv sweep: {exc}") from None
     out = Path(args.out or f"results/sweep/{time.strftime('%Y%m%d-%H%M%S')}")
-    for name, spec in specs.items():
-        if len(specs) > 1:
-            print(
-                f"## {name}: " + " x ".join(f"{axis} ({len(values)})" for axis, values in spec.grid),
-                flush=True,
-            )
-        _sweep_one(spec, out / name if name else out, args)
+    try:
+        for name, spec in specs.items():
+            if len(specs) > 1:
+                print(
+                    f"## {name}: " + " x ".join(f"{axis} ({len(values)})" for axis, values in spec.grid),
+                    flush=True,
+                )
+            _sweep_one(spec, out / name if name else out, args)
+    except KeyboardInterrupt:  # (Ray is stopped by then; the finished chunks are on disk)
+        print(
+            f"subenv sweep: interrupted; the same command resumes it from the finished chunks in {out}",
+            file=sys.stderr,
+        )
+        return 130  # (128 + SIGINT, as a shell reports a command ended by Ctrl-C)
     return 0
 
 
 def _sweep_one(spec: Any, out: Path, args: argparse.Namespace) -> None:
     """Run (or resume) one sweep, print its success per grid point, draw its maps."""
+    from subenv.atomic import OutputDirError
     from subenv.sweep import run_sweep
 
     try:
         path = run_sweep(
             spec, out, address=args.address, num_cpus=args.num_cpus, progress=not args.no_progress
         )
-    except FileExistsError as exc:
+    except (FileExistsError, OutputDirError) as exc:
         raise SystemExit(f"subenv sweep: --out: {exc}") from None
     import pyarrow.parquet as pq
 

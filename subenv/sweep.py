@@ -7,32 +7,46 @@ runs every controller on the same seeded episodes at every point, with the batch
 point, a range of seeds), run as Ray tasks: on a local Ray instance by default, on a cluster with
 ``address``. Per-episode results are those of the serial harness for the same seeds.
 
-The results folder ``out_dir``::
+The results folder ``out_dir`` (made if missing; one that holds another sweep is refused)::
 
     sweep.json          the sweep (controllers, scenarios, grid, episodes, seed, vehicle)
     chunks/<id>.parquet each finished chunk's rows, written whole (a temporary name, then a rename)
     manifest.json       the finished chunks, rewritten (atomically) after each one
-    results.parquet     every row, in grid order; written last, when every chunk is done
+    results.parquet     every row, in grid order; written as soon as every chunk is done
 
 A sweep that is interrupted (Ctrl-C, a lost driver) is resumed by running it again with the same
-arguments: finished chunks are read back, not run again; a chunk whose worker died is retried by
-Ray (``max_retries``), so no row is lost or duplicated. Needs the ``ray`` extra (Ray and pyarrow).
+arguments: finished chunks are read back, not run again; a chunk file that does not read back whole
+(truncated, damaged) is reported on stderr in one line and its chunk run again; a chunk whose worker
+died is retried by Ray (``max_retries``), so no row is lost or duplicated. Needs the ``ray`` extra
+(Ray and pyarrow).
+
+Ray's processes. A local Ray instance the sweep starts, it stops on every way out of
+:func:`run_sweep` (the end, an error, Ctrl-C; a Ctrl-C during the stop is held until Ray has
+stopped); a Ray the caller started (``ray.init`` before, or the cluster at ``address``) is left
+running. A driver killed with SIGKILL stops nothing itself: on Linux Ray binds its head processes
+(GCS server, raylet) to the driver (``PR_SET_PDEATHSIG``), so the kernel ends them with it and the
+workers exit within seconds of losing the raylet; its dashboard agent and runtime-env agent notice
+later and exit within about a minute (65 s measured here, Ray 2.60). ``ray stop`` ends them at once,
+with every other Ray instance of the same user on the machine.
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import itertools
 import json
 import math
 import os
+import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final
 
-from subenv.atomic import atomic_write_bytes, atomic_write_text
+from subenv.atomic import OutputDirError, atomic_write_bytes, atomic_write_text
+from subenv.envs._interrupts import interrupts_deferred
 from subenv.evaluation.suites import DEFAULT_SEED
 from subenv.extras import require
 from subenv.scenarios import get_scenario, scenario_names
@@ -99,7 +113,9 @@ class SweepSpec:
     def points(self) -> list[dict[str, float]]:
         """The grid's points, each parameter -> value (one empty point without a grid)."""
         names = [name for name, _ in self.grid]
-        return [dict(zip(names, values)) for values in itertools.product(*(v for _, v in self.grid))]
+        return [
+            dict(zip(names, values, strict=True)) for values in itertools.product(*(v for _, v in self.grid))
+        ]
 
     def chunks(self) -> list[Chunk]:
         """Every chunk of the sweep, in the order of the results table."""
@@ -118,6 +134,7 @@ class SweepSpec:
         ]
 
     def as_dict(self) -> dict[str, Any]:
+        """The sweep as JSON data (what ``sweep.json`` holds; the grid as parameter -> values)."""
         return {**dataclasses.asdict(self), "grid": {name: list(values) for name, values in self.grid}}
 
 
@@ -182,7 +199,36 @@ def _write_table(path: Path, rows: Sequence[Mapping[str, Any]]) -> None:
 def _read_rows(path: Path) -> list[dict[str, Any]]:
     import pyarrow.parquet as pq
 
-    return pq.read_table(path).to_pylist()  # type: ignore[no-any-return]
+    return pq.read_table(path).to_pylist()
+
+
+def _finished_chunks(out: Path, chunks: Sequence[Chunk]) -> dict[str, list[dict[str, Any]]]:
+    """The rows of each chunk whose file in ``out`` reads back whole, by chunk id; a file that does
+    not (truncated, damaged) is named on stderr in one line, and its chunk left to run again."""
+    import pyarrow as pa
+
+    finished = {}
+    for chunk in chunks:
+        path = out / _CHUNKS_DIR / f"{chunk.id}.parquet"
+        if not path.exists():
+            continue
+        try:
+            rows = _read_rows(path)
+            if len(rows) != chunk.count or any(row.get("chunk") != chunk.id for row in rows):
+                raise ValueError(f"{len(rows)} rows, not the chunk's {chunk.count}")
+        except (OSError, ValueError, pa.ArrowException) as exc:
+            reason = (str(exc).splitlines() or [type(exc).__name__])[0]
+            print(f"(sweep: {path} does not read back: {reason}; running its chunk again)", file=sys.stderr)
+            continue
+        finished[chunk.id] = rows
+    return finished
+
+
+def _stop_ray(ray: Any) -> None:
+    """``ray.shutdown()`` with Ctrl-C held until it is done (interrupted, it would leave Ray's processes
+    running)."""
+    with interrupts_deferred():
+        ray.shutdown()
 
 
 def run_sweep(
@@ -199,13 +245,14 @@ def run_sweep(
     ----------
     address : str, optional
         A Ray cluster (``ray.init(address=...)``, e.g. ``"auto"``); None starts a local instance.
+        Either is used only where Ray is not initialised already; the sweep stops only a Ray it started.
     num_cpus : int, optional
         CPUs of the local instance (Ray's default: all).
     progress : bool
         Chunks done, and the time left, on stderr.
 
-    Returns the path of ``results.parquet``. Raises ``FileExistsError`` if ``out_dir`` holds another
-    sweep (its ``sweep.json`` differs).
+    Returns the path of ``results.parquet``. Raises ``FileExistsError`` if ``out_dir`` is a file or
+    holds another sweep (its ``sweep.json`` differs), ``OutputDirError`` if it cannot be created.
     """
     require("ray", "subenv sweep", "ray", "pyarrow")
     import ray
@@ -215,15 +262,20 @@ def run_sweep(
     out = Path(out_dir)
     stored = out / _SPEC_FILE
     wanted = json.dumps(spec.as_dict(), indent=2, sort_keys=True) + "\n"
+    if os.path.lexists(out) and not out.is_dir():
+        raise FileExistsError(f"output folder {str(out)!r} exists and is not a folder: choose another folder")
     if stored.exists() and stored.read_text() != wanted:
         raise FileExistsError(
             f"{str(out)!r} holds another sweep (its {_SPEC_FILE} differs): choose another folder"
         )
-    (out / _CHUNKS_DIR).mkdir(parents=True, exist_ok=True)
+    try:
+        (out / _CHUNKS_DIR).mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputDirError(f"output folder {str(out)!r} cannot be created: {exc.strerror or exc}") from exc
     if not stored.exists():
         atomic_write_text(stored, wanted)
     chunks = spec.chunks()
-    finished = {p.stem for p in (out / _CHUNKS_DIR).glob("*.parquet")}  # (each written whole)
+    finished = _finished_chunks(out, chunks)
     todo = [c for c in chunks if c.id not in finished]
 
     def record() -> None:
@@ -232,35 +284,33 @@ def run_sweep(
             json.dumps({"chunks": len(chunks), "finished": sorted(finished)}, indent=2) + "\n",
         )
 
-    if todo:
-        started_here = not ray.is_initialized()
-        if started_here:
-            ray.init(
-                address=address,
-                num_cpus=num_cpus,
-                include_dashboard=False,
-                log_to_driver=False,
-                configure_logging=False,
-            )
-        bar = Progress(len(todo), enabled=progress, label="sweep", unit="chunk")
-        try:
+    with contextlib.ExitStack() as cleanup:  # (its callbacks run, last first, however the block ends)
+        if todo:
+            if not ray.is_initialized():  # (registered first: a start that is interrupted is stopped too)
+                cleanup.callback(_stop_ray, ray)
+                ray.init(
+                    address=address,
+                    num_cpus=num_cpus,
+                    include_dashboard=False,
+                    log_to_driver=False,
+                    configure_logging=False,
+                )
+            bar = Progress(len(todo), enabled=progress, label="sweep", unit="chunk")
+            cleanup.callback(bar.close)
             task = ray.remote(max_retries=TASK_RETRIES)(run_chunk)
             pending = {task.remote(c, spec.seed, spec.vehicle): c for c in todo}
             while pending:
                 (done,), _ = ray.wait(list(pending), num_returns=1)
                 chunk = pending.pop(done)
-                _write_table(out / _CHUNKS_DIR / f"{chunk.id}.parquet", ray.get(done))
-                finished.add(chunk.id)
+                rows = ray.get(done)
+                _write_table(out / _CHUNKS_DIR / f"{chunk.id}.parquet", rows)
+                finished[chunk.id] = rows
                 record()
                 bar.describe(f"{chunk.controller} on {chunk.scenario}")
                 bar.update(1)
-        finally:
-            bar.close()
-            if started_here:
-                ray.shutdown()
-    record()
-    rows = [row for c in chunks for row in _read_rows(out / _CHUNKS_DIR / f"{c.id}.parquet")]
-    _write_table(out / _RESULTS_FILE, rows)
+        # The table is written as soon as every chunk is done, before Ray is stopped.
+        record()
+        _write_table(out / _RESULTS_FILE, [row for c in chunks for row in finished[c.id]])
     return out / _RESULTS_FILE
 
 
@@ -352,7 +402,7 @@ def plot_performance_maps(
             images.append(
                 ax.pcolormesh(x_edges, y_edges, values, vmin=0.0, vmax=vmax, cmap=cmap, shading="flat")
             )
-            for j, i in zip(*np.nonzero(blocked)):  # whole cells, hatched
+            for j, i in zip(*np.nonzero(blocked), strict=True):  # whole cells, hatched
                 ax.add_patch(
                     Rectangle(
                         (x_edges[i], y_edges[j]),
@@ -380,7 +430,8 @@ def plot_performance_maps(
     cusp = "; red: the saturation cusp" if other == "grid_x_GB_m" else ""
     fig.suptitle(
         "Dashed: the critical speed; dotted: the fold (hysteresis) set of one plane command (alpha = 0)"
-        f"{cusp};\nhatched: no depth-holding trim within the limits for any allocation (no controller can win)",
+        f"{cusp};\nhatched: no depth-holding trim within the limits for any allocation "
+        "(no controller can win)",
         fontsize="medium",
     )
     path = save_figure(fig, out)

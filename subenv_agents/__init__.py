@@ -1,7 +1,8 @@
 """Stable-Baselines3 agents for subenv: training, a physics-placed curriculum, and shipped models.
 
 - ``python -m subenv_agents.train --algo ppo`` (or ``subenv train``) trains PPO, SAC or TD3 with the
-  hyperparameters of ``subenv_agents/hyperparams/<algo>.yml`` (:mod:`subenv_agents.train`, :mod:`subenv_agents.config`);
+  hyperparameters of ``subenv_agents/hyperparams/<algo>.yml`` (:mod:`subenv_agents.train`,
+  :mod:`subenv_agents.config`);
 - :mod:`subenv_agents.curriculum` moves the training speeds down through the critical speed as the agent
   succeeds;
 - :func:`load_agent` loads a model with its normalisation statistics in one call;

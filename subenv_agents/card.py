@@ -46,7 +46,8 @@ _MODEL_FILES: Final = (MODEL_FILE, VECNORMALIZE_FILE, CONFIG_FILE)
 
 
 def lineage(run_dir: Path) -> list[dict[str, Any]]:
-    """The ``train.json`` records of the runs ``run_dir`` continued from (``--trained-agent``), earliest first.
+    """The ``train.json`` records of the runs ``run_dir`` continued from (``--trained-agent``), earliest
+    first.
 
     A run that continued another one took that one's training too: a model's training time is the
     sum over its lineage. A parent is found from the path it was continued from (a run folder, its
@@ -138,7 +139,8 @@ def _integral(config: dict[str, Any]) -> str:
         return ""
     return (
         f"; it also observes the leaky integral of the depth error (time constant "
-        f"{integral['time_constant_s']:g} s, `subenv_agents/features.py`), which `load_agent`/`AgentController` append"
+        f"{integral['time_constant_s']:g} s, `subenv_agents/features.py`), which "
+        "`load_agent`/`AgentController` append"
     )
 
 
@@ -147,11 +149,12 @@ def _policy(train: dict[str, Any], selection: dict[str, Any] | None) -> str:
         return f"- Policy: the final one, after {train['timesteps']:,} steps."
     best = selection["best"]
     return (
-        f"- Policy: the best of {selection['evaluations']} validations, one every {selection['freq']:,} steps "
-        f"and one at the end (`subenv_agents/selection.py`): at step {best['timestep']:,}, "
+        f"- Policy: the best of {selection['evaluations']} validations, one every {selection['freq']:,} "
+        f"steps and one at the end (`subenv_agents/selection.py`): at step {best['timestep']:,}, "
         f"{100 * best['success_rate']:.1f}% success and {best['plane_rms_rad']:.4f} rad plane RMS on "
         f"{selection['episodes']} episodes each of {', '.join(selection['scenarios'])} with the seeds "
-        f"{selection['validation_seed']} + i (not the evaluation's below); the validations are part of the training time."
+        f"{selection['validation_seed']} + i (not the evaluation's below); the validations are part of "
+        "the training time."
     )
 
 
@@ -166,7 +169,8 @@ def _steps(train: dict[str, Any], parents: list[dict[str, Any]]) -> str:
 
 
 def _shaping(config: dict[str, Any], continued: bool) -> str:
-    """The card's line on the training-only reward terms (:mod:`subenv_agents.shaping`), if the config has any."""
+    """The card's line on the training-only reward terms (:mod:`subenv_agents.shaping`), if the config has
+    any."""
     terms = []
     if config.get("plane_effort_l1"):
         speed = config.get("plane_effort_reference_speed_mps")
@@ -217,14 +221,17 @@ def _card(
 
 A {train["algo"].upper()} agent (Stable-Baselines3 {train["versions"]["stable_baselines3"]}) for depth
 keeping, trained on {envs} with the environment arguments
-`{config["env_kwargs"]}` (`control: independent`: stern and bow planes driven separately){_integral(config)}.
-Registered as the controller `{name}` of `subenv evaluate` (a `subenv.controllers` entry point); load it with
-`subenv_agents.load_agent("subenv_agents/models/{name}")` (the model and its VecNormalize statistics together).
+`{config["env_kwargs"]}` (`control: independent`: stern and bow planes driven
+separately){_integral(config)}. Registered as the controller `{name}` of `subenv evaluate` (a
+`subenv.controllers` entry point); load it with `subenv_agents.load_agent("subenv_agents/models/{name}")`
+(the model and its VecNormalize statistics together).
 
 ## Training
 
 - Command: {command}
-- Seed: {train["seed"]}; {train["n_envs"]} sub-environments of the native vector env; {_steps(train, parents)}; hyperparameters in `config.yml` (resolved from `subenv_agents/hyperparams/{train["algo"]}.yml`).
+- Seed: {train["seed"]}; {train["n_envs"]} sub-environments of the native vector env;
+  {_steps(train, parents)}; hyperparameters in `config.yml` (resolved from
+  `subenv_agents/hyperparams/{train["algo"]}.yml`).
 - Training time: {total_s:.0f} s ({total_s / 60:.1f} min) of wall-clock time on {train["machine"]}
   ({train["torch_threads"]} torch thread), the learning itself (model set-up and the final save not
   counted); `train.json` has the record.
@@ -252,12 +259,15 @@ ranges (`subenv_agents/generalisation.py`), next to the baseline:
 
 {table(held, [s.name for s in HELD_OUT])}
 
-Reproduce: `python -m subenv_agents.card <run folder> --name {name} --force` re-evaluates and rewrites this card;
-`python -m subenv_agents.evaluate subenv_agents/models/{name} --suite default` gives the full tables.
+Reproduce: `python -m subenv_agents.card <run folder> --name {name} --force` re-evaluates and rewrites this
+card; `python -m subenv_agents.evaluate subenv_agents/models/{name} --suite default` gives the full tables.
 """
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m subenv_agents.card``: evaluate a training run and ship it as
+    ``subenv_agents/models/<name>/``, then print its card; exits with a one-line message on a bad run
+    folder or an existing model (without ``--force``)."""
     parser = argparse.ArgumentParser(
         prog="python -m subenv_agents.card", description=__doc__.split("\n\n")[0]
     )

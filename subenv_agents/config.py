@@ -12,7 +12,7 @@ any id that has none of its own (rl-zoo's layout, with that one addition)::
       curriculum: {threshold: 0.8, window: 100}                    # or false (see subenv_agents.curriculum)
       depth_integral: {time_constant_s: 100.0}                     # or false (see subenv_agents.features)
       plane_effort_l1: 0.5                                         # training-only (see subenv_agents.shaping)
-      depth_band_bonus: {half_width_m: 0.3, bonus: 0.5}            # or false; training-only (subenv_agents.shaping)
+      depth_band_bonus: {half_width_m: 0.3, bonus: 0.5}            # or false (see subenv_agents.shaping)
       policy_kwargs: {net_arch: [64, 64], activation_fn: tanh}
       learning_rate: lin_3.0e-4   # "lin_<x>": linear decay from x to 0, as in rl-zoo
       n_steps: 256                # ... any other argument of the algorithm's constructor
@@ -129,14 +129,15 @@ class CurriculumConfig:
                     and 0 < stage[1] <= stage[2]
                 ):
                     raise ValueError(
-                        f"curriculum stage {stage!r} is invalid: must be [name, low, high] with 0 < low <= high "
-                        "(multiples of the critical speed)"
+                        f"curriculum stage {stage!r} is invalid: must be [name, low, high] with "
+                        "0 < low <= high (multiples of the critical speed)"
                     )
 
 
 @dataclass(frozen=True)
 class DepthIntegralConfig:
-    """The depth-error integral observation (:mod:`subenv_agents.features`): leak time constant [s] and clipping [m s]."""
+    """The depth-error integral observation (:mod:`subenv_agents.features`): leak time constant [s] and
+    clipping [m s]."""
 
     time_constant_s: float = 100.0
     limit_ms: float = 200.0
@@ -187,11 +188,13 @@ class AgentConfig:
     curriculum: CurriculumConfig | None = None
     depth_integral: DepthIntegralConfig | None = None
     plane_effort_l1: float = 0.0
-    """Weight of the training-only L1 penalty on the plane commands (:mod:`subenv_agents.shaping`); 0: none."""
+    """Weight of the training-only L1 penalty on the plane commands (:mod:`subenv_agents.shaping`); 0:
+    none."""
     plane_effort_reference_speed_mps: float | None = None
     """With it, the L1 weight scales with the speed u of the step: weight * u / this (None: constant)."""
     depth_band_bonus: DepthBandBonusConfig | None = None
-    """The training-only bonus for steps that end near the ordered depth (:mod:`subenv_agents.shaping`); None: none."""
+    """The training-only bonus for steps that end near the ordered depth (:mod:`subenv_agents.shaping`);
+    None: none."""
     policy_kwargs: dict[str, Any] = field(default_factory=dict)
     algo_kwargs: dict[str, Any] = field(default_factory=dict)
 

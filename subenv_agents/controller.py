@@ -19,7 +19,8 @@ __all__ = ["AgentController"]
 
 
 class AgentController(SingleRowMixin):
-    """A trained agent (:func:`subenv_agents.load_agent`) behind the :class:`~subenv.evaluation.Controller` protocol.
+    """A trained agent (:func:`subenv_agents.load_agent`) behind the
+    :class:`~subenv.evaluation.Controller` protocol.
 
     Acts deterministically on the environment's observations (one episode, or a batch: one row
     per episode): appends each episode's depth-error integral (:mod:`subenv_agents.features`) if the
@@ -47,13 +48,17 @@ class AgentController(SingleRowMixin):
         self._first = True
 
     def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
-        """Start ``len(infos)`` episodes: their depth-error integrals (if the agent observes it) start at 0."""
+        """Start ``len(infos)`` episodes: their depth-error integrals (if the agent observes it) start at
+        0."""
         self._episodes = len(infos)
         if self._integral_config is not None:
             self._integral = DepthIntegral(self._episodes, CONTROL_PERIOD_S, self._integral_config)
         self._first = True
 
     def act_batch(self, observations: np.ndarray) -> np.ndarray:
+        """The agent's deterministic action for every episode's observation, shape (N, action_dim): with
+        each episode's depth-error integral appended (advanced by this observation, except the reset's)
+        if the agent observes it."""
         obs = check_batch(observations, self._episodes).astype(np.float32, copy=False)
         if self._integral is None:
             return self.agent.predict(obs)

@@ -1,9 +1,10 @@
-"""Evaluate trained agents with the harness of ``subenv evaluate``, next to the classical baselines.
+r"""Evaluate trained agents with the harness of ``subenv evaluate``, next to the classical baselines.
 
 ::
 
     python -m subenv_agents.evaluate results/agents/ppo/subenv-DivePlane-v0_1 --suite reversal
-    python -m subenv_agents.evaluate subenv_agents/models/ppo subenv_agents/models/sac --against reversal_aware,lqr
+    python -m subenv_agents.evaluate subenv_agents/models/ppo subenv_agents/models/sac \
+        --against reversal_aware,lqr
 
 Each path is a run folder, a shipped model folder or a model file (:func:`subenv_agents.load_agent`);
 the agent is named after its folder unless ``NAME=PATH`` is given. The results folder is the same
@@ -38,6 +39,8 @@ def agent_controllers(specs: Sequence[str]) -> list[AgentController]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m subenv_agents.evaluate``: compare the agents at the given paths with the baselines on
+    a suite, print the leaderboard and write the results folder; returns the exit status."""
     from subenv.evaluation import DEFAULT_SEED, run_comparison
 
     parser = argparse.ArgumentParser(
@@ -79,7 +82,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         raise SystemExit(f"subenv_agents.evaluate: {exc}") from None
     print(comparison.leaderboard)
     print(
-        f"\n{len(comparison.results)} episodes in {comparison.elapsed_s:.1f} s; results in {comparison.out_dir}/"
+        f"\n{len(comparison.results)} episodes in {comparison.elapsed_s:.1f} s; results in "
+        f"{comparison.out_dir}/"
     )
     return 0
 

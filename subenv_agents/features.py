@@ -50,6 +50,7 @@ class DepthIntegral:
         self.limit = config.limit_ms
 
     def reset(self, mask: np.ndarray | None = None) -> None:
+        """Set the integrals to 0: all of them, or those where the boolean ``mask`` (shape (n,)) is set."""
         if mask is None:
             self.value[:] = 0.0
         else:
@@ -69,6 +70,7 @@ class DepthIntegral:
         return float(self._next(self.value[index], obs[_DEPTH_ERROR]))
 
     def append(self, obs: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """The observations (n, obs_dim) with ``values`` (n,) as one more column, in ``obs``'s dtype."""
         return np.concatenate([obs, values[:, None].astype(obs.dtype)], axis=1)
 
 
@@ -81,11 +83,14 @@ class DepthIntegralVecEnv(VecEnvWrapper):  # type: ignore[misc]
         self.integral = DepthIntegral(venv.num_envs, dt_s, config)
 
     def reset(self) -> np.ndarray:
+        """Reset ``venv``: its observations with every integral at 0 appended."""
         obs = self.venv.reset()
         self.integral.reset()
         return self.integral.append(obs, self.integral.value)
 
     def step_wait(self) -> Any:
+        """``venv``'s step with the integrals advanced and appended; an ended episode's terminal
+        observation gets its last integral, and the integral of the episode that replaces it starts at 0."""
         obs, rewards, dones, infos = self.venv.step_wait()
         for i in np.flatnonzero(dones):
             terminal = infos[i].get("terminal_observation")
@@ -109,11 +114,13 @@ class DepthIntegralEnv(gym.Wrapper):  # type: ignore[type-arg]
         self.integral = DepthIntegral(1, dt_s, config)
 
     def reset(self, **kwargs: Any) -> tuple[np.ndarray, dict[str, Any]]:
+        """Reset the environment (``kwargs``: its ``reset``'s): the observation with the integral at 0."""
         obs, info = self.env.reset(**kwargs)
         self.integral.reset()
         return self.integral.append(obs[None], self.integral.value)[0], info
 
     def step(self, action: Any) -> tuple[np.ndarray, Any, bool, bool, dict[str, Any]]:
+        """Step the environment: its step's return with the integral advanced and appended."""
         obs, reward, terminated, truncated, info = self.env.step(action)
         self.integral.update(obs[None])
         return self.integral.append(obs[None], self.integral.value)[0], reward, terminated, truncated, info

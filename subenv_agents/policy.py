@@ -53,7 +53,8 @@ CONFIG_FILE: Final = "config.yml"
 CHECKPOINT_DIR: Final = "checkpoints"
 """A run's sub-folder of SB3 checkpoints, ``rl_model_<N>_steps.zip``."""
 SELECTED_DIR: Final = "selected"
-"""A run's sub-folder with the policy that did best on validation episodes (:mod:`subenv_agents.selection`)."""
+"""A run's sub-folder with the policy that did best on validation episodes
+(:mod:`subenv_agents.selection`)."""
 RUN_ID_ATTRIBUTE: Final = "subenv_run_id"
 """The attribute, saved with a run's models and statistics, that ties them together (:func:`mark_run`)."""
 _CHECKPOINT = re.compile(r"^(?P<prefix>.+)_(?P<steps>\d+)_steps\.zip$")
@@ -174,10 +175,12 @@ class TrainedAgent:
 
     @property
     def observation_space(self) -> spaces.Box:
+        """The observations the model takes (the depth-error integral appended, if it observes one)."""
         return self.model.observation_space  # type: ignore[no-any-return]
 
     @property
     def action_space(self) -> spaces.Box:
+        """The actions the model gives: the environment's normalised plane commands."""
         return self.model.action_space  # type: ignore[no-any-return]
 
     def normalize(self, obs: np.ndarray) -> np.ndarray:
@@ -197,8 +200,8 @@ class TrainedAgent:
         single = obs.ndim == 1
         if obs.shape[-1:] != self.observation_space.shape:
             raise ValueError(
-                f"observation has shape {obs.shape}: the agent {str(self.path)!r} was trained on observations of "
-                f"shape {self.observation_space.shape}"
+                f"observation has shape {obs.shape}: the agent {str(self.path)!r} was trained on "
+                f"observations of shape {self.observation_space.shape}"
             )
         action = self.actor(self.normalize(obs.reshape(1, -1) if single else obs))
         return action[0] if single else action
@@ -248,7 +251,8 @@ class TrainedAgent:
             if not same:
                 raise ValueError(
                     f"the agent {str(self.path)!r} was trained on the {what} space {ours} "
-                    f"({self.config.env_id}, env_kwargs={self.config.env_kwargs}); this environment has {theirs}"
+                    f"({self.config.env_id}, env_kwargs={self.config.env_kwargs}); this environment has "
+                    f"{theirs}"
                 )
 
 
@@ -297,8 +301,9 @@ def load_agent(path: str | Path, env: Any = None, device: str = "cpu") -> Traine
         Exception
     ) as exc:  # SB3 fails in its own ways: AssertionError, TypeError, ValueError, zipfile errors
         raise ValueError(
-            f"{str(model_file)!r} cannot be loaded ({type(exc).__name__}: {_one_line(exc)}): must be a complete "
-            f"{config.algo.upper()} model saved by Stable-Baselines3, the algorithm {str(run_dir / CONFIG_FILE)!r} names"
+            f"{str(model_file)!r} cannot be loaded ({type(exc).__name__}: {_one_line(exc)}): must be a "
+            f"complete {config.algo.upper()} model saved by Stable-Baselines3, the algorithm "
+            f"{str(run_dir / CONFIG_FILE)!r} names"
         ) from exc
     stats_file = statistics_file(model_file, run_dir)
     stats = None

@@ -62,7 +62,8 @@ def evaluation_record(results: Sequence[Any]) -> dict[str, dict[str, dict[str, f
 
 
 def table(record: dict[str, dict[str, dict[str, float]]], scenarios: Sequence[str]) -> str:
-    """A Markdown table of ``record``'s success (95% Wilson interval) and plane RMS per scenario and controller."""
+    """A Markdown table of ``record``'s success (95% Wilson interval) and plane RMS per scenario and
+    controller."""
     lines = [
         "| scenario | " + " | ".join(f"{c} success | {c} plane RMS [rad]" for c in record) + " |",
         "|---|" + "---:|---:|" * len(record),
@@ -80,7 +81,8 @@ def table(record: dict[str, dict[str, dict[str, float]]], scenarios: Sequence[st
 
 
 def target_met(record: dict[str, dict[str, dict[str, float]]], name: str) -> tuple[bool, str]:
-    """Whether ``name`` met the target on every scenario of :data:`REVERSAL_SCENARIOS`, and the sentence saying so."""
+    """Whether ``name`` met the target on every scenario of :data:`REVERSAL_SCENARIOS`, and the sentence
+    saying so."""
     ok, parts = True, []
     for s in REVERSAL_SCENARIOS:
         a, b = record[name][s], record[BASELINE][s]

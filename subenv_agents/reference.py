@@ -1,10 +1,10 @@
-"""Multi-seed reference results: PPO, SAC and TD3 trained with several seeds as Ray Tune trials, their
+r"""Multi-seed reference results: PPO, SAC and TD3 trained with several seeds as Ray Tune trials, their
 final policies evaluated on the default suite, and summarised with rliable's statistics.
 
 ::
 
     python -m subenv_agents.reference                       # this machine's budgets (docs/reference/)
-    python -m subenv_agents.reference --seeds 10 --timesteps ppo=7000000,sac=600000,td3=300000 \\
+    python -m subenv_agents.reference --seeds 10 --timesteps ppo=7000000,sac=600000,td3=300000 \
         --address auto                                      # a cluster: the configs' own budgets
 
 Each trial is :func:`subenv_agents.train.train` of one algorithm's hyperparameter file (its defaults,
@@ -76,7 +76,8 @@ class Plan:
     seeds : int
         Seeds per algorithm: 0, 1, ..., seeds - 1.
     episodes : int
-        Evaluation episodes per scenario of the default suite (its seeds, ``subenv.evaluation.DEFAULT_SEED + i``).
+        Evaluation episodes per scenario of the default suite (its seeds,
+        ``subenv.evaluation.DEFAULT_SEED + i``).
     curve_points, curve_episodes : int
         Validations while training, and validation episodes per scenario at each.
     reps : int
@@ -276,8 +277,8 @@ def _progress_lines(total: int, say: Any) -> Any:
             elapsed = time.perf_counter() - self.start
             eta = elapsed / self.done * (total - self.done)
             say(
-                f"reference: {trial.config['trial']['name']} done ({self.done}/{total}, {elapsed / 60:.1f} min, "
-                f"about {eta / 60:.0f} min left)",
+                f"reference: {trial.config['trial']['name']} done ({self.done}/{total}, "
+                f"{elapsed / 60:.1f} min, about {eta / 60:.0f} min left)",
                 file=sys.stderr,
             )
 
@@ -488,10 +489,10 @@ def reference_markdown(summary: Mapping[str, Any]) -> str:
     return "\n".join(
         [
             (
-                f"Success over the winnable episodes [%], {plan['episodes']} episodes per scenario of the default suite; "
-                f"multi-seed rows: final policies after {steps} steps on {plan['env_id']}, IQM and mean over runs x "
-                f"scenarios and each scenario's mean over seeds with 95% stratified bootstrap intervals (rliable, "
-                f"{plan['reps']:,} resamples)."
+                f"Success over the winnable episodes [%], {plan['episodes']} episodes per scenario of the "
+                f"default suite; multi-seed rows: final policies after {steps} steps on {plan['env_id']}, "
+                "IQM and mean over runs x scenarios and each scenario's mean over seeds with 95% stratified "
+                f"bootstrap intervals (rliable, {plan['reps']:,} resamples)."
             ),
             "",
             *lines,
@@ -582,13 +583,16 @@ def _timesteps(text: str) -> dict[str, int]:
         algo, sep, steps = part.partition("=")
         if not sep or not steps.strip().isdigit():
             raise ValueError(
-                f"--timesteps {text!r} is invalid: must be algo=steps[,algo=steps...], e.g. ppo=100000,sac=50000"
+                f"--timesteps {text!r} is invalid: must be algo=steps[,algo=steps...], "
+                "e.g. ppo=100000,sac=50000"
             )
         out[algo.strip()] = int(steps)
     return out
 
 
 def main(argv: list[str] | None = None) -> int:
+    """``python -m subenv_agents.reference``: run the multi-seed reference and print its table; exits
+    with a one-line message on bad arguments or a missing extra."""
     parser = argparse.ArgumentParser(
         prog="python -m subenv_agents.reference", description=__doc__.split("\n\n")[0]
     )

@@ -43,7 +43,8 @@ from subenv_agents.records import REVERSAL_SCENARIOS
 __all__ = ["SELECTED_DIR", "SELECTION_SCENARIOS", "VALIDATION_SEED", "SelectionCallback", "validation_score"]
 
 SELECTION_SCENARIOS: Final = REVERSAL_SCENARIOS
-"""Where the shipped agents' target is measured (:mod:`subenv_agents.records`), and so where they are selected."""
+"""Where the shipped agents' target is measured (:mod:`subenv_agents.records`), and so where they are
+selected."""
 VALIDATION_SEED: Final = 50_000
 """Validation episode i is ``reset(seed=VALIDATION_SEED + i)``: disjoint from the evaluation suites' seeds."""
 SELECTION_FILE: Final = "selection.json"
@@ -72,7 +73,8 @@ def validation_score(
 
 
 class SelectionCallback(BaseCallback):
-    """Evaluate the policy every ``freq`` environment steps and at the end; keep the best in ``<run>/selected/``.
+    """Evaluate the policy every ``freq`` environment steps and at the end; keep the best in
+    ``<run>/selected/``.
 
     Parameters
     ----------
@@ -151,8 +153,8 @@ class SelectionCallback(BaseCallback):
             self._save(venv)
         if self.verbose:
             tqdm.write(
-                f"selection at {self.num_timesteps} steps: success {100 * score['success_rate']:.1f}%, plane RMS "
-                f"{score['plane_rms_rad']:.4f} rad (best: {self.best['timestep']})"
+                f"selection at {self.num_timesteps} steps: success {100 * score['success_rate']:.1f}%, "
+                f"plane RMS {score['plane_rms_rad']:.4f} rad (best: {self.best['timestep']})"
             )
         self._write_record()
 

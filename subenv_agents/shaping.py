@@ -1,10 +1,10 @@
 """Training-only reward shaping: an L1 penalty on the plane commands, and a bonus for holding depth.
 
-The environment's effort term is quadratic (``-effort_weight * mean(a^2)``, :class:`subenv.envs.DivePlaneEnv`),
-which is nearly free for small commands: a policy that keeps its planes swinging by +-0.05 rad
-around zero, or holds them against each other, pays almost nothing for it, yet that is what the
-plane RMS of the evaluation counts. ``-weight * mean(|a|)`` costs small commands in proportion,
-and full ones no more than the quadratic term does.
+The environment's effort term is quadratic (``-effort_weight * mean(a^2)``,
+:class:`subenv.envs.DivePlaneEnv`), which is nearly free for small commands: a policy that keeps its
+planes swinging by +-0.05 rad around zero, or holds them against each other, pays almost nothing for
+it, yet that is what the plane RMS of the evaluation counts. ``-weight * mean(|a|)`` costs small
+commands in proportion, and full ones no more than the quadratic term does.
 
 With a reference speed u_ref the weight scales with the forward speed u of the step,
 ``weight * u / u_ref``: the planes' force grows with u^2, so at speed a small angle does what
@@ -39,7 +39,8 @@ __all__ = ["DEPTH_ERROR_KEY", "DepthBandBonusVecEnv", "PlaneEffortL1VecEnv"]
 
 _SPEED = OBSERVATION_NAMES.index("speed_mps")
 DEPTH_ERROR_KEY = "depth_error_m"
-"""The ``info`` key :class:`DepthBandBonusVecEnv` reads: the true depth error after the step, without sensor noise."""
+"""The ``info`` key :class:`DepthBandBonusVecEnv` reads: the true depth error after the step, without sensor
+noise."""
 
 
 class PlaneEffortL1VecEnv(VecEnvWrapper):  # type: ignore[misc]
@@ -65,6 +66,7 @@ class PlaneEffortL1VecEnv(VecEnvWrapper):  # type: ignore[misc]
         self._penalty = np.zeros(venv.num_envs)
 
     def step_async(self, actions: np.ndarray) -> None:
+        """Step ``venv`` with ``actions``, keeping each sub-environment's penalty for :meth:`step_wait`."""
         a = np.clip(np.asarray(actions, dtype=float).reshape(self.num_envs, -1), -1.0, 1.0)
         self._penalty = self.weight * np.abs(a).mean(axis=1)
         if self.reference_speed_mps is not None:
@@ -72,11 +74,13 @@ class PlaneEffortL1VecEnv(VecEnvWrapper):  # type: ignore[misc]
         self.venv.step_async(actions)
 
     def step_wait(self) -> Any:
+        """``venv``'s step with the penalty of the stepped commands subtracted from the rewards."""
         obs, rewards, dones, infos = self.venv.step_wait()
         self._speed = np.asarray(obs[:, _SPEED], dtype=float)  # (a new episode's first, where one ended)
         return obs, (rewards - self._penalty).astype(rewards.dtype), dones, infos
 
     def reset(self) -> np.ndarray:
+        """Reset ``venv``, noting each sub-environment's speed for the first step's penalty."""
         obs = self.venv.reset()
         self._speed = np.asarray(obs[:, _SPEED], dtype=float)
         return obs
@@ -97,16 +101,18 @@ class DepthBandBonusVecEnv(VecEnvWrapper):  # type: ignore[misc]
         self.bonus = float(band.bonus)
 
     def step_wait(self) -> Any:
+        """``venv``'s step with the bonus added to the rewards of the steps that end inside the band."""
         obs, rewards, dones, infos = self.venv.step_wait()
         try:
             error = np.array([info[DEPTH_ERROR_KEY] for info in infos], dtype=float)
         except KeyError:
             raise ValueError(
-                f"DepthBandBonusVecEnv needs info[{DEPTH_ERROR_KEY!r}] from every step: make the environment with "
-                f"info_keys including {DEPTH_ERROR_KEY!r}"
+                f"DepthBandBonusVecEnv needs info[{DEPTH_ERROR_KEY!r}] from every step: make the environment "
+                f"with info_keys including {DEPTH_ERROR_KEY!r}"
             ) from None
         inside = np.abs(error) <= self.half_width_m
         return obs, (rewards + self.bonus * inside).astype(rewards.dtype), dones, infos
 
     def reset(self) -> np.ndarray:
+        """Reset ``venv`` (the bonus keeps no state between steps)."""
         return self.venv.reset()

@@ -5,8 +5,8 @@
     python -m subenv_agents.train --algo ppo --env subenv/DivePlane-v0 --seed 0
     subenv train --algo sac --env subenv/LowSpeed-v0 -n 200000          # the same command
 
-Hyperparameters come from ``subenv_agents/hyperparams/<algo>.yml`` (:mod:`subenv_agents.config`). Training runs
-on the native vector environment (:func:`subenv.envs.sb3.make_sb3_vec_env`) wrapped in
+Hyperparameters come from ``subenv_agents/hyperparams/<algo>.yml`` (:mod:`subenv_agents.config`).
+Training runs on the native vector environment (:func:`subenv.envs.sb3.make_sb3_vec_env`) wrapped in
 ``VecMonitor`` and ``VecNormalize``. A run folder ``<log-folder>/<algo>/<env>_<k>/`` receives::
 
     model.zip, vecnormalize.pkl   the final model and its normalisation statistics (load both with
@@ -18,7 +18,8 @@ on the native vector environment (:func:`subenv.envs.sb3.make_sb3_vec_env`) wrap
     checkpoints/rl_model_<N>_steps.zip and rl_model_vecnormalize_<N>_steps.pkl
     curriculum.json               the curriculum's stage, the stage it started at and its advances
     selected/, selection.json     with --select-freq: the policy that did best on validation episodes
-                                  (subenv_agents.selection), loadable on its own, and the record of every check
+                                  (subenv_agents.selection), loadable on its own, and the record of
+                                  every check
 
 ``--trained-agent`` continues a run from its model, a checkpoint or its selected policy into a new
 folder, with that model's statistics and the curriculum stage training was at when it was saved.
@@ -89,7 +90,8 @@ class TrainResult:
 
 def make_vec_env(config: AgentConfig, n_envs: int, seed: int, curriculum: bool = False) -> Any:
     """The native vector env of ``config`` for SB3, with (if configured) the depth-band bonus, the L1
-    plane-effort penalty and the depth-error integral observation, ``VecMonitor`` and (if configured) ``VecNormalize``."""
+    plane-effort penalty and the depth-error integral observation, ``VecMonitor`` and (if configured)
+    ``VecNormalize``."""
     from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
 
     from subenv.envs.sb3 import make_sb3_vec_env
@@ -214,11 +216,13 @@ def train(
     if threads is not None:
         torch.set_num_threads(threads)
     run_dir = Path(run_dir) if run_dir is not None else _next_run_dir(Path(log_folder), config)
-    if run_dir.exists():
+    # An empty folder loses nothing: a run may fill it (as every output folder of subenv may).
+    existed = run_dir.is_dir() and not run_dir.is_symlink() and not any(run_dir.iterdir())
+    if run_dir.exists() and not existed:
         raise FileExistsError(f"run folder {str(run_dir)!r} exists: choose another (or delete it)")
     # The outermost folder this run creates (the run folder, or <log-folder>/<algo>/... if new).
-    created = next(p for p in reversed((run_dir, *run_dir.parents)) if not p.exists())
-    run_dir.mkdir(parents=True)
+    created = next((p for p in reversed((run_dir, *run_dir.parents)) if not p.exists()), None)
+    run_dir.mkdir(parents=True, exist_ok=existed)
     try:
         atomic_write_text(
             run_dir / CONFIG_FILE,
@@ -274,8 +278,8 @@ def train(
         planned = trained_steps(config.n_timesteps, chunk)
         if planned != config.n_timesteps and verbose:
             print(
-                f"training {planned} steps: {config.n_timesteps} rounded up to whole iterations of {chunk} steps "
-                f"({_iteration(model)})",
+                f"training {planned} steps: {config.n_timesteps} rounded up to whole iterations of {chunk} "
+                f"steps ({_iteration(model)})",
                 file=sys.stderr,
             )
         callbacks: list[Any] = [TrainingProgress(planned, enabled=progress)]
@@ -318,11 +322,14 @@ def train(
         # Nothing trained yet: leave no half-made run folder behind (it would block the same --run-dir),
         # nor the folders made for it (<log-folder>/<algo>/) while they are empty (another run may use one).
         shutil.rmtree(run_dir, ignore_errors=True)
-        with suppress(OSError):
-            for folder in run_dir.parents:
-                if folder == created.parent:
-                    break
-                folder.rmdir()
+        if existed:  # the empty folder it was given is left as it was
+            run_dir.mkdir(exist_ok=True)
+        elif created is not None:
+            with suppress(OSError):
+                for folder in run_dir.parents:
+                    if folder == created.parent:
+                        break
+                    folder.rmdir()
         raise
     start = time.perf_counter()
     model.learn(
@@ -367,7 +374,8 @@ def train(
 
 @contextmanager
 def _hyperparameters_checked(config: AgentConfig) -> Iterator[None]:
-    """SB3's checks of its constructor's arguments (mostly ``assert``) as a ValueError naming the algorithm."""
+    """SB3's checks of its constructor's arguments (mostly ``assert``) as a ValueError naming the
+    algorithm."""
     try:
         yield
     except (AssertionError, ValueError, TypeError) as exc:
@@ -393,6 +401,8 @@ def _quote(arg: str) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """``python -m subenv_agents.train`` (and ``subenv train``): train one agent into a run folder and
+    say where; exits with a one-line message on a bad configuration or argument."""
     parser = argparse.ArgumentParser(
         prog="python -m subenv_agents.train",
         description="Train a Stable-Baselines3 agent (PPO, SAC, TD3) on a subenv environment.",
@@ -475,12 +485,13 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, FileExistsError, FileNotFoundError) as exc:
         raise SystemExit(f"subenv_agents.train: {exc}") from None
     print(
-        f"trained {config.algo} on {config.env_id} for {result.timesteps} steps in {result.wall_time_s:.0f} s "
-        f"(seed {args.seed}); run folder {result.run_dir}/"
+        f"trained {config.algo} on {config.env_id} for {result.timesteps} steps in "
+        f"{result.wall_time_s:.0f} s (seed {args.seed}); run folder {result.run_dir}/"
     )
     if result.final_stage is not None:
         print(
-            f"curriculum: stage {result.final_stage}, advances (step, stage): {list(result.curriculum_advances)}"
+            f"curriculum: stage {result.final_stage}, advances (step, stage): "
+            f"{list(result.curriculum_advances)}"
         )
     return 0
 

@@ -214,6 +214,8 @@ def fit(make_tuner: Callable[[], Any], address: str | None) -> Any:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """``python -m subenv_agents.tune``: run the search and print the best trial; exits with a one-line
+    message on bad arguments or a missing extra."""
     parser = argparse.ArgumentParser(
         prog="python -m subenv_agents.tune", description=__doc__.split("\n\n")[0]
     )
@@ -254,8 +256,9 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, FileExistsError, RuntimeError, json.JSONDecodeError, MissingExtra) as exc:
         raise SystemExit(f"subenv_agents.tune: {exc}") from None
     print(
-        f"best: {best['values']} success {best['success_rate']:.0%}, plane RMS {best['plane_rms_rad']:.4f} rad; "
-        f"run folder {best['run_dir']}; all trials in {Path(args.out) / 'best.json'}"
+        f"best: {best['values']} success {best['success_rate']:.0%}, plane RMS "
+        f"{best['plane_rms_rad']:.4f} rad; run folder {best['run_dir']}; all trials in "
+        f"{Path(args.out) / 'best.json'}"
     )
     return 0
 

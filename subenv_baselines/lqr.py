@@ -62,6 +62,18 @@ class DepthIntegrator:
         self.value = np.zeros(episodes)
 
     def update(self, error: np.ndarray, integral_gain: np.ndarray, saturated: np.ndarray) -> None:
+        """Integrate one period of every episode's depth ``error`` [m], within +-limit.
+
+        Parameters
+        ----------
+        error : ndarray, shape (N,)
+            The (clipped) depth error fed back.
+        integral_gain : ndarray, shape (N,) or ()
+            The gain on the integral, whose sign says which way the integral moves the planes.
+        saturated : ndarray of bool, shape (N,)
+            Whether the planes are at their limit; such an integral is held where integrating would
+            push them further (conditional integration).
+        """
         # Integrate unless the planes are saturated and integrating would push them further.
         hold = saturated & (np.sign(error) == np.sign(integral_gain * self.value))
         self.value = np.where(
@@ -102,6 +114,8 @@ class ScheduledLQR(SingleRowMixin):
         self.integrator = DepthIntegrator(dt_s, INTEGRAL_LIMIT_M_S)
 
     def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
+        """Design the gain schedule for ``vehicle`` (once per vehicle, at its Froude-scaled points) and
+        start one depth-error integral at 0 per episode of ``infos``."""
         if vehicle is not self._vehicle:
             self._limit = vehicle.planes.limit_rad
             self.schedule = GainSchedule.design(
@@ -111,6 +125,8 @@ class ScheduledLQR(SingleRowMixin):
         self.integrator.reset(len(infos))
 
     def act_batch(self, observations: np.ndarray) -> np.ndarray:
+        """The normalised stern-plane command of every episode, shape (N, 1): -K(u) (theta, w, q, e, int e)
+        with the gains at its observed speed, saturated at the plane limit; advances the integrals."""
         if self.schedule is None:
             raise RuntimeError("call reset() or reset_batch() first")
         obs = check_batch(observations, self.integrator.value.size)

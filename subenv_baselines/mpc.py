@@ -17,7 +17,7 @@ import numba
 import numpy as np
 
 from subenv.dynamics import CONTROL_PERIOD_S, SUBSTEPS, ModelParams, derivatives, model_params, rk4
-from subenv.envs.config import DEPTH_BAND_M, NOISE_STD, OBSERVATION_NAMES, DivePlaneConfig
+from subenv.envs.config import DEFAULT_ARGUMENTS, DEPTH_BAND_M, NOISE_STD, OBSERVATION_NAMES
 from subenv.evaluation import SingleRowMixin, check_batch
 from subenv.extras import require
 from subenv.thesis import reference_length_ratio
@@ -25,7 +25,7 @@ from subenv.vehicles import Vehicle
 from subenv_baselines._common import DEPTH_ERROR, HEAVE, PITCH, PITCH_RATE, SPEED
 
 require("mpc", "the MPC baseline (subenv_baselines.mpc)", "daqp")
-import daqp
+import daqp  # noqa: E402 (after require(), which names the extra to install when DAQP is missing)
 
 __all__ = ["BLOCKS", "DepthMPC", "MPCWeights", "control_period", "discrete_jacobians"]
 
@@ -37,7 +37,8 @@ N_X: Final = 4  # (theta, w, q, Z)
 N_U: Final = 2  # (stern, bow) [rad]
 N_D: Final = 2  # (heave force [N], pitch moment [N m]), derivatives' force and moment
 BLOCKS: Final = (1, 1, 2, 4, 8, 8, 8, 8)
-"""The plan's blocks [control periods] (move blocking): 40 periods, 20 s, with the planes held over each block."""
+"""The plan's blocks [control periods] (move blocking): 40 periods, 20 s, with the planes held over
+each block."""
 _EPS: Final = np.array([1e-7, 1e-7, 1e-7, 1e-7, 1e-7, 1e-7, 1e-5, 1e-5])
 """Forward-difference steps of the discrete Jacobians: (theta, w, q, Z) [rad, m/s, rad/s, m], planes [rad],
 force [N], moment [N m]. The truncation error is O(eps) against curvatures of order 1, the rounding error
@@ -133,10 +134,10 @@ def _differences(out: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 class MPCWeights:
     """Stage cost, in SI units: over the horizon,
     ``depth (Z - Z_cmd)^2 + pitch theta^2 + heave w^2 + pitch_rate q^2`` at the QP's stages, each times the
-    periods it stands for, and the last times ``terminal``; ``plane u^2`` every period and ``move (u_j - u_{j-1})^2``
-    at every change of the planes; and ``slack_linear s + slack_quadratic s^2`` for each family of soft
-    constraints (pitch, depth), s its largest violation (an exact penalty: the constraints hold whenever they
-    can)."""
+    periods it stands for, and the last times ``terminal``; ``plane u^2`` every period and
+    ``move (u_j - u_{j-1})^2`` at every change of the planes; and ``slack_linear s + slack_quadratic s^2``
+    for each family of soft constraints (pitch, depth), s its largest violation (an exact penalty: the
+    constraints hold whenever they can)."""
 
     depth: float = 1.0
     pitch: float = 20.0
@@ -191,10 +192,10 @@ class DepthMPC(SingleRowMixin):
     ``derivatives`` takes external loads; it is estimated by a Kalman filter from what the last period's
     prediction missed in heave and pitch rate (:meth:`_observe`): excess buoyancy (surface suction) is a
     heave force (W - B) cos(theta), a ballast offset a pitch moment -x_GB W cos(theta) (eq. 2.39), and both
-    are estimated to 0.1% (tests). The target (:meth:`_target`) is the steady state at the ordered depth of the
-    model with d, restricted to the plane limits and the pitch bound: on it the linearisation is exact, so the
-    closed loop settles at the ordered depth (the depth error goes to < 1 mm under a ballast offset, and stays
-    off depth without the estimate: tests).
+    are estimated to 0.1% (tests). The target (:meth:`_target`) is the steady state at the ordered depth of
+    the model with d, restricted to the plane limits and the pitch bound: on it the linearisation is exact,
+    so the closed loop settles at the ordered depth (the depth error goes to < 1 mm under a ballast offset,
+    and stays off depth without the estimate: tests).
 
     **Both planes.** ``control="independent"``: the bow/stern allocation is the optimiser's, every period.
     With one command the depth mode is uncontrollable at u_cr(alpha) (eq. 3.9, Fig. 3-14); with two
@@ -207,8 +208,8 @@ class DepthMPC(SingleRowMixin):
     took 1.0-1.6 ms per episode-step (QP median 0.5 ms) and the default suite 614 s. This one linearises
     once per period (72 right-hand sides), condenses onto 18 variables and 56 rows, and DAQP solves that in
     0.02 ms (median; 0.08 ms at the 99th percentile, Python's call included): 0.07 ms per episode-step in all,
-    the default suite's 700 episodes in 47-57 s (two runs). It won and lost the same episodes on the default suite at
-    100 episodes per scenario, and in one run of ``benchmarks/mpc.py --scenarios
+    the default suite's 700 episodes in 47-57 s (two runs). It won and lost the same episodes on the default
+    suite at 100 episodes per scenario, and in one run of ``benchmarks/mpc.py --scenarios
     PeriscopeDepthWaves,BallastOffset --episodes 20 --controllers mpc`` the old one took 63.1 s and this one
     6.1 s, with the same successes and plane RMS within 0.002 rad. So ``./dev run``, with the MPC in its
     comparison, took 93 s against 55 s without (1.69x; ``farm-bench``, two pairs).
@@ -252,9 +253,9 @@ class DepthMPC(SingleRowMixin):
         noise: ObserverNoise = ObserverNoise(),
         dt_s: float = CONTROL_PERIOD_S,
         substeps: int = SUBSTEPS,
-        plane_rate_limit_radps: float | None = DivePlaneConfig.plane_rate_limit_radps,
-        max_pitch_rad: float = DivePlaneConfig.max_pitch_rad,
-        max_depth_error_m: float | None = DivePlaneConfig.max_depth_error_m,
+        plane_rate_limit_radps: float | None = DEFAULT_ARGUMENTS["plane_rate_limit_radps"],
+        max_pitch_rad: float = DEFAULT_ARGUMENTS["max_pitch_rad"],
+        max_depth_error_m: float | None = DEFAULT_ARGUMENTS["max_depth_error_m"],
         pitch_fraction: float = 0.5,
         depth_band_margin_m: float = 5.0,
         surface_margin_m: float = 0.25,
@@ -297,8 +298,8 @@ class DepthMPC(SingleRowMixin):
     def predict(
         self, state: np.ndarray, planes_rad: np.ndarray, speed_mps: Any, disturbance: np.ndarray | None = None
     ) -> np.ndarray:
-        """The state one control period on, as the controller predicts it (:func:`control_period` of the design
-        vehicle)."""
+        """The state one control period on, as the controller predicts it (:func:`control_period` of the
+        design vehicle)."""
         if self._params is None:
             raise RuntimeError("call reset() or reset_batch() first")
         d = np.zeros(np.shape(planes_rad)) if disturbance is None else np.asarray(disturbance, dtype=float)
@@ -313,6 +314,8 @@ class DepthMPC(SingleRowMixin):
 
     # --- the protocol -------------------------------------------------------------------------------
     def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
+        """Take the design model and limits of ``vehicle`` (once per vehicle), and start one observer per
+        episode of ``infos``: no disturbance estimated yet, no planes applied yet."""
         if vehicle is not self._vehicle:
             self._params = model_params(vehicle)
             self._limit = vehicle.planes.limit_rad
@@ -333,6 +336,12 @@ class DepthMPC(SingleRowMixin):
         self._sensitivity = np.zeros((n, N_X, N_D))  # dF/dd at the last linearisation, for the observer
 
     def act_batch(self, observations: np.ndarray) -> np.ndarray:
+        """The normalised (stern, bow) commands of every episode, shape (N, 2): the first move of its plan.
+
+        Each row updates its disturbance estimate from what the last period's prediction missed,
+        re-linearises at its measured state and solves its QP; a row whose QP has no usable solution
+        holds its planes.
+        """
         if self._params is None:
             raise RuntimeError("call reset() or reset_batch() first")
         obs = check_batch(observations, self._n).astype(float)
@@ -404,8 +413,9 @@ class DepthMPC(SingleRowMixin):
 
     # --- the observer -----------------------------------------------------------------------------
     def _observe(self, y: np.ndarray, predicted: np.ndarray, rows: np.ndarray) -> np.ndarray:
-        """Estimate the disturbance (heave force, pitch moment) from what the last period's prediction missed, in
-        ``rows`` (those with a last period; ``predicted`` their states); the change of the estimate, every row.
+        """Estimate the disturbance (heave force, pitch moment) from what the last period's prediction
+        missed, in ``rows`` (those with a last period; ``predicted`` their states); the change of the
+        estimate, every row.
 
         A Kalman filter on d alone, a random walk, measured through the heave and pitch-rate residuals
         e = y_k - F(y_{k-1}, u_{k-1}, d_hat) ~ B_d (d - d_hat) + noise (B_d the (w, q) rows of dF/dd). In a
@@ -431,16 +441,16 @@ class DepthMPC(SingleRowMixin):
     def _target(
         self, A: np.ndarray, B: np.ndarray, c: np.ndarray, command: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
-        """The steady state at the ordered depth that the cost's state and plane terms measure from, each row's.
+        """Each row's steady state at the ordered depth, which the cost's state and plane terms measure from.
 
-        The linearised map x+ = A x + B u + c (at the measured state) held still, x = x+, with Z at the ordered
-        depth: 4 equations in v = (theta, w, q, stern, bow), a line of steady states (the bow/stern allocation is
-        free). On it, the point of least weighted size with the planes within their limit and the pitch within
-        the soft bound (where the line crosses that box; else the point nearest to it in plane angle). At a
-        steady state the linearisation is exact, so the cost's minimum is the plant's steady state at the
-        ordered depth: the state and plane weights leave no offset (measured from 0, a finite horizon trades
-        depth error for plane angle), and the target is one the planes can hold (an unconstrained one can lie
-        beyond the limit, where the planes then stay pinned while the boat drifts).
+        The linearised map x+ = A x + B u + c (at the measured state) held still, x = x+, with Z at the
+        ordered depth: 4 equations in v = (theta, w, q, stern, bow), a line of steady states (the bow/stern
+        allocation is free). On it, the point of least weighted size with the planes within their limit and
+        the pitch within the soft bound (where the line crosses that box; else the point nearest to it in
+        plane angle). At a steady state the linearisation is exact, so the cost's minimum is the plant's
+        steady state at the ordered depth: the state and plane weights leave no offset (measured from 0, a
+        finite horizon trades depth error for plane angle), and the target is one the planes can hold (an
+        unconstrained one can lie beyond the limit, where the planes then stay pinned while the boat drifts).
         """
         w = self.weights
         scale = 1.0 / np.sqrt([w.pitch, w.heave, w.pitch_rate, w.plane, w.plane])

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from functools import partial
 from typing import Any, Final
 
 import numpy as np
@@ -70,6 +71,9 @@ class ReversalAware(SingleRowMixin):
         self.integrator = DepthIntegrator(dt_s, INTEGRAL_LIMIT_M_S)
 
     def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
+        """Find the switching speed and design both allocations' gain schedules for ``vehicle`` (once per
+        vehicle); start one integral per episode of ``infos`` and choose its allocation at its initial
+        speed (``info["speed_mps"]``)."""
         if vehicle is not self._vehicle:
             self._limit = vehicle.planes.limit_rad
             ucr = {a: critical_speed(vehicle, a) for a in ALLOCATIONS}
@@ -82,7 +86,8 @@ class ReversalAware(SingleRowMixin):
             self._slow, self._fast = (a for a, _ in sorted(ucr.items(), key=lambda kv: -kv[1]))
             self.schedules = {
                 a: GainSchedule.design(
-                    scaled_points(self.points, vehicle), lambda u, a=a: lqi_gain(vehicle, u, a, self._limit)
+                    scaled_points(self.points, vehicle),
+                    partial(lqi_gain, vehicle, alpha=a, plane_limit_rad=self._limit),
                 )
                 for a in ALLOCATIONS
             }
@@ -109,6 +114,9 @@ class ReversalAware(SingleRowMixin):
         return np.where((allocation == self._slow)[:, None], slow, fast)
 
     def act_batch(self, observations: np.ndarray) -> np.ndarray:
+        """The normalised (stern, bow) commands of every episode, shape (N, 2): stern = delta, bow =
+        alpha delta, the allocation rechosen at its observed speed (with hysteresis) and the integral
+        rescaled where it switched (bumpless transfer)."""
         if not self.schedules:
             raise RuntimeError("call reset() or reset_batch() first")
         obs = check_batch(observations, self.allocation.size)

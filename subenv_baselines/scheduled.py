@@ -40,6 +40,8 @@ class GainScheduledPolePlacement(SingleRowMixin):
         self._limit = 0.4
 
     def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
+        """Place the gains at every (Froude-scaled) scheduling speed for ``vehicle``, once per vehicle (the
+        controller keeps no per-episode state, so ``infos`` is not read)."""
         if vehicle is not self._vehicle:
             self.schedule = GainSchedule.design(
                 scaled_points(self.points, vehicle),
@@ -49,6 +51,8 @@ class GainScheduledPolePlacement(SingleRowMixin):
             self._limit = vehicle.planes.limit_rad
 
     def act_batch(self, observations: np.ndarray) -> np.ndarray:
+        """The normalised stern-plane command of every episode, shape (N, 1): -K(u) x with the gains
+        interpolated at its observed speed, clipped to the limit."""
         if self.schedule is None:
             raise RuntimeError("call reset() or reset_batch() first")
         delta = -row_dot(self.schedule.at(speeds(observations)), feedback_state(observations))

@@ -32,16 +32,20 @@ class ThesisPolePlacement(SingleRowMixin):
 
     @property
     def gain(self) -> np.ndarray:
+        """K of (theta, w, q, Z - Z_cmd), in SI units, placed for the last reset's vehicle."""
         if self._gain is None:
             raise RuntimeError("call reset() first: the gain is designed for the episode's vehicle")
         return self._gain
 
     def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
+        """Place the gain for ``vehicle`` unless it is the vehicle already designed for (the controller
+        keeps no per-episode state, so ``infos`` is not read)."""
         if vehicle is not self._vehicle:  # design once per design model
             self._gain = thesis_gain(vehicle, self.alpha)
             self._vehicle = vehicle
             self._limit = vehicle.planes.limit_rad
 
     def act_batch(self, observations: np.ndarray) -> np.ndarray:
+        """The normalised stern-plane command of every episode, shape (N, 1): -K x clipped to the limit."""
         delta = -row_dot(self.gain, feedback_state(observations))
         return np.clip(delta / self._limit, -1.0, 1.0).astype(np.float32)[:, None]

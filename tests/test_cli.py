@@ -186,6 +186,24 @@ def test_force_replaces_only_an_earlier_result_of_the_command(tmp_path: Path, no
         main([*command, "--out", str(tmp_path / "afile"), "--force"])
 
 
+class _WorkStarted(Exception):
+    pass
+
+
+@pytest.mark.parametrize("force", [[], ["--force"]], ids=["", "force"])
+@pytest.mark.parametrize("command", [EVALUATE, ["analyze"]], ids=["evaluate", "analyze"])
+def test_an_empty_out_folder_is_accepted(tmp_path: Path, monkeypatch, command, force):
+    def started(*args, **kwargs):  # the command got past its checks of --out
+        raise _WorkStarted
+
+    monkeypatch.setattr(subenv.evaluation.comparison, "evaluate", started)
+    monkeypatch.setattr(subenv.analysis.report, "reproduce_numbers", started)
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(_WorkStarted):
+        main([*command, "--out", str(tmp_path / "empty"), *force])
+    assert [p.name for p in tmp_path.iterdir()] == ["empty"] and not any((tmp_path / "empty").iterdir())
+
+
 @pytest.mark.parametrize(
     ("vehicle", "reason"),
     [
@@ -201,8 +219,8 @@ def test_analyze_with_a_bad_vehicle_is_a_one_line_error(tmp_path: Path, no_work,
 
 def test_analyze_with_a_singular_vehicle_is_a_one_line_error(tmp_path: Path, no_work):
     text = resources.files("subenv.vehicles.data").joinpath("suboff.toml").read_text("utf-8")
-    # With M_qdot' = I_y' and Z_qdot' = 0 the mass matrix [[m' - Z_wdot', -Z_qdot'], [-M_wdot', I_y' - M_qdot']]
-    # is singular.
+    # With M_qdot' = I_y' and Z_qdot' = 0 the mass matrix
+    # [[m' - Z_wdot', -Z_qdot'], [-M_wdot', I_y' - M_qdot']] is singular.
     inertia_nd = 561.32 / (0.97 * 13.9792**5)  # I_y / (rho/2 L^5), in the file's US customary units
     singular = text.replace("M_qdot = -8.8e-4", f"M_qdot = {inertia_nd!r}").replace(
         "Z_qdot = -6.33e-4", "Z_qdot = 0.0"
@@ -431,8 +449,8 @@ def test_evaluate_takes_a_vehicle_and_says_what_is_not_scaled(tmp_path: Path, ca
     )
     err = capsys.readouterr().err
     assert (
-        "--vehicle suboff_fullscale: the scenarios, the success criterion and the classical baselines' designs are "
-        "Froude-scaled to its 102.3 m (x24)" in err
+        "--vehicle suboff_fullscale: the scenarios, the success criterion and the classical baselines' "
+        "designs are Froude-scaled to its 102.3 m (x24)" in err
     )
     assert json.loads((out / "run.json").read_text())["vehicle"] == "suboff_fullscale"
     with pytest.raises(

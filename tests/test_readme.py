@@ -30,7 +30,7 @@ PLUGIN_COMMANDS = [
 def _leaderboard_row(printed: str, name: str) -> dict[str, str]:
     header = next(line for line in printed.splitlines() if line.startswith("| controller |"))
     row = next(line for line in printed.splitlines() if line.startswith(f"| {name} |"))
-    return dict(zip((c.strip() for c in header.split("|")), (c.strip() for c in row.split("|"))))
+    return dict(zip((c.strip() for c in header.split("|")), (c.strip() for c in row.split("|")), strict=True))
 
 
 def test_the_readme_has_its_examples() -> None:

@@ -11,12 +11,12 @@ from pathlib import Path
 
 import pytest
 
-ray = pytest.importorskip("ray", reason="the 'ray' extra is not installed")
-pq = pytest.importorskip("pyarrow.parquet")
-
 from subenv.evaluation import make_controller, run_episodes
 from subenv.scenarios import get_scenario
 from subenv.sweep import Chunk, SweepSpec, run_sweep
+
+ray = pytest.importorskip("ray", reason="the 'ray' extra is not installed")
+pq = pytest.importorskip("pyarrow.parquet")
 
 SPEC = SweepSpec(
     controllers=("lqr", "thesis"),
@@ -40,27 +40,69 @@ def test_a_sweep_gives_the_serial_harness_rows_at_every_grid_point(local_ray, tm
             pinned = get_scenario("LowSpeed").replace(speed_ratio=(ratio, ratio))
             serial = run_episodes(make_controller(controller), pinned, range(SPEC.seed, SPEC.seed + 6))
             assert [r["seed"] for r in mine] == [s.seed for s in serial]
-            assert [{k: r[k] for k in s.row()} for r, s in zip(mine, serial)] == [s.row() for s in serial]
+            assert [{k: r[k] for k in s.row()} for r, s in zip(mine, serial, strict=True)] == [
+                s.row() for s in serial
+            ]
             assert all(abs(r["final_speed_ratio"] - ratio) < 1e-12 for r in mine)  # the point was pinned
 
 
-def test_an_interrupted_sweep_resumes_without_running_finished_chunks_again(local_ray, tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_an_interrupted_sweep_resumes_without_running_finished_chunks_again(
+    local_ray, tmp_path, capsys
+) -> None:  # type: ignore[no-untyped-def]
     out = tmp_path / "sweep"
     first = _table(run_sweep(SPEC, out, progress=False))
+    assert ray.is_initialized()  # the caller's Ray is left running
     chunk_files = sorted((out / "chunks").glob("*.parquet"))
     assert len(chunk_files) == len(SPEC.chunks()) == 8
-    # As if the run had been stopped after all chunks but one: that chunk and the final table missing.
-    lost, kept = chunk_files[3], chunk_files[:3] + chunk_files[4:]
+    # As if the run had been stopped after all chunks but one (that chunk and the final table missing),
+    # and a chunk file had been cut short (a full disk, a copy interrupted).
+    lost, damaged = chunk_files[3], chunk_files[5]
+    kept = [p for p in chunk_files if p not in (lost, damaged)]
     lost.unlink()
     (out / "results.parquet").unlink()
+    damaged.write_bytes(damaged.read_bytes()[: damaged.stat().st_size // 2])
     stamps = {p: p.stat().st_mtime_ns for p in kept}
+    capsys.readouterr()
     second = _table(run_sweep(SPEC, out, progress=False))
-    assert second == first and lost.exists()
+    assert second == first and lost.exists() and len(_table(damaged)) == 3
     assert {p: p.stat().st_mtime_ns for p in kept} == stamps  # read back, not run again
+    (said,) = capsys.readouterr().err.splitlines()
+    assert said.startswith(f"(sweep: {damaged} does not read back: ") and said.endswith(
+        "running its chunk again)"
+    )
     with pytest.raises(FileExistsError, match="holds another sweep"):
         run_sweep(
             SweepSpec(controllers=("lqr",), scenarios=("LowSpeed",), grid=(), episodes=2), out, progress=False
         )
+
+
+def test_ctrl_c_when_the_chunks_are_done_leaves_the_table_and_stops_the_sweeps_ray(  # type: ignore[no-untyped-def]
+    local_ray, tmp_path, monkeypatch, capsys
+):
+    """Ctrl-C while the sweep stops the Ray it started: the table is written, Ray stops, and the command
+    ends with one line and status 130. (The session's Ray stands in for the sweep's own.)"""
+    from subenv.cli import main
+
+    calls = []
+    answers = iter([False])  # the sweep's question: no Ray yet (Ray's own auto-start then sees one)
+
+    def shutdown() -> None:
+        calls.append("shutdown")
+        signal.raise_signal(signal.SIGINT)  # Ctrl-C while Ray stops
+        calls.append("stopped")
+
+    monkeypatch.setattr(ray, "is_initialized", lambda: next(answers, True))
+    monkeypatch.setattr(ray, "init", lambda **kwargs: calls.append("init"))
+    monkeypatch.setattr(ray, "shutdown", shutdown)
+    out = tmp_path / "sweep"
+    command = ["sweep", "--controllers", "thesis", "--grid", "speed_ratio=0.5,1.5", "--episodes", "2"]
+    assert main([*command, "--no-progress", "--no-plots", "--out", str(out)]) == 130
+    assert calls == ["init", "shutdown", "stopped"]  # the stop ran to its end, the Ctrl-C came after
+    assert len(_table(out / "results.parquet")) == 2 * 2
+    err = capsys.readouterr().err
+    assert err.splitlines() == [
+        f"subenv sweep: interrupted; the same command resumes it from the finished chunks in {out}"
+    ]
 
 
 def _kill_a_chunk_worker(stop: threading.Event, killed: list[int]) -> None:
@@ -131,6 +173,7 @@ def test_the_command_line_sweeps_a_grid_and_prints_success_per_point(local_ray, 
     from subenv.cli import main
 
     out = tmp_path / "cli"
+    out.mkdir()  # an empty folder is as good as none
     assert (
         main(
             [
@@ -156,6 +199,11 @@ def test_the_command_line_sweeps_a_grid_and_prints_success_per_point(local_ray, 
     with pytest.raises(SystemExit) as error:
         main(["sweep", "--grid", "speed_ratio=1:2", "--out", str(tmp_path / "bad")])
     assert error.value.code == 2 and not (tmp_path / "bad").exists()
+    (tmp_path / "afile").write_text("x")
+    with pytest.raises(
+        SystemExit, match=r"^subenv sweep: --out: output folder '.*afile' exists and is not a folder"
+    ):
+        main(["sweep", "--grid", "speed_ratio=1", "--out", str(tmp_path / "afile")])
 
 
 def test_performance_maps_are_drawn_from_a_two_axis_sweep(local_ray, tmp_path) -> None:  # type: ignore[no-untyped-def]

@@ -16,49 +16,109 @@
   speed's shift.
 - :mod:`~subenv.analysis.winnable`: depth-holding trims with every plane pair free (can an episode be won).
 - :mod:`~subenv.analysis.report`: the reproduction report (``subenv analyze``).
+
+Importing the package loads none of them: each public name below is imported from its module on first
+use (PEP 562), so that ``import subenv``, whose environments need only :mod:`~subenv.analysis.linear`
+and :mod:`~subenv.analysis.critical`, does not load SciPy's optimisers and signal tools with the
+rest (``benchmarks/import_time.py``).
 """
 
-from subenv.analysis.bifurcation import (
-    approximate_cusp,
-    buoyancy_bifurcation_set,
-    exact_bifurcation_set,
-    exact_cusp,
-    saturation_cusp,
-    saturation_cusp_closed_form,
-)
-from subenv.analysis.continuation import Branch, ContinuationError, continue_equilibria
-from subenv.analysis.critical import critical_froude, critical_speed, froude_number
-from subenv.analysis.curriculum import SpeedStage, speed_curriculum
-from subenv.analysis.design import (
-    THESIS_POLES,
-    closed_loop_eigenvalues,
-    controllability_determinant,
-    controllability_losses,
-    place_gain,
-    scheduled_depth_gain,
-    thesis_gain,
-    thesis_poles,
-)
-from subenv.analysis.equilibria import Equilibrium, equilibria, steady_state_residual, symmetric_pitchfork
-from subenv.analysis.free_surface import (
-    LevelFlightDepth,
-    SurfaceCriticalSpeed,
-    SurfaceTrim,
-    min_level_flight_depth,
-    surface_critical_speed,
-    surface_trim,
-)
-from subenv.analysis.hopf import (
-    HopfPoint,
-    PeriodicOrbit,
-    continue_periodic_orbits,
-    hopf_points,
-    oscillatory_growth_rate,
-    periodic_orbit,
-)
-from subenv.analysis.linear import BOW_PLANES_ONLY, LinearModel, linear_model, numerical_jacobian
-from subenv.analysis.reversal import LevelFlightTrim, level_flight_trim
-from subenv.analysis.winnable import DepthHoldingTrim, depth_holding_trim, winnable
+from __future__ import annotations
+
+import importlib
+import sys
+import types
+from typing import TYPE_CHECKING, Any, Final
+
+if TYPE_CHECKING:  # (the names as the type checkers see them; imported on use at run time)
+    from subenv.analysis.bifurcation import (
+        approximate_cusp,
+        buoyancy_bifurcation_set,
+        exact_bifurcation_set,
+        exact_cusp,
+        saturation_cusp,
+        saturation_cusp_closed_form,
+    )
+    from subenv.analysis.continuation import Branch, ContinuationError, continue_equilibria
+    from subenv.analysis.critical import critical_froude, critical_speed, froude_number
+    from subenv.analysis.curriculum import SpeedStage, speed_curriculum
+    from subenv.analysis.design import (
+        THESIS_POLES,
+        closed_loop_eigenvalues,
+        controllability_determinant,
+        controllability_losses,
+        place_gain,
+        scheduled_depth_gain,
+        thesis_gain,
+        thesis_poles,
+    )
+    from subenv.analysis.equilibria import Equilibrium, equilibria, steady_state_residual, symmetric_pitchfork
+    from subenv.analysis.free_surface import (
+        LevelFlightDepth,
+        SurfaceCriticalSpeed,
+        SurfaceTrim,
+        min_level_flight_depth,
+        surface_critical_speed,
+        surface_trim,
+    )
+    from subenv.analysis.hopf import (
+        HopfPoint,
+        PeriodicOrbit,
+        continue_periodic_orbits,
+        hopf_points,
+        oscillatory_growth_rate,
+        periodic_orbit,
+    )
+    from subenv.analysis.linear import BOW_PLANES_ONLY, LinearModel, linear_model, numerical_jacobian
+    from subenv.analysis.reversal import LevelFlightTrim, level_flight_trim
+    from subenv.analysis.winnable import DepthHoldingTrim, depth_holding_trim, winnable
+
+_MODULES: Final = {
+    "bifurcation": (
+        "approximate_cusp",
+        "buoyancy_bifurcation_set",
+        "exact_bifurcation_set",
+        "exact_cusp",
+        "saturation_cusp",
+        "saturation_cusp_closed_form",
+    ),
+    "continuation": ("Branch", "ContinuationError", "continue_equilibria"),
+    "critical": ("critical_froude", "critical_speed", "froude_number"),
+    "curriculum": ("SpeedStage", "speed_curriculum"),
+    "design": (
+        "THESIS_POLES",
+        "closed_loop_eigenvalues",
+        "controllability_determinant",
+        "controllability_losses",
+        "place_gain",
+        "scheduled_depth_gain",
+        "thesis_gain",
+        "thesis_poles",
+    ),
+    "equilibria": ("Equilibrium", "equilibria", "steady_state_residual", "symmetric_pitchfork"),
+    "free_surface": (
+        "LevelFlightDepth",
+        "SurfaceCriticalSpeed",
+        "SurfaceTrim",
+        "min_level_flight_depth",
+        "surface_critical_speed",
+        "surface_trim",
+    ),
+    "hopf": (
+        "HopfPoint",
+        "PeriodicOrbit",
+        "continue_periodic_orbits",
+        "hopf_points",
+        "oscillatory_growth_rate",
+        "periodic_orbit",
+    ),
+    "linear": ("BOW_PLANES_ONLY", "LinearModel", "linear_model", "numerical_jacobian"),
+    "reversal": ("LevelFlightTrim", "level_flight_trim"),
+    "winnable": ("DepthHoldingTrim", "depth_holding_trim", "winnable"),
+}
+"""The public names by the module that defines them: the imports above as data, for :func:`__getattr__`
+(``tests/analysis/test_lazy_import.py`` checks that the three lists agree)."""
+_HOME: Final = {name: module for module, names in _MODULES.items() for name in names}
 
 __all__ = [
     "BOW_PLANES_ONLY",
@@ -109,3 +169,36 @@ __all__ = [
     "thesis_poles",
     "winnable",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """A public name, imported from its module on first use and kept (PEP 562)."""
+    module = _HOME.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})
+
+
+class _Package(types.ModuleType):
+    """The package's module type: it keeps the functions ``equilibria`` and ``winnable`` bound to their
+    names when their modules of the same name are imported.
+
+    The import system binds a submodule to the attribute of its name on the package the first time it
+    is imported (``import subenv.analysis.winnable``, or any module importing it); the eager package
+    imported the functions after their modules, so the names were the functions, which ``from
+    subenv.analysis import winnable`` must keep giving whatever was imported before.
+    """
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if isinstance(value, types.ModuleType) and name in _HOME and _HOME[name] == name:
+            value = getattr(value, name)
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package

@@ -194,7 +194,8 @@ def continue_equilibria(
             h /= 2
             if h < h_min:
                 raise ContinuationError(
-                    f"corrector failed at {parameter}={z[3] * scale!r} (pitch {z[0]!r} rad) at the smallest step"
+                    f"corrector failed at {parameter}={z[3] * scale!r} (pitch {z[0]!r} rad) at the "
+                    "smallest step"
                 )
             continue
         z_new, iterations = corrected
@@ -210,7 +211,7 @@ def continue_equilibria(
     pts = np.array(points)
     values = pts[:, 3] * scale
     rows = []
-    for (th, w, d), p in zip(pts[:, :3], values):
+    for (th, w, d), p in zip(pts[:, :3], values, strict=True):
         u, _, v = setup(float(p))
         rows.append(
             np.linalg.eigvals(closed_loop_jacobian(v, u, np.array([th, w, 0.0, 0.0]), d, alpha, gain))

@@ -40,6 +40,7 @@ class SpeedStage:
 
     @property
     def speed_mps(self) -> tuple[float, float]:
+        """The stage's speed interval (low, high) [m/s]."""
         return (self.speed_low_mps, self.speed_high_mps)
 
 

@@ -14,8 +14,9 @@ function (:func:`subenv.dynamics.derivatives`) through its numerical Jacobian.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Final, Literal
+from typing import Any, Final, Literal
 
 import numpy as np
 from scipy.optimize import brentq
@@ -172,7 +173,11 @@ def _stability(eigenvalues: np.ndarray) -> bool:
     return bool(np.all(eigenvalues.real < 0))
 
 
-def _roots(fun, grid: FloatArray) -> list[float]:  # type: ignore[no-untyped-def]
+def _roots(fun: Callable[[Any], Any], grid: FloatArray) -> list[float]:
+    """The sorted roots of ``fun`` on ``grid``: its sign changes between grid points, refined by brentq.
+
+    ``fun`` takes the whole grid (an array) and, in brentq, single floats.
+    """
     values = fun(grid)
     roots = []
     for i in np.flatnonzero(np.sign(values[:-1]) * np.sign(values[1:]) <= 0):
@@ -325,8 +330,9 @@ def symmetric_pitchfork(
     """
     if vehicle.excess_buoyancy_N != 0 or vehicle.x_GB_m != 0 or vehicle.crossflow_drag != 0:
         raise ValueError(
-            f"vehicle {vehicle.name!r} has B - W = {vehicle.excess_buoyancy_N!r} N, x_GB = {vehicle.x_GB_m!r} m, "
-            f"C_D = {vehicle.crossflow_drag!r}: the symmetric pitchfork needs all three 0 (use equilibria())"
+            f"vehicle {vehicle.name!r} has B - W = {vehicle.excess_buoyancy_N!r} N, "
+            f"x_GB = {vehicle.x_GB_m!r} m, C_D = {vehicle.crossflow_drag!r}: the symmetric pitchfork needs "
+            "all three 0 (use equilibria())"
         )
     if not (math.isfinite(speed_mps) and speed_mps > 0):
         raise ValueError(f"speed_mps={speed_mps!r} is invalid: must be a finite number > 0")

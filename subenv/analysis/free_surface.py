@@ -40,7 +40,8 @@ __all__ = [
 _EPS: Final = 1e-6  # central-difference step of the Jacobians (rad, m/s, rad/s, m)
 _RESIDUAL: Final = 1e-12  # m/s^2 and rad/s^2: a trim's heave and pitch accelerations, at most
 _PITCH_STARTS_RAD: Final = (0.0, 0.1, -0.1, 0.2, -0.2, 0.4, -0.4)  # the trim search's starts
-_DEPTH_STEPS: Final = 400  # depths from the deepest (5 m on SUBOFF) to the hull radius, geometric (steps below 1 % of the depth)
+# Depths from the deepest (5 m on SUBOFF) to the hull radius, geometric (steps below 1 % of the depth).
+_DEPTH_STEPS: Final = 400
 _BRANCH_JUMP_RAD: Final = 0.05  # a trim this far in pitch from the one below is another branch
 _DEPTH_TOLERANCE_M: Final = 1e-3  # of the shallowest depth held
 _DEEPEST_M: Final = 5.0  # the search's deepest depth on SUBOFF (Froude-scaled on another vehicle, as its
@@ -158,12 +159,18 @@ class SurfaceCriticalSpeed:
         return self.speed_mps / self.deep_speed_mps - 1.0
 
 
-def _external(vehicle: Vehicle, sea_state: SeaState | None, depth_m: float) -> tuple[float, float]:
-    """A sea's mean suction at ``depth_m`` (heave force [N], moment [N m]); none in calm water."""
+def sea_mean_suction(vehicle: Vehicle, sea_state: SeaState | None, depth_m: float) -> tuple[float, float]:
+    """A sea's mean suction on ``vehicle`` at ``depth_m``: the external (heave force [N], pitch moment
+    [N m]) of :func:`subenv.dynamics.derivatives` for a trim there (:meth:`SeaState.mean_suction` over the
+    vehicle's hull); (0, 0) in calm water (``sea_state`` None)."""
     if sea_state is None:
         return 0.0, 0.0
     Z, M = sea_state.mean_suction(
-        depth_m, vehicle.hull.x_m, vehicle.hull.breadth_m, vehicle.water_density_kg_m3, vehicle.gravity_m_s2
+        depth_m,
+        np.asarray(vehicle.hull.x_m),
+        np.asarray(vehicle.hull.breadth_m),
+        vehicle.water_density_kg_m3,
+        vehicle.gravity_m_s2,
     )
     return float(Z), float(M)
 
@@ -177,7 +184,7 @@ def _field(
     bow: float,
     x: FloatArray,
 ) -> FloatArray:
-    force, moment = _external(vehicle, sea_state, float(x[3]))
+    force, moment = sea_mean_suction(vehicle, sea_state, float(x[3]))
     return derivatives(np.asarray(x, dtype=float), u, stern, bow, params, force, moment)
 
 
@@ -280,7 +287,7 @@ def surface_trim(
         float(a)
         for a in suction(params.hull, theta, h, u, params.rho_suction, x0[1], 0.0, params.suction_model)
     )
-    Zw, Mw = _external(vehicle, sea_state, h)
+    Zw, Mw = sea_mean_suction(vehicle, sea_state, h)
     return SurfaceTrim(
         depth_m=h,
         speed_mps=u,

@@ -26,6 +26,7 @@ right-hand side (:func:`subenv.dynamics.derivatives`).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Final, Literal
 
@@ -81,6 +82,7 @@ class HopfPoint:
 
     @property
     def period_s(self) -> float:
+        """The period of the oscillation born at the crossing, 2 pi / frequency [s]."""
         return 2.0 * math.pi / self.frequency_radps
 
     @property
@@ -160,7 +162,9 @@ def _check_gain(gain: FloatArray | None) -> FloatArray | None:
     return k
 
 
-def _field(vehicle: Vehicle, speed_mps: float, gain: FloatArray | None, alpha: float):  # type: ignore[no-untyped-def]
+def _field(
+    vehicle: Vehicle, speed_mps: float, gain: FloatArray | None, alpha: float
+) -> Callable[[FloatArray], FloatArray]:
     """The nonlinear right-hand side in the loop's coordinates, for a batch of states (..., n)."""
     params = model_params(vehicle)
     if gain is None:
@@ -253,7 +257,7 @@ def hopf_points(
 
     values = [growth(u) for u in grid]
     points = []
-    for lo, hi, g_lo, g_hi in zip(grid[:-1], grid[1:], values[:-1], values[1:]):
+    for lo, hi, g_lo, g_hi in zip(grid[:-1], grid[1:], values[:-1], values[1:], strict=True):
         if not (math.isfinite(g_lo) and math.isfinite(g_hi)) or (g_lo < 0.0) == (g_hi < 0.0):
             continue  # (no pair at one end: a pair that turns real is not a Hopf crossing)
         speed = brentq(growth, lo, hi, xtol=1e-12)
@@ -274,7 +278,7 @@ def hopf_points(
     return points
 
 
-def _flow(field, x0: FloatArray, period: float, **kwargs: Any) -> Any:  # type: ignore[no-untyped-def]
+def _flow(field: Callable[[FloatArray], FloatArray], x0: FloatArray, period: float, **kwargs: Any) -> Any:
     return solve_ivp(
         lambda t, x: field(x), (0.0, period), x0, method="DOP853", rtol=1e-10, atol=1e-12, **kwargs
     )

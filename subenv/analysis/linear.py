@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Final, Literal, Union
+from typing import Final, Literal, TypeAlias
 
 import numpy as np
 
@@ -33,7 +33,7 @@ def check_alpha(alpha: float) -> float:
 BOW_PLANES_ONLY: Final = "bow"
 """Pass as ``alpha`` for bow-plane control only, the limit alpha -> infinity (Riedel 1993 Ch. V.B)."""
 
-Allocation = Union[float, Literal["bow"]]
+Allocation: TypeAlias = float | Literal["bow"]
 """A dual-control allocation alpha in [-1, 1], or ``"bow"`` for the bow planes alone."""
 
 
@@ -51,7 +51,7 @@ def plane_derivatives(vehicle: Vehicle, alpha: Allocation) -> tuple[float, float
             f"a number in [-1, 1]: vehicle {vehicle.name!r} has no bow planes",
         )
         return c.Z_delta_b, c.M_delta_b
-    alpha = check_alpha(alpha)  # type: ignore[arg-type]
+    alpha = check_alpha(alpha)
     return c.Z_delta_s + alpha * c.Z_delta_b, c.M_delta_s + alpha * c.M_delta_b
 
 

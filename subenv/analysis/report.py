@@ -78,6 +78,7 @@ class ReportRow:
 
     @property
     def difference(self) -> float:
+        """Computed minus thesis value, in :attr:`unit`."""
         return self.computed - self.thesis
 
 
@@ -165,8 +166,9 @@ def _path_a_crossings(vehicle: Vehicle) -> tuple[float, float]:
 
 
 def has_suboff_shape(vehicle: Vehicle) -> bool:
-    """Whether ``vehicle`` is SUBOFF at some size: the thesis's non-dimensional derivatives and hull shape, so that
-    its published numbers (Froude numbers, angles, ratios) apply to it (``suboff``, ``suboff_fullscale``)."""
+    """Whether ``vehicle`` is SUBOFF at some size: the thesis's non-dimensional derivatives and hull shape,
+    so that its published numbers (Froude numbers, angles, ratios) apply to it (``suboff``,
+    ``suboff_fullscale``)."""
     suboff = load_vehicle("suboff")
     ratio = vehicle.length_m / suboff.length_m
     return (
@@ -178,8 +180,8 @@ def has_suboff_shape(vehicle: Vehicle) -> bool:
 
 
 def vehicle_numbers(vehicle: Vehicle) -> list[VehicleRow]:
-    """The critical speed (three ways), critical and saturation Froude numbers of any vehicle: the report's table
-    for a vehicle of another shape than SUBOFF's, where the thesis's numbers do not apply."""
+    """The critical speed (three ways), critical and saturation Froude numbers of any vehicle: the report's
+    table for a vehicle of another shape than SUBOFF's, where the thesis's numbers do not apply."""
     three = critical_speed_three_ways(vehicle)
     theta_sat, fn_sat = _saturation_pitch_and_froude(vehicle, 0.0)
     rows = [
@@ -214,12 +216,13 @@ def vehicle_numbers(vehicle: Vehicle) -> list[VehicleRow]:
 
 
 def reproduce_numbers(vehicle: Vehicle) -> list[ReportRow]:
-    """The thesis's published numbers next to the values the package computes for ``vehicle`` (of SUBOFF's shape:
-    :func:`has_suboff_shape`)."""
+    """The thesis's published numbers next to the values the package computes for ``vehicle`` (of SUBOFF's
+    shape: :func:`has_suboff_shape`)."""
     rows = []
     # On SUBOFF at another size (Froude-similar, lambda = L / L_SUBOFF) the published dimensional numbers are
     # compared Froude-scaled: a speed x sqrt(lambda), the gains on (theta, w, q, Z) x (1, 1/sqrt(lambda),
-    # sqrt(lambda), 1/lambda) (the poles, rates, scale as 1/sqrt(lambda)); exactly the published ones on SUBOFF.
+    # sqrt(lambda), 1/lambda) (the poles, rates, scale as 1/sqrt(lambda)); exactly the published ones on
+    # SUBOFF.
     ratio = reference_length_ratio(vehicle)
     speed = froude_factor("speed", ratio)
     scaled = "" if ratio == 1.0 else f"; published value Froude-scaled to lambda = {ratio:.4g}"
@@ -227,7 +230,7 @@ def reproduce_numbers(vehicle: Vehicle) -> list[ReportRow]:
     gain_ft = gain * np.array([1.0, FOOT_M, 1.0, FOOT_M])
     gain_scale = (1.0, 1.0 / speed, speed, 1.0 / froude_factor("length", ratio))
     for i, (name, published) in enumerate(
-        zip(("k_theta", "k_w", "k_q", "k_Z"), (-0.9917, -0.8333, -0.6026, 0.0351))
+        zip(("k_theta", "k_w", "k_q", "k_Z"), (-0.9917, -0.8333, -0.6026, 0.0351), strict=True)
     ):
         rows.append(
             ReportRow(
@@ -321,9 +324,15 @@ def env_growth_rate(
     import gymnasium as gym
 
     import subenv.envs  # noqa: F401  (registers the ids)
+    from subenv.envs.dive_plane import DivePlaneEnv
 
-    env = gym.make(env_id, **({} if vehicle is None else {"vehicle": vehicle}))
-    depth = 5.0 * env.unwrapped.base_vehicle.length_m  # (deep: no surface for any hull)
+    kwargs: dict[str, Any] = {} if vehicle is None else {"vehicle": vehicle}
+    env = gym.make(env_id, **kwargs)
+    base = env.unwrapped
+    if not isinstance(base, DivePlaneEnv):
+        env.close()
+        raise ValueError(f"env_id={env_id!r} is invalid: must be a subenv environment id")
+    depth = 5.0 * base.base_vehicle.length_m  # (deep: no surface for any hull)
     _, info = env.reset(
         seed=0,
         options={
@@ -333,7 +342,7 @@ def env_growth_rate(
         },
     )
     times, pitch = [info["time_s"]], [info["pitch_rad"]]
-    action = np.zeros(env.action_space.shape, dtype=np.float32)
+    action = np.zeros(base.config.n_actions, dtype=np.float32)
     while True:
         _, _, terminated, truncated, info = env.step(action)
         times.append(info["time_s"])
@@ -400,6 +409,7 @@ def hopf_findings(vehicle: Vehicle) -> HopfFindings:
 
 def _hopf_markdown(vehicle: Vehicle, found: HopfFindings) -> list[str]:
     p = found.point
+    predicted_rad = p.predicted_amplitude_rad(vehicle, found.orbit_speeds_mps[0])
     rows = [
         (
             "Hopf speed u_H, eigenvalues of level flight (planes held)",
@@ -413,7 +423,8 @@ def _hopf_markdown(vehicle: Vehicle, found: HopfFindings) -> list[str]:
             "m/s",
             "rates "
             + ", ".join(
-                f"{g:+.4f}/s at {u:.2f}" for u, g in zip(found.env_speeds_mps, found.env_growth_rates)
+                f"{g:+.4f}/s at {u:.2f}"
+                for u, g in zip(found.env_speeds_mps, found.env_growth_rates, strict=True)
             ),
         ),
         ("frequency at u_H (period)", f"{p.frequency_radps:.4f}", "rad/s", f"period {p.period_s:.1f} s"),
@@ -433,7 +444,7 @@ def _hopf_markdown(vehicle: Vehicle, found: HopfFindings) -> list[str]:
             f"cycle pitch amplitude at {found.orbit_speeds_mps[0]:.3g} m/s: continuation / normal form",
             f"{math.degrees(found.orbit_amplitudes_rad[0]):.2f}",
             "deg",
-            f"normal form {math.degrees(p.predicted_amplitude_rad(vehicle, found.orbit_speeds_mps[0])):.2f} deg",
+            f"normal form {math.degrees(predicted_rad):.2f} deg",
         ),
         (
             "speed at which the cycle reaches the 0.6 rad pitch limit",
@@ -455,10 +466,10 @@ def _hopf_markdown(vehicle: Vehicle, found: HopfFindings) -> list[str]:
         "## Beyond the thesis: the Hopf bifurcation at speed",
         "",
         "Riedel (1993) Ch. VI recommends a Hopf bifurcation analysis of the instability at high speed. With",
-        "the planes held at zero, level flight has an oscillatory pitch/heave mode that loses stability as the",
-        "speed rises (the destabilising Munk moment grows with u, the restoring moment W z_GB does not). The",
-        "hull's cross-flow drag is quadratic (v|v|), so the cubic first Lyapunov coefficient does not decide",
-        "the criticality: the averaged amplitude equation dr/dt = Re(lambda) r + c2 r^2 does",
+        "the planes held at zero, level flight has an oscillatory pitch/heave mode that loses stability as",
+        "the speed rises (the destabilising Munk moment grows with u, the restoring moment W z_GB does not).",
+        "The hull's cross-flow drag is quadratic (v|v|), so the cubic first Lyapunov coefficient does not",
+        "decide the criticality: the averaged amplitude equation dr/dt = Re(lambda) r + c2 r^2 does",
         "(`subenv.analysis.hopf`). The cycles are continued by shooting on the nonlinear equations, and the",
         "Hopf speed is checked against growth rates measured in the environment.",
         "",
@@ -468,8 +479,8 @@ def _hopf_markdown(vehicle: Vehicle, found: HopfFindings) -> list[str]:
 
 
 _SURFACE_DEPTHS_M: Final = (0.3, 0.35, 0.4, 0.5, 0.6, 0.8, 1.0, 1.2, 1.5, 2.0, 3.0)
-"""Depths of midship [m] at which the report gives the critical speed near the surface (SUBOFF's; Froude-scaled on
-another vehicle: :func:`_surface_depths`)."""
+"""Depths of midship [m] at which the report gives the critical speed near the surface (SUBOFF's;
+Froude-scaled on another vehicle: :func:`_surface_depths`)."""
 _SURFACE_SPEED_RATIOS: Final = (
     0.3,
     0.5,
@@ -515,7 +526,8 @@ class SurfaceFindings:
     suction_N: tuple[float, ...]
     """The suction at :data:`_SURFACE_DEPTHS_M`, level, at u_cr [N, down positive]."""
     growth_per_s: tuple[float, ...]
-    """The fastest eigenvalue's real part of level flight at :data:`_SURFACE_DEPTHS_M`, planes held, 0.5 u_cr [1/s]."""
+    """The fastest eigenvalue's real part of level flight at :data:`_SURFACE_DEPTHS_M`, planes held,
+    0.5 u_cr [1/s]."""
 
 
 def surface_findings(vehicle: Vehicle) -> SurfaceFindings:
@@ -546,7 +558,7 @@ def _surface_markdown(vehicle: Vehicle, found: SurfaceFindings) -> list[str]:
         "| shift | growth, planes held, 0.5 u_cr [1/s] |"
     )
     lines = [header, "|---:|---:|---:|---:|---:|---:|"]
-    for c, z, g in zip(found.critical, found.suction_N, found.growth_per_s):
+    for c, z, g in zip(found.critical, found.suction_N, found.growth_per_s, strict=True):
         lines.append(
             f"| {c.depth_m:.2f} | {z:.3f} | {c.speed_mps:.4f} | {c.speed_numerical_mps:.4f} | "
             f"{100 * c.shift:+.2f} % | {g:+.4f} |"
@@ -562,25 +574,24 @@ def _surface_markdown(vehicle: Vehicle, found: SurfaceFindings) -> list[str]:
     return [
         "## Beyond the thesis: level flight near the free surface",
         "",
-        "Riedel (1993) Ch. VI's first recommendation: a more complete expression for the free surface's effect,",
-        "taken into the bifurcation analysis. The model (`subenv.dynamics.free_surface`) is the rigid-lid suction",
-        "of the hull's slender-body sources (Lagally's force in the flow of their images above the surface; the",
-        "zero-Froude limit of Havelock's free-surface source, as in McCreight 1970): up, proportional to u^2,",
-        "falling as h^-4 far away, with a nose-up moment that grows as the bow rises. It enters the one",
-        "right-hand side, so the critical speed (eq. 3.9 with the suction's pitch derivatives, checked by the",
-        "root of the linearised steady depth-rate gain), the trims and their stability follow from it.",
+        "Riedel (1993) Ch. VI's first recommendation: a more complete expression for the free surface's",
+        "effect, taken into the bifurcation analysis. The model (`subenv.dynamics.free_surface`) is the",
+        "rigid-lid suction of the hull's slender-body sources (Lagally's force in the flow of their images",
+        "above the surface; the zero-Froude limit of Havelock's free-surface source, as in McCreight 1970):",
+        "up, proportional to u^2, falling as h^-4 far away, with a nose-up moment that grows as the bow",
+        "rises. It enters the one right-hand side, so the critical speed (eq. 3.9 with the suction's pitch",
+        "derivatives, checked by the root of the linearised steady depth-rate gain), the trims and their",
+        "stability follow from it.",
         f"Deep-water u_cr = {ucr:.4f} m/s.",
         "",
         *lines,
         "",
         "With the planes held, level flight near the surface is unstable in depth: the suction weakens with",
         "depth, so a boat pushed down keeps sinking and one pushed up keeps rising (the growth rate above).",
-        (
-            f"The shallowest depth at which level flight is held with the planes within {vehicle.planes.limit_rad:.2g} rad "
-            "(the trim followed"
-        ),
-        "up from deep water; `planes`: the plane limit; `no trim`: the trim meets another in a fold and",
-        "vanishes; `broaching`: held up to the hull radius):",
+        "The shallowest depth at which level flight is held with the planes within "
+        f"{vehicle.planes.limit_rad:.2g} rad",
+        "(the trim followed up from deep water; `planes`: the plane limit; `no trim`: the trim meets another",
+        "in a fold and vanishes; `broaching`: held up to the hull radius):",
         "",
         *held,
         "",
@@ -618,9 +629,13 @@ def _surface_figure(fig: Any, vehicle: Vehicle, found: SurfaceFindings) -> str:
             label=f"alpha = {a:g}",
         )
         for why, marker in markers.items():
-            pts = [(x, r.min_depth_m) for x, r in zip(_SURFACE_SPEED_RATIOS, rows) if r.limited_by == why]
+            pts = [
+                (x, r.min_depth_m)
+                for x, r in zip(_SURFACE_SPEED_RATIOS, rows, strict=True)
+                if r.limited_by == why
+            ]
             if pts:
-                right.plot(*zip(*pts), marker, color=f"C{k}", ms=5)
+                right.plot(*zip(*pts, strict=True), marker, color=f"C{k}", ms=5)
     for why, marker in markers.items():
         right.plot([], [], marker, color="0.3", label=why)
     right.axhspan(
@@ -671,13 +686,13 @@ def _plot_branches(
     color: str = "C0",
 ) -> None:
     """Scatter steady states: filled = stable, hollow = unstable."""
-    stable = [(x, value(e)) for x, es in zip(xs, states) for e in es if e.stable]
-    unstable = [(x, value(e)) for x, es in zip(xs, states) for e in es if not e.stable]
+    stable = [(x, value(e)) for x, es in zip(xs, states, strict=True) for e in es if e.stable]
+    unstable = [(x, value(e)) for x, es in zip(xs, states, strict=True) for e in es if not e.stable]
     if stable:
-        ax.plot(*zip(*stable), ".", ms=3, color=color, label=label and f"{label} (stable)")
+        ax.plot(*zip(*stable, strict=True), ".", ms=3, color=color, label=label and f"{label} (stable)")
     if unstable:
         ax.plot(
-            *zip(*unstable),
+            *zip(*unstable, strict=True),
             "o",
             ms=2.5,
             mfc="none",
@@ -700,10 +715,13 @@ _TITLES: Final = {
     "fig3-9": "Critical Froude number against the bow/stern allocation alpha (Riedel 1993, Fig. 3-9)",
     "fig3-13": "Critical and plane-saturation Froude numbers against alpha (Riedel 1993, Fig. 3-13)",
     "fig3-14": "Controllability determinant against Froude number (Riedel 1993, Fig. 3-14)",
-    "fig4-1": "Steady pitch against Froude number, with and without a ballast offset\n(Riedel 1993, Fig. 4-1)",
+    "fig4-1": "Steady pitch against Froude number, with and without a ballast offset\n"
+    "(Riedel 1993, Fig. 4-1)",
     "fig4-2": "Bifurcation sets in the ballast offset-Froude number plane (Riedel 1993, Fig. 4-2)",
-    "fig4-6": "Steady pitch against Froude number with plane saturation, x_GB/L = -1e-4\n(Riedel 1993, Fig. 4-6)",
-    "fig4-11": "Path A at constant ballast through the bifurcation and saturation cusps\n(Riedel 1993, Fig. 4-11)",
+    "fig4-6": "Steady pitch against Froude number with plane saturation, x_GB/L = -1e-4\n"
+    "(Riedel 1993, Fig. 4-6)",
+    "fig4-11": "Path A at constant ballast through the bifurcation and saturation cusps\n"
+    "(Riedel 1993, Fig. 4-11)",
     "fig4-13": "Steady pitch against ballast offset at constant speed: hysteresis (Riedel 1993, Fig. 4-13)",
     "fig5-2": "Level-flight trim against speed with 0.01% excess buoyancy (Riedel 1993, Fig. 5-2)",
     "fig5-3": "Depth gain of the pole placement repeated at each speed (Riedel 1993, Fig. 5-3)",
@@ -711,8 +729,9 @@ _TITLES: Final = {
     "fig5-7": "Saturation cusps with drag and excess buoyancy (supplementary; Riedel 1993, Fig. 5-7)",
     "hopf": "Planes held at zero: growth of the pitch oscillation and amplitude of the cycles against speed\n"
     "(the Hopf bifurcation Riedel 1993 Ch. VI asks for)",
-    "free_surface": "Near the free surface: the critical speed against depth, and the shallowest depth at which\n"
-    "level flight is held within the plane limit against speed (Riedel 1993 Ch. VI's first recommendation)",
+    "free_surface": "Near the free surface: the critical speed against depth, and the shallowest depth at "
+    "which\nlevel flight is held within the plane limit against speed (Riedel 1993 Ch. VI's first "
+    "recommendation)",
 }
 """Each figure's title: what it shows, then the thesis figure it reproduces."""
 
@@ -734,7 +753,10 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
         ax.axvline(mps_to_fps(ucr), color="r", ls="--", lw=1, label=f"u_cr = {mps_to_fps(ucr):.4f} fps")
         ax.set(xlabel="speed [fps]", ylabel="Re(eigenvalue) [1/s]", ylim=(-1.5, 0.3))
         _legend_outside(ax)
-        return "Fig. 3-4: real parts of the closed-loop eigenvalues with the thesis gain; one crosses zero at u_cr."
+        return (
+            "Fig. 3-4: real parts of the closed-loop eigenvalues with the thesis gain; one crosses zero at "
+            "u_cr."
+        )
 
     def fig_3_5_to_3_7(fig: Any) -> str:
         fns = np.linspace(0.6, 1.3, 141)
@@ -839,8 +861,9 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
         ax.set(xlabel="x_GB / L", ylabel="sqrt(lambda) = Fn", xlim=(-6e-4, 6e-4))
         _legend_outside(ax)
         return (
-            "Fig. 4-2: bifurcation sets in the (x_GB, Fn) plane. The printed eq. 4.37 carries a dimensional u^2 "
-            "(evaluated in fps, as the thesis did); the dimensionally consistent cusp matches the exact folds."
+            "Fig. 4-2: bifurcation sets in the (x_GB, Fn) plane. The printed eq. 4.37 carries a dimensional "
+            "u^2 (evaluated in fps, as the thesis did); the dimensionally consistent cusp matches the exact "
+            "folds."
         )
 
     def fig_4_6(fig: Any) -> str:
@@ -890,9 +913,9 @@ def _figures(vehicle: Vehicle) -> dict[str, Callable[[Any], str]]:
         ax.set(xlabel="x_GB / L", ylabel="theta [deg]", ylim=(-20, 20))
         _legend_outside(ax)
         return (
-            "Fig. 4-13: steady pitch versus ballast at constant speed. With saturation, path C (Fn 1.0) jumps "
-            "between the saturated branches (hysteresis); the thin lines are the pseudo-arclength continuation "
-            "of the unlimited-plane steady states, whose folds give the S-shape."
+            "Fig. 4-13: steady pitch versus ballast at constant speed. With saturation, path C (Fn 1.0) "
+            "jumps between the saturated branches (hysteresis); the thin lines are the pseudo-arclength "
+            "continuation of the unlimited-plane steady states, whose folds give the S-shape."
         )
 
     def fig_5_2(fig: Any) -> str:
@@ -1026,8 +1049,8 @@ def _hopf_figure(fig: Any, vehicle: Vehicle, found: HopfFindings) -> str:
     return (
         f"Beyond the thesis: with the planes held, level flight's pitch/heave oscillation grows above "
         f"u_H = {p.speed_mps:.3f} m/s ({p.period_s:.0f} s period; the environment's measured growth rates "
-        f"agree). The bifurcation is {p.criticality}: stable cycles grow linearly with u - u_H (the quadratic "
-        f"drag's signature)"
+        f"agree). The bifurcation is {p.criticality}: stable cycles grow linearly with u - u_H (the "
+        "quadratic drag's signature)"
         + (
             f" and reach the pitch limit at {found.pitch_limit_speed_mps:.2f} m/s."
             if math.isfinite(found.pitch_limit_speed_mps)
@@ -1049,7 +1072,8 @@ def _table(rows: list[ReportRow]) -> str:
     ]
     for r in rows:
         lines.append(
-            f"| {r.quantity} | {r.thesis:.5g} | {r.computed:.5g} | {r.difference:+.3g} | {r.unit} | {r.note} |"
+            f"| {r.quantity} | {r.thesis:.5g} | {r.computed:.5g} | {r.difference:+.3g} | {r.unit} "
+            f"| {r.note} |"
         )
     return "\n".join(lines)
 
@@ -1113,26 +1137,28 @@ def write_report(out_dir: str | Path, vehicle: Vehicle | None = None, overwrite:
             intro = [
                 "# Reproduction of Riedel (1993) with subenv",
                 "",
-                f"Vehicle: {vehicle.name} ({vehicle.description}). Figures 3-4 to 5-4 use C_D = 0 as the thesis's",
-                "did (so neither the hull integral nor the drag-moment sign enters them). The supplementary Fig. 5-7",
-                "has drag: it is drawn with the thesis's inputs (truncated hull integral, printed moment sign) next",
-                "to the full hull with the physically consistent sign.",
+                f"Vehicle: {vehicle.name} ({vehicle.description}). Figures 3-4 to 5-4 use C_D = 0 as the",
+                "thesis's did (so neither the hull integral nor the drag-moment sign enters them). The",
+                "supplementary Fig. 5-7 has drag: it is drawn with the thesis's inputs (truncated hull",
+                "integral, printed moment sign) next to the full hull with the physically consistent sign.",
                 "",
                 "## Published numbers",
                 "",
                 table,
                 "",
-                "Equation 4.37 as printed is not dimensionless; Fig. 4-2 shows it evaluated as printed (u in fps) next",
-                "to the dimensionally consistent form, which agrees with the exact folds of eq. 4.3.",
+                "Equation 4.37 as printed is not dimensionless; Fig. 4-2 shows it evaluated as printed (u in",
+                "fps) next to the dimensionally consistent form, which agrees with the exact folds of",
+                "eq. 4.3.",
                 "",
             ]
         else:
             intro = [
                 f"# Riedel (1993)'s analysis of {vehicle.name} with subenv",
                 "",
-                f"Vehicle: {vehicle.name} ({vehicle.description}); source: {vehicle.source}. The thesis studied",
-                "SUBOFF, so its published numbers do not apply here: the same analysis code computes this vehicle's.",
-                "The figures are the thesis's, drawn for this vehicle, with C_D = 0 as the thesis's Ch. III-IV did"
+                f"Vehicle: {vehicle.name} ({vehicle.description}); source: {vehicle.source}. The thesis",
+                "studied SUBOFF, so its published numbers do not apply here: the same analysis code computes",
+                "this vehicle's. The figures are the thesis's, drawn for this vehicle, with C_D = 0 as the",
+                "thesis's Ch. III-IV did"
                 + (
                     "."
                     if vehicle.planes.has_bow_planes

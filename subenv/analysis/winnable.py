@@ -29,6 +29,7 @@ import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
 from subenv import _validation as check
+from subenv.analysis.free_surface import sea_mean_suction
 from subenv.dynamics.free_surface import NO_FREE_SURFACE, FreeSurface
 from subenv.dynamics.model import derivatives, model_params
 from subenv.dynamics.waves import SeaState
@@ -73,11 +74,7 @@ def _planes(vehicle: Vehicle, speed_mps: float, pitch_rad: np.ndarray, surface: 
     """(stern, bow) that zero w_dot and q_dot at (theta, u tan(theta), 0, depth): shape (..., 2)."""
     depth, free_surface, sea_state = surface
     params = model_params(vehicle, free_surface)
-    force, moment = 0.0, 0.0
-    if sea_state is not None:  # the waves' mean suction (their first order averages out)
-        force, moment = sea_state.mean_suction(
-            depth, vehicle.hull.x_m, vehicle.hull.breadth_m, vehicle.water_density_kg_m3, vehicle.gravity_m_s2
-        )
+    force, moment = sea_mean_suction(vehicle, sea_state, depth)  # (the waves' first order averages out)
     theta = np.asarray(pitch_rad, dtype=float)
     state = np.stack(
         [theta, speed_mps * np.tan(theta), np.zeros_like(theta), np.full_like(theta, depth)], axis=-1
@@ -104,11 +101,7 @@ def _stern_only_mismatch(
     at (theta, u tan(theta), 0, depth). A trim exists at the pitches where it is zero."""
     depth, free_surface, sea_state = surface
     params = model_params(vehicle, free_surface)
-    force, moment = 0.0, 0.0
-    if sea_state is not None:
-        force, moment = sea_state.mean_suction(
-            depth, vehicle.hull.x_m, vehicle.hull.breadth_m, vehicle.water_density_kg_m3, vehicle.gravity_m_s2
-        )
+    force, moment = sea_mean_suction(vehicle, sea_state, depth)
     theta = np.asarray(pitch_rad, dtype=float)
     state = np.stack(
         [theta, speed_mps * np.tan(theta), np.zeros_like(theta), np.full_like(theta, depth)], axis=-1
@@ -128,8 +121,9 @@ def depth_holding_trim(
     sea_state: SeaState | None = None,
 ) -> DepthHoldingTrim:
     """The depth-holding trim of ``vehicle`` (its loading) at ``speed_mps`` that needs the least plane angle,
-    with every plane pair free (the stern planes alone on a vehicle without bow planes) and the pitch inside ``max_pitch_rad``: in deep water, or at ``depth_m``
-    below the free surface (its suction, :mod:`subenv.dynamics.free_surface`, and a sea's mean suction).
+    with every plane pair free (the stern planes alone on a vehicle without bow planes) and the pitch inside
+    ``max_pitch_rad``: in deep water, or at ``depth_m`` below the free surface (its suction,
+    :mod:`subenv.dynamics.free_surface`, and a sea's mean suction).
 
     Parameters
     ----------
@@ -138,7 +132,8 @@ def depth_holding_trim(
     speed_mps : float
         Forward speed [m/s], > 0.
     max_pitch_rad : float
-        Pitch limit [rad] in (0, pi/2): the environment's ``max_pitch_rad`` (a trim beyond it ends the episode).
+        Pitch limit [rad] in (0, pi/2): the environment's ``max_pitch_rad`` (a trim beyond it ends the
+        episode).
     depth_m : float
         Depth [m] of the trim; it matters only with ``free_surface`` or ``sea_state``.
     free_surface : FreeSurface
@@ -183,11 +178,11 @@ def depth_holding_trim(
 def _stern_only_trim(
     vehicle: Vehicle, u: float, limit: float, grid: np.ndarray, surface: _Surface
 ) -> DepthHoldingTrim:
-    """:func:`depth_holding_trim` for a vehicle without bow planes: the stern planes alone must meet both balances,
-    so the trims are the roots in pitch of :func:`_stern_only_mismatch` (more than one below the critical speed,
-    the pitchfork's branches); the one that needs the least plane angle. Where there is none within the pitch
-    limit, no plane angle holds depth: the pitch of the least mismatch, its least-squares stern angle, and the
-    margin -pi (outside any limit)."""
+    """:func:`depth_holding_trim` for a vehicle without bow planes: the stern planes alone must meet both
+    balances, so the trims are the roots in pitch of :func:`_stern_only_mismatch` (more than one below the
+    critical speed, the pitchfork's branches); the one that needs the least plane angle. Where there is none
+    within the pitch limit, no plane angle holds depth: the pitch of the least mismatch, its least-squares
+    stern angle, and the margin -pi (outside any limit)."""
     mismatch = _stern_only_mismatch(vehicle, u, grid, surface)
     crossings = np.flatnonzero(np.sign(mismatch[:-1]) * np.sign(mismatch[1:]) <= 0)
     best: tuple[float, float] | None = None

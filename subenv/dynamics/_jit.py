@@ -18,9 +18,12 @@ cache, numba#10128, which two Ray workers here did.)
   only the first process on a machine pays the compile time (``benchmarks/speed.py`` reports it).
   numba checks a cached kernel against its own source file only, not against the files of the
   functions it inlines: after an edit of ``hull.py`` the environments' kernel in
-  ``transition.py`` would load the old physics from the cache. So every cache directory of these
-  kernels carries a stamp of all their source files (:data:`KERNEL_SOURCES`), and a changed
-  stamp drops the directory's cached kernels before any is loaded.
+  ``transition.py`` would load the old physics from the cache. So each package that compiles
+  kernels declares its kernel sources (:func:`declare_kernel_sources`: its files with kernels, and
+  the packages whose kernels they inline; this package's are :data:`KERNEL_SOURCES`), every cache
+  directory (one per package folder) carries a stamp of all the files its kernels may inline, and a
+  changed stamp drops the directory's cached kernels before any is loaded. A kernel in a file its
+  package has not declared is refused when it is defined.
 - ``error_model="numpy"``: division by zero gives inf/nan as in NumPy instead of raising, and
   saves the checks.
 - No ``fastmath``: results stay IEEE, so the compiled integrator reproduces
@@ -33,7 +36,8 @@ import hashlib
 import os
 import types
 from collections.abc import Callable
-from functools import cache
+from dataclasses import dataclass
+from functools import cache, cached_property
 from pathlib import Path
 from typing import Any, Final, TypeVar, cast
 
@@ -43,7 +47,10 @@ import numpy as np
 __all__ = [
     "KERNEL_OPTIONS",
     "KERNEL_SOURCES",
+    "KernelSources",
+    "declare_kernel_sources",
     "inline_kernel",
+    "kernel_sources",
     "kernel",
     "parallel_kernel",
     "rows",
@@ -53,19 +60,82 @@ __all__ = [
 
 KERNEL_OPTIONS: Final[dict[str, Any]] = {"cache": True, "nogil": True, "error_model": "numpy"}
 
-_PACKAGE = Path(__file__).resolve().parents[1]
-KERNEL_SOURCES: Final = (
-    "dynamics/_jit.py",
-    "dynamics/hull.py",
-    "dynamics/free_surface.py",
-    "dynamics/waves.py",
-    "dynamics/model.py",
-    "dynamics/integrate.py",
-    "dynamics/sincos.py",
-    "envs/transition.py",
-)
-"""The files the compiled kernels are written in (relative to the package): any edit recompiles them all."""
 _STAMP_PREFIX: Final = "subenv-kernels."
+
+
+@dataclass(frozen=True)
+class KernelSources:
+    """The files a package's compiled kernels are written in: its own, and (through the declarations in
+    ``inlines``) those of the packages whose kernels they inline. Declared with
+    :func:`declare_kernel_sources`.
+
+    Attributes
+    ----------
+    folder : Path
+        The package's folder (numba keeps one cache directory per folder of kernel sources).
+    files : tuple of str
+        The package's files that define kernels, in ``folder``.
+    inlines : tuple of KernelSources
+        The packages whose kernels this package's kernels call (numba inlines them).
+    """
+
+    folder: Path
+    files: tuple[str, ...]
+    inlines: tuple[KernelSources, ...] = ()
+
+    def paths(self) -> tuple[Path, ...]:
+        """Every file this package's kernels may inline: its own, then those of ``inlines`` (each once)."""
+        own = tuple(self.folder / name for name in self.files)
+        return tuple(dict.fromkeys([*own, *(path for sources in self.inlines for path in sources.paths())]))
+
+    @cached_property
+    def stamp(self) -> str:
+        """A digest of the files of :meth:`paths` (read once per process)."""
+        digest = hashlib.sha256()
+        for path in self.paths():
+            digest.update(f"{path.parent.name}/{path.name}".encode())
+            digest.update(path.read_bytes())
+        return digest.hexdigest()[:16]
+
+
+_DECLARED: dict[Path, KernelSources] = {}
+
+
+def declare_kernel_sources(
+    module_file: str, files: tuple[str, ...], inlines: tuple[KernelSources, ...] = ()
+) -> KernelSources:
+    """Declare the kernel sources of the package of ``module_file`` (a module's ``__file__``): its
+    ``files`` that define kernels, and the declarations of the packages whose kernels they call.
+
+    Call it in the package's first module to define kernels, before the first of them (the
+    decorators look the declaration up: :func:`kernel_sources`). An edit of any of these files then
+    drops the package's cached kernels.
+    """
+    sources = KernelSources(Path(module_file).resolve().parent, tuple(files), tuple(inlines))
+    _DECLARED[sources.folder] = sources
+    return sources
+
+
+def kernel_sources(source_file: str | Path) -> KernelSources:
+    """The declared kernel sources of the package of ``source_file``, a file that defines kernels;
+    RuntimeError if the file is not among them."""
+    path = Path(source_file).resolve()
+    sources = _DECLARED.get(path.parent)
+    if sources is None or path.name not in sources.files:
+        raise RuntimeError(
+            f"{path} defines kernels but is not among its package's kernel sources: declare them with "
+            "subenv.dynamics._jit.declare_kernel_sources before the package's first kernel"
+            + ("" if sources is None else f" (declared: {list(sources.files)})")
+        )
+    return sources
+
+
+KERNEL_SOURCES: Final = declare_kernel_sources(
+    __file__,
+    ("_jit.py", "hull.py", "free_surface.py", "waves.py", "model.py", "integrate.py", "sincos.py"),
+)
+"""The kernel sources of the dynamics: the files of this package that define kernels (they inline
+no other package's)."""
 
 FunctionT = TypeVar("FunctionT", bound=Callable[..., Any])
 
@@ -144,41 +214,33 @@ def inline_kernel(fn: FunctionT) -> FunctionT:
 
 
 def rows(value: Any, shape: tuple[int, ...]) -> Any:
-    """``value`` broadcast to ``shape`` as a contiguous float64 array of one row per element (``shape + (k,)``
-    arrays: pass ``shape + (k,)`` and reshape): how the batched NumPy-facing functions hand a batch to a kernel
-    that loops over it."""
+    """``value`` broadcast to ``shape`` as a contiguous float64 array of one row per element
+    (``shape + (k,)`` arrays: pass ``shape + (k,)`` and reshape): how the batched NumPy-facing functions
+    hand a batch to a kernel that loops over it."""
     return np.ascontiguousarray(np.broadcast_to(np.asarray(value, dtype=float), shape)).reshape(-1)
-
-
-@cache
-def sources_stamp() -> str:
-    """A digest of :data:`KERNEL_SOURCES` (read once per process)."""
-    digest = hashlib.sha256()
-    for name in KERNEL_SOURCES:
-        digest.update(name.encode())
-        digest.update((_PACKAGE / name).read_bytes())
-    return digest.hexdigest()[:16]
 
 
 def _drop_stale_cache(fn: Callable[..., Any]) -> None:
     """Before ``fn``'s kernel can load from numba's cache: if its cache directory's stamp is not that
-    of the current sources, delete the directory's cached kernels of these sources and stamp it."""
+    of its package's current kernel sources, delete the directory's cached kernels of these sources
+    and stamp it."""
     from numba.core.caching import FunctionCache
 
+    sources = kernel_sources(fn.__code__.co_filename)
     try:
         directory = Path(FunctionCache(fn)._cache_path)
     except (AttributeError, RuntimeError, OSError):  # no cache location (numba then compiles every time)
         return
-    _check_directory(directory)
+    _check_directory(directory, sources.stamp, tuple(Path(name).stem for name in sources.files))
 
 
 @cache
-def _check_directory(directory: Path) -> None:
-    """Once per process and directory (:func:`_drop_stale_cache`)."""
-    stamp = directory / f"{_STAMP_PREFIX}{sources_stamp()}"
-    if stamp.exists():
+def _check_directory(directory: Path, stamp: str, stems: tuple[str, ...]) -> None:
+    """Once per process and directory (:func:`_drop_stale_cache`): ``stems`` are the modules whose
+    kernels the directory caches."""
+    stamp_file = directory / f"{_STAMP_PREFIX}{stamp}"
+    if stamp_file.exists():
         return
-    stems = tuple(Path(name).stem for name in KERNEL_SOURCES)
     try:
         for path in directory.iterdir():
             # numba names its files <module>.<function>-<line>.<python>.nbi/.nbc ("guf-" first for gufuncs).
@@ -186,7 +248,7 @@ def _check_directory(directory: Path) -> None:
             stale_stamp = path.name.startswith(_STAMP_PREFIX)
             if stale_stamp or (path.suffix in (".nbi", ".nbc") and module in stems):
                 path.unlink(missing_ok=True)
-        stamp.touch()
+        stamp_file.touch()
     except OSError:  # a read-only or vanished cache directory: numba copes (it compiles)
         return
 

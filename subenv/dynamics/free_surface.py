@@ -41,10 +41,10 @@ order in the images and in W the hull feels
    linear in w and q, the free surface's share of Z_w, M_w, Z_q, M_q.
 
 Terms 2 and 3 leave the level-flight heave force as it is but not the moment: at 1 m below the surface
-SUBOFF's level-flight pitch stiffness is 25% larger than term 1 alone gives, within 5% of an exact
+SUBOFF's level-flight pitch stiffness is 1.6 times the sources-only theory's, and within 2% of an exact
 potential-flow (panel) computation (docs/free_surface.md). The axis points are two per panel of equal
-length (:func:`slender_points`). Far from the surface the hull acts as one dipole of moment u V
-(V the volume) and the force falls as
+length (:func:`~subenv.dynamics.hull.slender_points`). Far from the surface the hull acts as one dipole
+of moment u V (V the volume) and the force falls as
 
     Z_fs -> -3 rho u^2 V^2 / (64 pi h^4)        (h >> L),
 
@@ -83,13 +83,12 @@ import numpy as np
 from subenv import _validation as check
 from subenv._typing import ArrayLike, FloatArray
 from subenv.dynamics._jit import inline_kernel, kernel, rows
+from subenv.dynamics.hull import SLENDER_ROW, SOURCE_ROW, HullTable
 
 __all__ = [
     "NO_FREE_SURFACE",
     "SLENDER_BODY",
-    "SLENDER_ROW",
     "SOURCES_ONLY",
-    "SOURCE_ROWS",
     "THEORIES",
     "VALIDITY_DEPTH_RADII",
     "VALIDITY_FROUDE_SQUARED",
@@ -99,10 +98,8 @@ __all__ = [
     "image_flow",
     "section_load",
     "self_pair",
-    "slender_points",
     "slender_suction",
     "source_pair",
-    "source_rows",
     "sources_suction",
     "station_depth",
     "suction",
@@ -111,15 +108,6 @@ __all__ = [
     "validity_depth_m",
     "within_validity",
 ]
-
-SOURCE_ROWS: Final = 7
-"""Rows the hull table (:attr:`subenv.dynamics.HullTable.packed`) gives the free surface, one column per
-hull segment: rows 0-2 the sources of the sources-only theory (:func:`sources_suction`), where each
-segment's sources are lumped, x [m], its change of cross-section S(x_aft) - S(x_fore) [m^2] (the
-segment's source strength per unit speed) and its mean radius [m]; rows 3-6 the slender-body theory's
-axis points (:func:`slender_points`)."""
-SLENDER_ROW: Final = 3
-"""The slender-body points' first row (:func:`slender_points`), relative to the sources' first row."""
 
 SLENDER_BODY: Final = 0.0
 """``ModelParams.suction_model`` of the consistent first-order slender-body theory
@@ -169,76 +157,6 @@ NO_FREE_SURFACE: Final = FreeSurface(suction_factor=0.0)
 """Deep water: the model of Riedel (1993), with no free-surface force."""
 
 
-def source_rows(x_m: FloatArray, breadth_m: FloatArray) -> FloatArray:
-    """The hull's sources (:data:`SOURCE_ROWS` rows, one column per segment) from ascending stations
-    ``x_m`` and breadths ``breadth_m`` (circular sections of diameter b).
-
-    Each segment's sources are lumped into one of strength u (S(x_aft) - S(x_fore)), the flux the
-    segment's growth of cross-section pushes out (Newman 1977 ch. 7: m = -u dS/dx), at the centroid
-    of m over the segment: with b linear, dS/dx is proportional to b, so the centroid is that of b,
-    x_aft + dx (b_aft + 2 b_fore) / (3 (b_aft + b_fore)). The lumped sources then have the hull's
-    exact total (zero, for a closed hull) and dipole moment (-u V).
-    """
-    x = np.asarray(x_m, dtype=float)
-    b = np.asarray(breadth_m, dtype=float)
-    area = 0.25 * math.pi * b * b
-    rows = np.zeros((SOURCE_ROWS, x.size))
-    b0, b1, dx = b[:-1], b[1:], np.diff(x)
-    total = b0 + b1
-    share = np.divide(b0 + 2.0 * b1, 3.0 * total, out=np.full_like(total, 0.5), where=total > 0)
-    rows[0, :-1] = x[:-1] + dx * share
-    rows[1, :-1] = area[:-1] - area[1:]  # x ascending: segment i runs aft (x[i]) to fore (x[i+1])
-    rows[2, :-1] = 0.25 * (b[:-1] + b[1:])
-    rows[SLENDER_ROW:, :-1] = slender_points(x, b)
-    return rows
-
-
-_GAUSS_NODE: Final = 1.0 / math.sqrt(3.0)  # two-point Gauss-Legendre nodes, +-1/sqrt(3) of the half-width
-
-
-def slender_points(x_m: FloatArray, breadth_m: FloatArray) -> FloatArray:
-    """The axis points of the slender-body theory (:func:`slender_suction`), shape (4, n_segments): x [m],
-    source strength per unit speed [m^2], cross-flow dipole weight [m^3] and radius [m], from ascending
-    stations ``x_m`` and breadths ``breadth_m`` (b linear between stations; circular sections).
-
-    The hull is cut into n_segments // 2 panels of equal length (a last column of zeros when n_segments is
-    odd), each carried by two points at its Gauss-Legendre nodes whose strengths have the panel's exact
-    zeroth and first moments: of the source density m(x) = -dS/dx (per unit speed; Newman 1977 ch. 7) and
-    of the dipole weight (S + a_33 / rho) = 2 S (a circle's added mass a_33 = rho S, Newman 1977 ch. 4).
-    The panels' points have the hull's exact total source (zero), dipole moment (-u V) and volume, and
-    resolve the long parallel midbody that one point per segment lumps (docs/free_surface.md measures
-    the convergence); as many points as segments, so the cost per pair is the sources-only theory's.
-    """
-    x = np.asarray(x_m, dtype=float)
-    b = np.asarray(breadth_m, dtype=float)
-    n_seg = x.size - 1
-    panels = n_seg // 2
-    out = np.zeros((4, n_seg))
-    edges = np.linspace(x[0], x[-1], panels + 1)
-    nodes, weights = np.polynomial.legendre.leggauss(3)  # exact for S x (cubic) on each linear piece
-
-    def area(at: FloatArray) -> FloatArray:
-        return 0.25 * math.pi * np.interp(at, x, b) ** 2
-
-    for i, (lo, hi) in enumerate(zip(edges[:-1], edges[1:], strict=True)):
-        mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
-        cuts = np.concatenate([[lo], x[(x > lo) & (x < hi)], [hi]])
-        a0, a1 = cuts[:-1, None], cuts[1:, None]
-        at = 0.5 * (a0 + a1) + 0.5 * (a1 - a0) * nodes
-        volume = float(np.sum(0.5 * (a1 - a0) * weights * area(at)))  # int S dx
-        volume_moment = float(np.sum(0.5 * (a1 - a0) * weights * area(at) * (at - mid)))  # int S (x - mid) dx
-        s_lo, s_hi = area(np.array([lo, hi]))
-        source = s_lo - s_hi  # int -S' dx
-        source_moment = s_lo * (lo - mid) - s_hi * (hi - mid) + volume  # int -S' (x - mid) dx, by parts
-        gap = _GAUSS_NODE * half
-        for total, first, row in ((source, source_moment, 1), (2.0 * volume, 2.0 * volume_moment, 2)):
-            out[row, 2 * i] = 0.5 * (total - first / gap)
-            out[row, 2 * i + 1] = 0.5 * (total + first / gap)
-        out[0, 2 * i : 2 * i + 2] = (mid - gap, mid + gap)
-        out[3, 2 * i : 2 * i + 2] = 0.5 * np.interp([mid - gap, mid + gap], x, b)
-    return out
-
-
 @inline_kernel
 def suction_point(
     theta: float,
@@ -258,7 +176,7 @@ def suction_point(
     ``rho_suction`` is the water density times :attr:`FreeSurface.suction_factor` [kg/m^3] (0: no free
     surface, and the force is exactly 0.0); ``suction_model`` the theory (:data:`SLENDER_BODY`, or
     :data:`SOURCES_ONLY`, which ignores ``w`` and ``q``); ``hull`` holds the hull's rows
-    (:func:`source_rows`) from row ``first_row`` on.
+    (:func:`subenv.dynamics.hull.source_rows`) from row ``first_row`` on.
     """
     if rho_suction == 0.0:  # (deep water: the sums would be zero, and are not computed)
         return 0.0, 0.0
@@ -274,7 +192,7 @@ def sources_suction(
     """The sources-only theory's (Z_fs [N], M_fs [N m]) (:data:`SOURCES_ONLY`; ``PeriscopeDepth-v1``): the
     Lagally force of the hull's sources, one per segment, in the flow of their rigid-lid images, summed
     over pairs of segments, and its moment about midship from the vertical force alone. ``hull`` holds
-    the sources (:func:`source_rows`) in rows ``first_row`` .. ``first_row + 2``.
+    the sources (:func:`subenv.dynamics.hull.source_rows`) in rows ``first_row`` .. ``first_row + 2``.
     """
     n_seg = hull.shape[1] - 1
     xs, strength, radius = hull[first_row], hull[first_row + 1], hull[first_row + 2]
@@ -346,8 +264,9 @@ def slender_suction(
     first_row: int,
 ) -> tuple[float, float]:
     """The slender-body theory's (Z_fs [N], M_fs [N m]) (:data:`SLENDER_BODY`; module docstring): at every
-    axis point (:func:`slender_points`, rows ``first_row`` .. ``first_row + 3`` of ``hull``) the outer flow
-    of all the points' rigid-lid images (:func:`image_flow`) and the section's loads in it
+    axis point (:func:`subenv.dynamics.hull.slender_points`, rows ``first_row`` .. ``first_row + 3`` of
+    ``hull``) the outer flow of all the points' rigid-lid images (:func:`image_flow`) and the section's
+    loads in it
     (:func:`section_load`, linear in the flow: summed image by image), summed. Each pair of points is met
     once, its distance shared by both images."""
     n = hull.shape[1] - 1
@@ -471,7 +390,7 @@ def _suction_rows(
 
 
 def suction(
-    hull: Any,
+    hull: HullTable,
     pitch_rad: ArrayLike,
     depth_m: ArrayLike,
     speed_mps: ArrayLike,
@@ -498,8 +417,6 @@ def suction(
         :data:`SLENDER_BODY` (default) or :data:`SOURCES_ONLY` (:attr:`FreeSurface.suction_model`,
         ``ModelParams.suction_model``).
     """
-    from subenv.dynamics.hull import SOURCE_ROW
-
     arguments = (pitch_rad, heave_mps, pitch_rate_radps, depth_m, speed_mps, rho_suction, suction_model)
     shape = np.broadcast_shapes(*(np.shape(a) for a in arguments))
     Z, M = np.empty(math.prod(shape)), np.empty(math.prod(shape))
@@ -521,8 +438,9 @@ VALIDITY_DEPTH_RADII: Final = 2.0
 """The model holds for midship depths h of at least this many hull radii r (the hull's top a radius below
 the surface): a line of images stands for the surface's images of the hull's sections with a relative
 error of order (r / 2h)^2 (the next multipole of a section at distance 2h), 6% here; the two-point panels
-(:func:`slender_points`) are converged to within 5% there (docs/free_surface.md). Shallower, the model is
-extrapolated (18% at h = 1.18 r, SUBOFF at 0.3 m), until the hull broaches at h = r."""
+(:func:`~subenv.dynamics.hull.slender_points`) are converged to within 1% there (docs/free_surface.md).
+Shallower, the model is extrapolated (18% at h = 1.18 r, SUBOFF at 0.3 m), until the hull broaches at
+h = r."""
 VALIDITY_FROUDE_SQUARED: Final = 0.25
 """The rigid lid holds for a depth Froude number u^2 / (g h) of at most this (F_h 0.5): the free surface's
 corrections are of order F_h^2 (module docstring). On SUBOFF it binds before the depth limit (0.51 m)

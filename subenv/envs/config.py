@@ -9,10 +9,13 @@ an environment is built; the transition reads its numbers as one record
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import math
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property
+from types import MappingProxyType
 from typing import Any, Final, Literal
 
 import numpy as np
@@ -28,7 +31,7 @@ from subenv.scenarios.scenario import Scenario
 from subenv.vehicles.loader import load_vehicle
 from subenv.vehicles.vehicle import Vehicle
 
-__all__ = ["OBSERVATION_NAMES", "ControlMode", "DivePlaneConfig"]
+__all__ = ["DEFAULT_ARGUMENTS", "OBSERVATION_NAMES", "ControlMode", "DivePlaneConfig"]
 
 ControlMode = Literal["dual", "independent"]
 
@@ -83,83 +86,105 @@ DEPTH_SCALE_M: Final = 2.0
 """``depth_scale_m`` by default on the scenario's reference vehicle; Froude-scaled on another."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class DivePlaneConfig:
     """Everything an environment is made with but its render mode, checked on construction.
 
-    The fields are the environments' keyword arguments (``DivePlaneEnv``'s Arguments section);
-    ``scenario`` and ``vehicle`` may be given by name or path and are stored resolved.
-    :meth:`replace` gives a checked copy (``set_scenario`` uses it).
+    It is made from the environments' keyword arguments (``DivePlaneEnv``'s Arguments section:
+    :data:`DEFAULT_ARGUMENTS`), and holds what they resolve to: ``scenario`` and ``vehicle`` given by
+    name or path are stored loaded, ``max_depth_error_m`` and ``depth_scale_m`` given as None are
+    stored as the values they stand for. :meth:`replace` gives a checked copy (``set_scenario`` uses
+    it).
     """
 
-    scenario: Scenario | str = "Randomized"
-    vehicle: Vehicle | str | os.PathLike[str] = "suboff"
-    control: ControlMode = "dual"
-    alpha: float = 0.0
-    dt: float = CONTROL_PERIOD_S
-    substeps: int = SUBSTEPS
-    plane_rate_limit_radps: float | None = None
-    max_pitch_rad: float = 0.6
-    max_depth_error_m: float | None = None
-    depth_scale_m: float | None = None
-    pitch_weight: float = 0.1
-    effort_weight: float = 0.05
-    termination_penalty: float = 100.0
+    scenario: Scenario
+    """The scenario the episodes are drawn from."""
+    vehicle: Vehicle
+    """The vehicle as loaded (each episode's loading is a variant of it)."""
+    control: ControlMode
+    alpha: float
+    dt: float
+    substeps: int
+    plane_rate_limit_radps: float | None
+    max_pitch_rad: float
+    max_depth_error_m: float
+    depth_scale_m: float
+    pitch_weight: float
+    effort_weight: float
+    termination_penalty: float
 
-    def __post_init__(self) -> None:
+    def __init__(
+        self,
+        *,
+        scenario: Scenario | str = "Randomized",
+        vehicle: Vehicle | str | os.PathLike[str] = "suboff",
+        control: ControlMode = "dual",
+        alpha: float = 0.0,
+        dt: float = CONTROL_PERIOD_S,
+        substeps: int = SUBSTEPS,
+        plane_rate_limit_radps: float | None = None,
+        max_pitch_rad: float = 0.6,
+        max_depth_error_m: float | None = None,
+        depth_scale_m: float | None = None,
+        pitch_weight: float = 0.1,
+        effort_weight: float = 0.05,
+        termination_penalty: float = 100.0,
+    ) -> None:
         put = object.__setattr__
-        if isinstance(self.scenario, str):
-            put(self, "scenario", get_scenario(self.scenario))
-        elif not isinstance(self.scenario, Scenario):
-            raise ValueError(f"scenario={self.scenario!r} is invalid: must be a scenario name or a Scenario")
-        if not isinstance(self.vehicle, Vehicle):
-            put(self, "vehicle", load_vehicle(self.vehicle))
+        if isinstance(scenario, str):
+            scenario = get_scenario(scenario)
+        elif not isinstance(scenario, Scenario):
+            raise ValueError(f"scenario={scenario!r} is invalid: must be a scenario name or a Scenario")
+        put(self, "scenario", scenario)
+        put(self, "vehicle", vehicle if isinstance(vehicle, Vehicle) else load_vehicle(vehicle))
         check.require(
-            "control", self.control, self.control in ("dual", "independent"), "one of ['dual', 'independent']"
+            "control", control, control in ("dual", "independent"), "one of ['dual', 'independent']"
         )
-        put(self, "alpha", check_alpha(self.alpha))
+        put(self, "control", control)
+        put(self, "alpha", check_alpha(alpha))
         if self.control == "independent" and self.alpha != 0.0:
             raise ValueError(
                 f"alpha={self.alpha!r} is invalid with control='independent': must be 0 "
                 "(the bow planes have their own action)"
             )
-        if not self.base_vehicle.planes.has_bow_planes and (
-            self.control == "independent" or self.alpha != 0.0
-        ):
+        if not self.vehicle.planes.has_bow_planes and (self.control == "independent" or self.alpha != 0.0):
             name, value = (
                 ("control", self.control) if self.control == "independent" else ("alpha", self.alpha)
             )
             raise ValueError(
-                f"{name}={value!r} is invalid for vehicle {self.base_vehicle.name!r}, which has no bow "
+                f"{name}={value!r} is invalid for vehicle {self.vehicle.name!r}, which has no bow "
                 "planes: must be control='dual' with alpha=0 (the stern planes alone)"
             )
-        put(self, "dt", check.positive("dt", self.dt, upper=10.0))
-        put(self, "substeps", check.integer("substeps", self.substeps, 1, 1000))
-        if self.plane_rate_limit_radps is not None:
-            put(
-                self,
-                "plane_rate_limit_radps",
-                check.positive(
-                    "plane_rate_limit_radps", self.plane_rate_limit_radps, upper=MAX_PLANE_RATE_RADPS
-                ),
+        put(self, "dt", check.positive("dt", dt, upper=10.0))
+        put(self, "substeps", check.integer("substeps", substeps, 1, 1000))
+        if plane_rate_limit_radps is not None:
+            plane_rate_limit_radps = check.positive(
+                "plane_rate_limit_radps", plane_rate_limit_radps, upper=MAX_PLANE_RATE_RADPS
             )
+        put(self, "plane_rate_limit_radps", plane_rate_limit_radps)
         put(
             self,
             "max_pitch_rad",
-            check.number("max_pitch_rad", self.max_pitch_rad, MIN_PITCH_LIMIT_RAD, math.pi / 2),
+            check.number("max_pitch_rad", max_pitch_rad, MIN_PITCH_LIMIT_RAD, math.pi / 2),
         )
         # None: the reference vehicle's value (SUBOFF's, for the shipped scenarios), Froude-scaled to
         # this vehicle's length as the scenario's episodes are (Scenario.reference_length_m).
         ratio = self.length_ratio
-        for name, reference in (("max_depth_error_m", DEPTH_BAND_M), ("depth_scale_m", DEPTH_SCALE_M)):
-            value = getattr(self, name)
+        for name, given, reference in (
+            ("max_depth_error_m", max_depth_error_m, DEPTH_BAND_M),
+            ("depth_scale_m", depth_scale_m, DEPTH_SCALE_M),
+        ):
             put(
                 self,
                 name,
-                check.positive(name, reference * ratio if value is None else value, upper=MAX_DEPTH_BAND_M),
+                check.positive(name, reference * ratio if given is None else given, upper=MAX_DEPTH_BAND_M),
             )
-        for name in ("pitch_weight", "effort_weight", "termination_penalty"):
-            put(self, name, check.number(name, getattr(self, name), 0.0, MAX_WEIGHT))
+        for name, weight in (
+            ("pitch_weight", pitch_weight),
+            ("effort_weight", effort_weight),
+            ("termination_penalty", termination_penalty),
+        ):
+            put(self, name, check.number(name, weight, 0.0, MAX_WEIGHT))
 
     def replace(self, **changes: Any) -> DivePlaneConfig:
         """A copy with some fields changed, checked again."""
@@ -168,14 +193,12 @@ class DivePlaneConfig:
     # --- derived -------------------------------------------------------------------------------
     @property
     def base_vehicle(self) -> Vehicle:
-        """The vehicle as loaded (each episode's loading is a variant of it)."""
-        assert isinstance(self.vehicle, Vehicle)
+        """:attr:`vehicle` (the name its callers knew it by when ``vehicle`` held the argument as given)."""
         return self.vehicle
 
     @property
     def base_scenario(self) -> Scenario:
-        """The scenario the episodes are drawn from (resolved)."""
-        assert isinstance(self.scenario, Scenario)
+        """:attr:`scenario` (the name its callers knew it by when ``scenario`` held the argument as given)."""
         return self.scenario
 
     @property
@@ -183,17 +206,17 @@ class DivePlaneConfig:
         """Lambda by which the scenario's episodes are Froude-scaled on this vehicle
         (:attr:`Scenario.reference_length_m <subenv.scenarios.Scenario.reference_length_m>`; 1.0 on the
         scenario's reference vehicle, or without one)."""
-        return self.base_scenario.length_ratio(self.base_vehicle.length_m)
+        return self.scenario.length_ratio(self.vehicle.length_m)
 
     @property
     def plane_limit_rad(self) -> float:
         """The planes' saturation [rad], the vehicle's."""
-        return self.base_vehicle.planes.limit_rad
+        return self.vehicle.planes.limit_rad
 
     @property
     def broach_depth_m(self) -> float:
         """The depth at which the hull breaks the surface: half the hull's largest breadth [m]."""
-        return 0.5 * max(self.base_vehicle.hull.breadth_m)
+        return 0.5 * max(self.vehicle.hull.breadth_m)
 
     @property
     def n_actions(self) -> int:
@@ -243,7 +266,7 @@ class DivePlaneConfig:
     @cached_property
     def hull(self) -> np.ndarray:
         """The vehicle's hull table as the kernels take it (:attr:`subenv.dynamics.HullTable.packed`)."""
-        return model_params(self.base_vehicle).hull.packed
+        return model_params(self.vehicle).hull.packed
 
     def constants(self, max_episode_steps: int | None = None) -> np.ndarray:
         """The transition's constants: one read-only record of
@@ -251,30 +274,50 @@ class DivePlaneConfig:
         episodes as ``gymnasium.wrappers.TimeLimit`` does (None: the scenario's duration only)."""
         decay = math.exp(-self.dt / DISTURBANCE_TIME_CONSTANT_S)
         low, high = self.observation_bounds
-        record = np.zeros(1, dtype=tr.CONFIG_DTYPE)
-        record[0] = (
-            self.dt,
-            self.substeps,
-            self.control == "dual",
-            self.alpha,
-            self.plane_limit_rad,
-            self.plane_rate_limit_radps is not None,
-            (self.plane_rate_limit_radps or 0.0) * self.dt,
-            self.max_pitch_rad,
-            self.max_depth_error_m,
-            self.broach_depth_m,
-            self.depth_scale_m,
-            self.pitch_weight,
-            self.effort_weight,
-            self.termination_penalty,
-            decay,
-            math.sqrt(1 - decay * decay),
-            math.inf if max_episode_steps is None else float(max_episode_steps),
-            MAX_HEAVE_MPS,
-            MAX_PITCH_RATE_RADPS,
-            low,
-            high,
-            [NOISE_STD.get(name, 0.0) for name in OBSERVATION_NAMES],
+        record = _record(
+            tr.CONFIG_DTYPE,
+            dt_s=self.dt,
+            substeps=self.substeps,
+            dual=self.control == "dual",
+            alpha=self.alpha,
+            plane_limit_rad=self.plane_limit_rad,
+            rate_limited=self.plane_rate_limit_radps is not None,
+            max_move_rad=(self.plane_rate_limit_radps or 0.0) * self.dt,
+            max_pitch_rad=self.max_pitch_rad,
+            max_depth_error_m=self.max_depth_error_m,
+            broach_depth_m=self.broach_depth_m,
+            depth_scale_m=self.depth_scale_m,
+            pitch_weight=self.pitch_weight,
+            effort_weight=self.effort_weight,
+            termination_penalty=self.termination_penalty,
+            disturbance_decay=decay,
+            disturbance_gain=math.sqrt(1 - decay * decay),
+            max_steps=math.inf if max_episode_steps is None else float(max_episode_steps),
+            max_heave_mps=MAX_HEAVE_MPS,
+            max_pitch_rate_radps=MAX_PITCH_RATE_RADPS,
+            obs_low=low,
+            obs_high=high,
+            noise_std=[NOISE_STD.get(name, 0.0) for name in OBSERVATION_NAMES],
         )
         record.flags.writeable = False
         return record
+
+
+def _record(dtype: np.dtype, **fields: Any) -> np.ndarray:
+    """One record of ``dtype`` (shape (1,)), each field set by its name: all of them, and no other."""
+    names = dtype.names or ()
+    if set(fields) != set(names):
+        raise ValueError(
+            f"a record of {sorted(names)} was given {sorted(fields)}: "
+            f"missing {sorted(set(names) - set(fields))}, unknown {sorted(set(fields) - set(names))}"
+        )
+    record = np.zeros(1, dtype=dtype)
+    for name, value in fields.items():
+        record[name] = value
+    return record
+
+
+DEFAULT_ARGUMENTS: Final[Mapping[str, Any]] = MappingProxyType(
+    {name: parameter.default for name, parameter in inspect.signature(DivePlaneConfig).parameters.items()}
+)
+"""The environments' keyword arguments and their defaults (:class:`DivePlaneConfig`'s)."""

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import os
 from typing import Any, Final, SupportsFloat
@@ -15,7 +14,7 @@ from subenv import _validation as check
 from subenv.envs import transition as tr
 from subenv.envs._compiling import first_call
 from subenv.envs._interrupts import interrupts_deferred
-from subenv.envs.config import OBSERVATION_NAMES, ControlMode, DivePlaneConfig
+from subenv.envs.config import DEFAULT_ARGUMENTS, OBSERVATION_NAMES, ControlMode, DivePlaneConfig
 from subenv.envs.episodes import Loadings, check_options, draw_episode, new_seas, write_episode, write_sea
 from subenv.envs.info import step_info
 from subenv.envs.validity import SurfaceValidityWatch
@@ -148,9 +147,10 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
     - ``plane_rate_limit_radps``: None (planes move at once) or the planes' largest rate, in
       (0, 1000] rad/s.
     - ``max_pitch_rad`` in [0.01, pi/2], ``max_depth_error_m`` in (0, 1e5] m (None: 25 m on
-      SUBOFF, see below): the Episode End limits. ``depth_scale_m`` in (0, 1e5] m (None: 2 m), ``pitch_weight``, ``effort_weight`` and
-      ``termination_penalty`` in [0, 1e6]: the Rewards' terms. Within these bounds every reward
-      and observation is finite; a value outside them raises ``ValueError``.
+      SUBOFF, see below): the Episode End limits. ``depth_scale_m`` in (0, 1e5] m (None: 2 m),
+      ``pitch_weight``, ``effort_weight`` and ``termination_penalty`` in [0, 1e6]: the Rewards'
+      terms. Within these bounds every reward and observation is finite; a value outside them
+      raises ``ValueError``.
     - ``config``: instead of the arguments above, a :class:`~subenv.envs.DivePlaneConfig` (the
       object they are checked into; ``env.config``).
 
@@ -196,24 +196,24 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def __init__(
         self,
-        scenario: str | Scenario = DivePlaneConfig.scenario,
-        vehicle: str | os.PathLike[str] | Vehicle = DivePlaneConfig.vehicle,
-        control: ControlMode = DivePlaneConfig.control,
-        alpha: float = DivePlaneConfig.alpha,
-        dt: float = DivePlaneConfig.dt,
-        substeps: int = DivePlaneConfig.substeps,
-        plane_rate_limit_radps: float | None = DivePlaneConfig.plane_rate_limit_radps,
-        max_pitch_rad: float = DivePlaneConfig.max_pitch_rad,
-        max_depth_error_m: float = DivePlaneConfig.max_depth_error_m,
-        depth_scale_m: float = DivePlaneConfig.depth_scale_m,
-        pitch_weight: float = DivePlaneConfig.pitch_weight,
-        effort_weight: float = DivePlaneConfig.effort_weight,
-        termination_penalty: float = DivePlaneConfig.termination_penalty,
+        scenario: str | Scenario = DEFAULT_ARGUMENTS["scenario"],
+        vehicle: str | os.PathLike[str] | Vehicle = DEFAULT_ARGUMENTS["vehicle"],
+        control: ControlMode = DEFAULT_ARGUMENTS["control"],
+        alpha: float = DEFAULT_ARGUMENTS["alpha"],
+        dt: float = DEFAULT_ARGUMENTS["dt"],
+        substeps: int = DEFAULT_ARGUMENTS["substeps"],
+        plane_rate_limit_radps: float | None = DEFAULT_ARGUMENTS["plane_rate_limit_radps"],
+        max_pitch_rad: float = DEFAULT_ARGUMENTS["max_pitch_rad"],
+        max_depth_error_m: float | None = DEFAULT_ARGUMENTS["max_depth_error_m"],
+        depth_scale_m: float | None = DEFAULT_ARGUMENTS["depth_scale_m"],
+        pitch_weight: float = DEFAULT_ARGUMENTS["pitch_weight"],
+        effort_weight: float = DEFAULT_ARGUMENTS["effort_weight"],
+        termination_penalty: float = DEFAULT_ARGUMENTS["termination_penalty"],
         render_mode: str | None = None,
         *,
         config: DivePlaneConfig | None = None,
     ) -> None:
-        given = {
+        given: dict[str, Any] = {
             "scenario": scenario,
             "vehicle": vehicle,
             "control": control,
@@ -233,13 +233,12 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         elif not isinstance(config, DivePlaneConfig):
             raise ValueError(f"config={config!r} is invalid: must be a DivePlaneConfig")
         else:
-            changed = sorted(name for name, value in given.items() if value != _DEFAULTS[name])
+            changed = sorted(name for name, value in given.items() if value != DEFAULT_ARGUMENTS[name])
             if changed:
                 raise ValueError(f"config and keyword arguments {changed} were given: give one or the other")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"render_mode={render_mode!r} is invalid: must be None or one of {self.metadata['render_modes']}"
-            )
+            allowed = self.metadata["render_modes"]
+            raise ValueError(f"render_mode={render_mode!r} is invalid: must be None or one of {allowed}")
         self.config = config
         """The environment's configuration (checked); ``set_scenario`` replaces its scenario."""
         self.render_mode = render_mode
@@ -276,9 +275,22 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Draw an episode from the scenario (Starting State) and return its first observation and info.
+
+        Parameters
+        ----------
+        seed : int, optional
+            Seeds the environment's generator (Gymnasium's ``np_random``): None, or an integer >= 0, a
+            NumPy integer too (``np.int64(3)`` draws what ``3`` draws). Anything else raises ``ValueError``.
+        options : dict, optional
+            ``"speed"``, ``"depth_command"``, ``"initial_state"`` (see Starting State). Not a dict, or an
+            unknown key or value, raises ``ValueError`` and changes nothing.
+        """
         if "reset" in self._first_calls:
             return first_call(self._first_calls, "reset", self.reset, seed=seed, options=options)
-        checked = check_options(self.config, options)
+        # One rule for seeds and options in every environment (the vector env's and subenv.jax's too).
+        seed = check.seed("seed", seed)
+        checked = check_options(self.config, check.mapping("options", options))
         previous = (self._np_random, self._np_random_seed)
         super().reset(seed=seed)
         rng = self.np_random
@@ -306,6 +318,10 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         return self._obs_row.copy(), step_info(self._report.ravel().tolist())
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, SupportsFloat, bool, bool, dict[str, Any]]:
+        """Advance one control period with the planes commanded by ``action`` (clipped to the Action Space).
+
+        A NaN or infinite action raises ``ValueError`` and changes nothing.
+        """
         if "step" in self._first_calls:
             return first_call(self._first_calls, "step", self.step, action)
         if self.episode is None:
@@ -344,10 +360,11 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         return self._obs_row.copy(), r[_REWARD], r[_TERMINATED] > 0.0, r[_TRUNCATED] > 0.0, step_info(r)
 
     def render(self) -> np.ndarray | None:
+        """The boat, its planes and its depth history: an RGB frame (``"rgb_array"``) or a window."""
         if self.render_mode is None:
             gym.logger.warn(
-                "You are calling render method without specifying any render mode. "
-                'Set render_mode at initialization, e.g. gym.make("subenv/DivePlane-v0", render_mode="rgb_array")'
+                "You are calling render method without specifying any render mode. Set render_mode at "
+                'initialization, e.g. gym.make("subenv/DivePlane-v0", render_mode="rgb_array")'
             )
             return None
         from subenv.envs.rendering import Frame, HumanWindow, render_rgb
@@ -361,6 +378,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         return None
 
     def close(self) -> None:
+        """Close the render window, if one is open."""
         if self._window is not None:
             self._window.close()
             self._window = None
@@ -460,7 +478,6 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         return self._rngs
 
 
-_DEFAULTS: Final = {f.name: f.default for f in dataclasses.fields(DivePlaneConfig)}
 _FIRST: Final = np.zeros(1, dtype=np.intp)  # the index of a single environment
 _TIME, _DEPTH, _COMMAND, _SPEED, _REWARD, _TERMINATED, _TRUNCATED = (
     tr.REPORT_KEYS.index(key)

@@ -71,7 +71,7 @@ class Loadings:
     """The loadings of an environment's episodes, memoised (a new draw of the same loading costs nothing)."""
 
     def __init__(self, config: DivePlaneConfig) -> None:
-        self.base = config.base_vehicle
+        self.base = config.vehicle
         self.alpha = config.alpha
         self._found: dict[tuple[float, float, float, float | None, float], Loading] = {}
 
@@ -125,7 +125,7 @@ def draw_episode(
     Returns the draw, its loading, and the episode's and the state's fields (:func:`episode_fields`).
     ``options`` must have passed :func:`check_options`.
     """
-    draw = for_vehicle(config, config.base_scenario.sample(rng, config.base_vehicle.weight_N))
+    draw = for_vehicle(config, config.scenario.sample(rng, config.vehicle.weight_N))
     std = draw.disturbance_std_N
     disturbance = float(rng.normal(0.0, std)) if std > 0 else 0.0
     loading = loadings.of(draw)
@@ -169,7 +169,7 @@ def draw_episode_batch(
 
     Returns as :func:`draw_episode`, with arrays (one value per episode) where the draw has them.
     """
-    draw = for_vehicle(config, config.base_scenario.sample_batch(uniforms, config.base_vehicle.weight_N))
+    draw = for_vehicle(config, config.scenario.sample_batch(uniforms, config.vehicle.weight_N))
     loading = loadings.of(draw)
     return (draw, loading, *episode_fields(config, draw, loading, disturbances, None))
 
@@ -190,7 +190,7 @@ def episode_fields(
     ucr = loading.critical_speed_mps
     if draw.speed_relative and not math.isfinite(ucr):
         raise ValueError(
-            f"scenario {config.base_scenario.name!r} gives speeds relative to the critical speed, but "
+            f"scenario {config.scenario.name!r} gives speeds relative to the critical speed, but "
             f"vehicle {loading.vehicle.name!r} (z_GB={loading.vehicle.z_GB_m!r} m) has none"
         )
     scale = ucr if draw.speed_relative else 1.0
@@ -265,19 +265,18 @@ def _sea(draw: EpisodeConfig, vehicle: Vehicle, knot_shape: Any) -> tuple[int, n
         return 0, None
     units = np.asarray(draw.wave_uniforms, dtype=float)  # (2 n,) or (2 n, batch)
     jitter, phase = units[: sea.waves], 2.0 * math.pi * units[sea.waves :]
-    hull, rho, g = vehicle.hull, vehicle.water_density_kg_m3, vehicle.gravity_m_s2
+    x, breadth = np.asarray(vehicle.hull.x_m), np.asarray(vehicle.hull.breadth_m)
+    rho, g = vehicle.water_density_kg_m3, vehicle.gravity_m_s2
     if batch is None:
-        return sea.waves, sea.components(jitter, phase, hull.x_m, hull.breadth_m, rho, g)
-    waves = np.stack(
-        [sea.components(jitter[:, i], phase[:, i], hull.x_m, hull.breadth_m, rho, g) for i in range(batch)]
-    )
+        return sea.waves, sea.components(jitter, phase, x, breadth, rho, g)
+    waves = np.stack([sea.components(jitter[:, i], phase[:, i], x, breadth, rho, g) for i in range(batch)])
     return sea.waves, waves
 
 
 def write_episode(records: np.ndarray, index: int | np.ndarray, fields: Mapping[str, Any]) -> None:
     """Write ``fields`` (:func:`episode_fields`) into ``records[index]``; ``index`` an int, or an array of
-    indices with a field's value one per index or shared."""
-    names = records.dtype.names
+    indices with a field's value one per index or shared. Each field of the records is set by its name."""
+    names = records.dtype.names or ()
     if isinstance(index, (int, np.integer)):
         records[index] = tuple([fields[name] for name in names])  # (one assignment: a reset's Python cost)
         return
@@ -330,9 +329,10 @@ def _initial_state(
         unknown = set(value) - set(STATE_KEYS)
         if unknown:
             raise ValueError(
-                f"options['initial_state'] has unknown keys {sorted(unknown)}: allowed keys are {list(STATE_KEYS)}"
+                f"options['initial_state'] has unknown keys {sorted(unknown)}: allowed keys are "
+                f"{list(STATE_KEYS)}"
             )
-        state = [value.get(k, d) for k, d in zip(STATE_KEYS, drawn)]
+        state = [value.get(k, d) for k, d in zip(STATE_KEYS, drawn, strict=True)]
     elif isinstance(value, (Sequence, np.ndarray)) and not isinstance(value, str) and len(value) == 4:
         state = list(value)
     else:
@@ -340,7 +340,7 @@ def _initial_state(
             f"options['initial_state']={value!r} is invalid: must be (pitch, heave, pitch_rate, depth) "
             f"or a mapping with keys {list(STATE_KEYS)}"
         )
-    for key, v in zip(STATE_KEYS, state):
+    for key, v in zip(STATE_KEYS, state, strict=True):
         if not check.is_number(v):
             raise ValueError(f"options['initial_state']={value!r} is invalid: must hold real numbers")
         unknown_depth = key == "depth" and math.isnan(command) and isinstance(v, float) and math.isnan(v)
@@ -381,6 +381,7 @@ def _initial_state(
         "options['initial_state']['depth']",
         depth,
         low < depth <= high,
-        f"in ({low:.4g}, {high:.4g}] m (below the hull radius, within max_depth_error_m of the ordered depth)",
+        f"in ({low:.4g}, {high:.4g}] m (below the hull radius, within max_depth_error_m of the ordered "
+        "depth)",
     )
     return pitch, heave, rate, depth

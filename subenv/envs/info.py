@@ -28,7 +28,9 @@ a ``take`` costs less)."""
 
 def step_info(values: list[float]) -> dict[str, Any]:
     """The ``info`` of one sub-environment from its report column (as a list of floats)."""
-    info = dict(zip(_VALUE_KEYS, values))  # (zip stops at the last key: the reason code is not one)
+    # Not strict: the column goes on past the value keys (the reason code, the reward and the end), and
+    # zip stops at the last key.
+    info: dict[str, Any] = dict(zip(_VALUE_KEYS, values, strict=False))
     info["termination_reason"] = tr.REASONS[int(values[_REASON])]
     return info
 
@@ -58,6 +60,6 @@ def step_infos(
         for value in values:
             value[~mask] = None if value.dtype == object else 0.0
         masks = np.tile(mask, (len(INFO_KEYS), 1))
-    infos: dict[str, Any] = dict(zip(INFO_KEYS, values))
-    infos.update(zip(_MASK_KEYS, masks))
+    infos: dict[str, Any] = dict(zip(INFO_KEYS, values, strict=True))
+    infos.update(zip(_MASK_KEYS, masks, strict=True))
     return infos

@@ -13,7 +13,8 @@ __all__ = ["ENTRY_POINT", "HEADLINE_ID", "VECTOR_ENTRY_POINT", "env_ids", "regis
 
 ENTRY_POINT = "subenv.envs.dive_plane:DivePlaneEnv"
 VECTOR_ENTRY_POINT = "subenv.envs.vector:DivePlaneVectorEnv"
-"""What ``gym.make_vec(id, num_envs=N)`` builds for every id (``vectorization_mode="sync"`` for SyncVectorEnv)."""
+"""What ``gym.make_vec(id, num_envs=N)`` builds for every id (``vectorization_mode="sync"`` for
+SyncVectorEnv)."""
 HEADLINE_ID = "subenv/DivePlane-v0"
 """The randomized scenario under the package's headline name."""
 _HEADLINE_SCENARIO = "Randomized"

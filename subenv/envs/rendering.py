@@ -187,7 +187,7 @@ class Frame:
         """The frame of a sub-environment: its vehicle, its records
         (:data:`~subenv.envs.transition.STATE_DTYPE`, :data:`~subenv.envs.transition.EPISODE_DTYPE`)
         and its (time, depth, ordered depth) history."""
-        times, depths, commands = zip(*history) if history else ((), (), ())
+        times, depths, commands = zip(*history, strict=True) if history else ((), (), ())
         return cls(
             hull_x_m=vehicle.hull.x_m,
             hull_breadth_m=vehicle.hull.breadth_m,
@@ -391,7 +391,7 @@ def _finite_runs(xs: Sequence[float], ys: Sequence[float]) -> list[list[tuple[fl
     """Split ``(x, y)`` pairs into runs of consecutive finite points."""
     runs: list[list[tuple[float, float]]] = []
     current: list[tuple[float, float]] = []
-    for x, y in zip(xs, ys):
+    for x, y in zip(xs, ys, strict=True):
         if math.isfinite(x) and math.isfinite(y):
             current.append((x, y))
         elif current:
@@ -507,8 +507,8 @@ def _draw_side_view(surface: pygame.Surface, pg: Any, font: Any | None, frame: F
     def to_screen(bx: float, bz: float) -> tuple[float, float]:
         return cx + (bx * c - bz * s) * scale, hull_y - (bx * s + bz * c) * scale
 
-    outline = [to_screen(xi, hi_) for xi, hi_ in zip(x, half)]
-    outline += [to_screen(xi, -hi_) for xi, hi_ in zip(x[::-1], half[::-1])]
+    outline = [to_screen(xi, hi_) for xi, hi_ in zip(x, half, strict=True)]
+    outline += [to_screen(xi, -hi_) for xi, hi_ in zip(x[::-1], half[::-1], strict=True)]
     pg.draw.polygon(surface, HULL_RGB, outline)
     pg.draw.polygon(surface, HULL_EDGE_RGB, outline, 1)
 

@@ -73,6 +73,12 @@ class SB3VecEnv(VecEnv):
 
     # --- SB3 VecEnv API -------------------------------------------------------------------------
     def reset(self) -> VecEnvObs:
+        """Reset every sub-environment with the seeds and options set since the last reset (SB3's
+        ``seed`` and ``set_options``), in one vector reset per distinct options dict.
+
+        Returns the observations, shape (num_envs, obs_dim); each sub-environment's ``info`` goes to
+        ``reset_infos``.
+        """
         seeds = list(self._seeds)
         options = [dict(o) for o in self._options]
         groups: dict[str, list[int]] = {}
@@ -87,31 +93,37 @@ class SB3VecEnv(VecEnv):
                 opts["reset_mask"] = mask
             seed = None if all(s is None for s in seeds) else seeds
             obs, infos = self.venv.reset(seed=seed, options=opts or None)  # type: ignore[arg-type]
-            for i, info in zip(indices, self._split(infos, indices)):
+            for i, info in zip(indices, self._split(infos, indices), strict=True):
                 self.reset_infos[i] = info
         self._reset_seeds()
         self._reset_options()
         return cast(VecEnvObs, obs)
 
     def step_async(self, actions: np.ndarray) -> None:
+        """Keep ``actions``, shape (num_envs, action_dim), for :meth:`step_wait`."""
         self._actions = actions
 
     def step_wait(self) -> VecEnvStepReturn:
+        """Step every sub-environment with the actions of :meth:`step_async`: SB3's ``(obs, rewards,
+        dones, infos)``, the ended sub-environments already reset (``obs`` their first observation),
+        with their last observation in ``infos[i]["terminal_observation"]`` and
+        ``infos[i]["TimeLimit.truncated"]`` set for every one."""
         obs, rewards, terminated, truncated, infos = self.venv.step(self._actions)
         dones = terminated | truncated
         ended = np.flatnonzero(dones)
         step_infos = self._split(infos, range(self.num_envs))
         if len(ended):
             final_infos = self._split(infos["final_info"], ended)
-            for i, final in zip(ended, final_infos):
+            for i, final in zip(ended, final_infos, strict=True):
                 self.reset_infos[i] = step_infos[i]  # the reset's info, as DummyVecEnv keeps it
                 final["terminal_observation"] = infos["final_obs"][i]
                 step_infos[i] = final
-        for info, term, trunc in zip(step_infos, terminated.tolist(), truncated.tolist()):
+        for info, term, trunc in zip(step_infos, terminated.tolist(), truncated.tolist(), strict=True):
             info["TimeLimit.truncated"] = trunc and not term
         return obs, rewards.astype(np.float32), dones, step_infos
 
     def close(self) -> None:
+        """Close the vector env."""
         self.venv.close()
 
     def get_attr(self, attr_name: str, indices: VecEnvIndices = None) -> list[Any]:
@@ -123,6 +135,7 @@ class SB3VecEnv(VecEnv):
         return [value for _ in self._get_indices(indices)]
 
     def set_attr(self, attr_name: str, value: Any, indices: VecEnvIndices = None) -> None:
+        """Not supported (NotImplementedError): the sub-environments share one configuration."""
         raise NotImplementedError(
             f"set_attr({attr_name!r}): the sub-environments of a native vector env share one configuration"
         )
@@ -149,6 +162,7 @@ class SB3VecEnv(VecEnv):
         return [result for _ in chosen]
 
     def env_is_wrapped(self, wrapper_class: type[gym.Wrapper], indices: VecEnvIndices = None) -> list[bool]:
+        """False for every index: the sub-environments are rows of one table, never wrapped."""
         return [False for _ in self._get_indices(indices)]
 
     def get_images(self) -> Sequence[np.ndarray | None]:
@@ -167,14 +181,14 @@ class SB3VecEnv(VecEnv):
         for key in keys:
             values, mask = infos[key], infos.get("_" + key)
             if isinstance(values, dict):
-                for d, sub in zip(out, self._split(values, indices)):
+                for d, sub in zip(out, self._split(values, indices), strict=True):
                     d[key] = sub
                 continue
             picked = (
                 values[indices].tolist() if isinstance(values, np.ndarray) else [values[i] for i in indices]
             )
             present = mask[indices].tolist() if mask is not None else [True] * len(indices)
-            for d, value, ok in zip(out, picked, present):
+            for d, value, ok in zip(out, picked, present, strict=True):
                 if ok:
                     d[key] = value
         return out

@@ -48,7 +48,15 @@ import numba
 import numpy as np
 
 from subenv._typing import FloatArray
-from subenv.dynamics._jit import inline_kernel, kernel, parallel_kernel, select, threading_layer_available
+from subenv.dynamics._jit import KERNEL_SOURCES as DYNAMICS_KERNEL_SOURCES
+from subenv.dynamics._jit import (
+    declare_kernel_sources,
+    inline_kernel,
+    kernel,
+    parallel_kernel,
+    select,
+    threading_layer_available,
+)
 from subenv.dynamics.integrate import (
     LANE_PITCH,
     LANE_ROWS,
@@ -88,6 +96,12 @@ __all__ = [
     "step_parallel",
     "threading_layer_available",
 ]
+
+KERNEL_SOURCES: Final = declare_kernel_sources(
+    __file__, ("transition.py",), inlines=(DYNAMICS_KERNEL_SOURCES,)
+)
+"""The environments' kernel sources (:func:`subenv.dynamics._jit.declare_kernel_sources`): this file, whose
+kernels inline the dynamics'."""
 
 MAX_KNOTS: Final = 4
 """Knots of an episode's speed profile, at most (a constant speed is one, a ramp three)."""

@@ -7,6 +7,7 @@ from typing import Any, Final
 
 import numba
 import numpy as np
+from gymnasium.error import ResetNeeded
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
@@ -131,14 +132,15 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         try:
             mode = AutoresetMode(autoreset_mode)
         except ValueError:
+            modes = [m.value for m in _AUTORESET_MODES]
             raise ValueError(
-                f"autoreset_mode={autoreset_mode!r} is invalid: must be one of {[m.value for m in _AUTORESET_MODES]}"
+                f"autoreset_mode={autoreset_mode!r} is invalid: must be one of {modes}"
             ) from None
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"render_mode={render_mode!r} is invalid: must be None or one of {self.metadata['render_modes']}"
-            )
-        most = numba.config.NUMBA_NUM_THREADS if tr.threading_layer_available() else 1
+            allowed = self.metadata["render_modes"]
+            raise ValueError(f"render_mode={render_mode!r} is invalid: must be None or one of {allowed}")
+        # (numba's config sets NUMBA_NUM_THREADS from the environment at import: mypy does not see it)
+        most = numba.config.NUMBA_NUM_THREADS if tr.threading_layer_available() else 1  # type: ignore[attr-defined]
         if threads is None:
             threads = min(most, max(1, n // ENVS_PER_THREAD))
         else:
@@ -229,21 +231,22 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
             return first_call(self._first_calls, "reset", self.reset, seed=seed, options=options)
         n = self.num_envs
         seeds = _seeds(seed, n)
-        options = dict(options or {})
+        options = check.mapping("options", options)  # (a copy: reset_mask is taken out of it)
         mask = options.pop("reset_mask", None)
         if mask is None:
             mask = self._everyone
-        else:  # SyncVectorEnv's checks, with its exception types
+        else:  # SyncVectorEnv's checks, with its exception types and messages (Gymnasium 1.4)
             if not isinstance(mask, np.ndarray):
-                raise TypeError(
-                    f"options['reset_mask']={mask!r} is invalid: must be a numpy array, got {type(mask)}"
-                )
+                raise TypeError(f"`options['reset_mask']` must be a numpy array, got {type(mask)}")
             if mask.shape != (n,):
-                raise ValueError(f"options['reset_mask'] has shape {mask.shape}: must have shape ({n},)")
+                raise ValueError(f"`options['reset_mask']` must have shape `({n},)`, got {mask.shape}")
             if mask.dtype != np.bool_:
-                raise TypeError(f"options['reset_mask'] has dtype {mask.dtype}: must have dtype bool")
+                raise TypeError(f"`options['reset_mask']` must have `dtype=np.bool_`, got {mask.dtype}")
             if not mask.any():
-                raise ValueError("options['reset_mask'] is all False: must have at least one True value")
+                raise ValueError(
+                    "`options['reset_mask']` must contain a boolean array with at least one True value, "
+                    f"got reset_mask={mask}"
+                )
             if self._interrupted:
                 raise RuntimeError(
                     "a step or reset was interrupted: reset every sub-environment (no reset_mask)"
@@ -295,7 +298,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
 
     def _restore(self, saved: dict[str, Any]) -> None:
         self._generators, self._seeds, self._rngs = saved["generators"], saved["seeds"], saved["rngs"]
-        for g, state in zip(self._generators, saved["states"]):
+        for g, state in zip(self._generators, saved["states"], strict=True):
             if g is not None:
                 g.bit_generator.state = state
         self._state[:], self._episode[:], self._seas[:], self._obs[:] = saved["records"]
@@ -307,16 +310,26 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
     def step(
         self, actions: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        """Step every sub-environment with its row of ``actions`` (``autoreset_mode`` resets the ended ones).
+
+        A NaN or infinite action, or ``actions`` of another shape, raises ``ValueError`` before any
+        sub-environment steps.
+        """
         if "step" in self._first_calls:
             return first_call(self._first_calls, "step", self.step, actions)
         if not self._ready:
-            if not self._started.all():
-                raise _reset_needed(np.flatnonzero(~self._started))
+            if not self._started.any():  # what Gymnasium's OrderEnforcing says, in SyncVectorEnv too
+                raise ResetNeeded("Cannot call env.step() before calling env.reset()")
+            if not self._started.all():  # (a first reset with a reset_mask, which SyncVectorEnv refuses)
+                never = np.flatnonzero(~self._started).tolist()[:10]
+                raise ResetNeeded(
+                    f"Cannot call step() before reset(): sub-environments {never} were never reset"
+                )
             self._ready = True
         if self._interrupted:
             raise RuntimeError(
-                "a step or reset of this vector environment was interrupted (e.g. by KeyboardInterrupt) and its "
-                "sub-environments may be midway: call reset() before stepping again"
+                "a step or reset of this vector environment was interrupted (e.g. by KeyboardInterrupt) and "
+                "its sub-environments may be midway: call reset() before stepping again"
             )
         actions = self._check_actions(actions)
         mode = self.autoreset_mode
@@ -350,7 +363,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         rewards = report[_REWARD].copy()
         terminated, truncated = report[_TERMINATED : _TRUNCATED + 1] > 0.0
         done = terminated | truncated
-        self._any_done = np.count_nonzero(done) > 0
+        self._any_done = bool(np.count_nonzero(done))
         self._done = done
         if mode is not AutoresetMode.SAME_STEP or not self._any_done:
             result = (
@@ -381,7 +394,8 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         return self._obs.copy(), rewards, terminated, truncated, infos
 
     def render(self) -> tuple[np.ndarray, ...] | None:
-        """One frame per sub-environment (``render_mode="rgb_array"``), as Gymnasium's ``CartPoleVectorEnv``."""
+        """One frame per sub-environment (``render_mode="rgb_array"``), as Gymnasium's
+        ``CartPoleVectorEnv``."""
         if self.render_mode is None:
             from gymnasium import logger
 
@@ -507,7 +521,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         else:
             config, generators, loadings = self.config, self._generators, self._loadings
             for i in index.tolist():
-                draw, loading, episode, state = draw_episode(config, generators[i], loadings, options)  # type: ignore[arg-type]
+                draw, loading, episode, state = draw_episode(config, generators[i], loadings, options)
                 write_episode(self._episode, i, episode)
                 write_episode(self._state, i, state)
                 write_sea(self._seas, i, episode)
@@ -549,30 +563,20 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
 
 
 def _seeds(seed: Any, n: int) -> list[int | None]:
-    """Each sub-environment's seed from ``reset(seed=...)``, checked before any is used."""
-
-    def is_seed(value: Any) -> bool:
-        return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)) and value >= 0
-
-    allowed = f"None, an integer >= 0 or a sequence of num_envs={n} such integers (or None)"
-    if seed is None:
-        return [None] * n
-    if is_seed(seed):
-        return [int(seed) + i for i in range(n)]
+    """Each sub-environment's seed from ``reset(seed=...)``, checked before any is used: the single
+    environment's rule (:func:`subenv._validation.seed`) for an integer and for each of a sequence."""
+    if seed is None or check.is_integer(seed):
+        first = check.seed("seed", seed)
+        return [None] * n if first is None else [first + i for i in range(n)]
     check.require(
-        "seed", seed, isinstance(seed, (Sequence, np.ndarray)) and not isinstance(seed, (str, bytes)), allowed
+        "seed",
+        seed,
+        isinstance(seed, (Sequence, np.ndarray)) and not isinstance(seed, (str, bytes)),
+        f"None, an integer >= 0 or a sequence of num_envs={n} such integers (or None)",
     )
     seeds = list(seed)
-    if len(seeds) != n:
-        raise ValueError(f"seed has {len(seeds)} entries: a sequence of seeds must have num_envs={n} entries")
-    for i, value in enumerate(seeds):
-        check.require(f"seed[{i}]", value, value is None or is_seed(value), "None or an integer >= 0")
-    return [None if value is None else int(value) for value in seeds]
-
-
-def _reset_needed(indices: np.ndarray) -> Exception:
-    from gymnasium.error import ResetNeeded
-
-    return ResetNeeded(
-        f"Cannot call step() before reset(): sub-environments {indices.tolist()[:10]} were never reset"
-    )
+    if len(seeds) != n:  # SyncVectorEnv's message
+        raise ValueError(
+            f"If seeds are passed as a list the length must match num_envs={n} but got length={len(seeds)}."
+        )
+    return [check.seed(f"seed[{i}]", value) for i, value in enumerate(seeds)]

@@ -26,7 +26,15 @@ from subenv.evaluation.controller import (
     register_controller,
 )
 from subenv.evaluation.metrics import EpisodeMetrics, episode_metrics
-from subenv.evaluation.rollout import EpisodeResult, Trajectory, evaluate, run_episode, run_episodes
+from subenv.evaluation.rollout import (
+    ControllerError,
+    ControllerFailure,
+    EpisodeResult,
+    Trajectory,
+    evaluate,
+    run_episode,
+    run_episodes,
+)
 from subenv.evaluation.suites import (
     DEFAULT_SEED,
     DEFAULT_SUITE,
@@ -44,7 +52,9 @@ __all__ = [
     "BatchController",
     "Comparison",
     "Controller",
+    "ControllerError",
     "ControllerFactory",
+    "ControllerFailure",
     "EpisodeMetrics",
     "EpisodeResult",
     "SingleRowMixin",

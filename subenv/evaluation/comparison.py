@@ -16,11 +16,19 @@ rolls out, aggregates and writes::
 The folder appears complete or not at all, and replaces an earlier one atomically
 (:func:`subenv.atomic.atomic_output_dir`); it holds a marker file saying it is a result of
 ``subenv evaluate``, and ``overwrite`` replaces only such a folder.
+
+A controller that fails (:class:`~subenv.evaluation.rollout.ControllerFailure`: an exception in its
+``reset`` or ``act``, an action the environment refuses) costs no other controller its results. It
+goes on with its other scenarios; the scenarios it completed are in ``results.csv`` and the summary
+(every row there is complete, on the same seeds as everyone's), the one it failed on has no episodes.
+The leaderboard and the figures leave it out (a leaderboard must not rank an incomplete controller),
+listing its failures instead, and ``run.json`` records them.
 """
 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import json
 import math
 import os
@@ -38,12 +46,20 @@ from subenv.evaluation.results import (
     atomic_output_dir,
     atomic_write_text,
     episode_table,
+    failures_markdown,
     leaderboard_markdown,
     summarize,
     summary_markdown,
     write_csv,
 )
-from subenv.evaluation.rollout import EpisodeResult, Trajectory, evaluate, resolve_controllers, resolve_suite
+from subenv.evaluation.rollout import (
+    ControllerFailure,
+    EpisodeResult,
+    Trajectory,
+    evaluate,
+    resolve_controllers,
+    resolve_suite,
+)
 from subenv.evaluation.suites import DEFAULT_SEED, DEFAULT_SUITE, Suite
 from subenv.vehicles.loader import load_vehicle
 from subenv.vehicles.vehicle import Vehicle
@@ -69,7 +85,8 @@ class Comparison:
     episodes, seed : int
         Episodes per scenario and controller; base seed (episode i: ``seed + i``).
     results : list of EpisodeResult
-        Per episode, ordered by controller, scenario, episode.
+        Per episode, ordered by controller, scenario, episode (none of a controller on a scenario
+        where it failed).
     summary : list of dict
         Aggregates per controller x scenario (:func:`~subenv.evaluation.results.summarize`).
     leaderboard : str
@@ -78,6 +95,9 @@ class Comparison:
         The folder written (None if not asked to write).
     elapsed_s : float
         Wall-clock time of the rollouts [s] (not counting tables and plots).
+    failures : tuple of ControllerFailure
+        The controllers' failures, in the order they happened (empty when every controller ran
+        every episode); a controller with one is not ranked.
     """
 
     suite: Suite
@@ -89,6 +109,13 @@ class Comparison:
     leaderboard: str = field(repr=False)
     out_dir: Path | None
     elapsed_s: float
+    failures: tuple[ControllerFailure, ...] = ()
+
+    @property
+    def failed(self) -> tuple[str, ...]:
+        """The controllers that failed on some scenario, in the order run."""
+        names = {f.controller for f in self.failures}
+        return tuple(name for name in self.controllers if name in names)
 
 
 def run_comparison(
@@ -159,10 +186,15 @@ def run_comparison(
     )
     with folder_block as folder:
         start = time.perf_counter()
-        results = evaluate(ctrls, the_suite, n, seed, progress, vehicle=boat, keep_trajectories=1)
+        failures: list[ControllerFailure] = []
+        results = evaluate(
+            ctrls, the_suite, n, seed, progress, vehicle=boat, keep_trajectories=1, on_failure=failures.append
+        )
         elapsed = time.perf_counter() - start
         summary = summarize(results)
-        board = leaderboard_markdown(results, title=f"Leaderboard: suite '{the_suite.name}'")
+        board = leaderboard_markdown(
+            results, title=f"Leaderboard: suite '{the_suite.name}'", failures=failures
+        )
         comparison = Comparison(
             suite=the_suite,
             controllers=tuple(c.name for c in ctrls),
@@ -173,6 +205,7 @@ def run_comparison(
             leaderboard=board,
             out_dir=None if out_dir is None else Path(out_dir),
             elapsed_s=elapsed,
+            failures=tuple(failures),
         )
         if folder is not None:
             _write_files(comparison, folder, plots=plots, controllers=ctrls, vehicle=vehicle)
@@ -188,6 +221,7 @@ def _run_record(
         version = "unknown"
     suite = comparison.suite
     by_name = {c.name: c for c in controllers or ()}
+    failed = comparison.failed
     return {
         "subenv_version": version,
         "suite": suite.name,
@@ -197,11 +231,16 @@ def _run_record(
         "episodes": comparison.episodes,
         "seeds": [comparison.seed, comparison.seed + comparison.episodes - 1],
         "controllers": [
-            {"name": name, "control": by_name[name].control, "alpha": float(by_name[name].alpha)}
-            if name in by_name
-            else {"name": name}
+            {"name": name}
+            | (
+                {"control": by_name[name].control, "alpha": float(by_name[name].alpha)}
+                if name in by_name
+                else {}
+            )
+            | {"complete": name not in failed}
             for name in comparison.controllers
         ],
+        "failures": [dataclasses.asdict(f) | {"message": f.message} for f in comparison.failures],
         "depth_tolerance_m": m.DEPTH_TOLERANCE_M,
         "hold_window_s": m.HOLD_WINDOW_S,
         "saturation_level": m.SATURATION_LEVEL,
@@ -245,12 +284,16 @@ def _write_files(
     write_csv(folder / "summary.csv", comparison.summary)
     atomic_write_text(folder / "leaderboard.md", comparison.leaderboard)
     atomic_write_text(
-        folder / "summary.md", summary_markdown(comparison.summary, title=f"Suite '{comparison.suite.name}'")
+        folder / "summary.md",
+        summary_markdown(comparison.summary, title=f"Suite '{comparison.suite.name}'")
+        + failures_markdown(comparison.failures),
     )
     atomic_write_text(
         folder / "run.json", json.dumps(_run_record(comparison, controllers, vehicle), indent=2) + "\n"
     )
-    if plots:
+    # The figures compare the controllers that completed the suite (and replay no failed controller).
+    shown = [r for r in comparison.results if r.controller not in comparison.failed]
+    if plots and shown:
         from subenv.evaluation.plots import plot_metrics_vs_speed, plot_outcomes, replay_trajectory
 
         by_name = {c.name: c for c in controllers or resolve_controllers(list(comparison.controllers))}
@@ -261,7 +304,7 @@ def _write_files(
             )
 
         for scenario in comparison.suite.scenarios:
-            mine = [r for r in comparison.results if r.scenario == scenario]
+            mine = [r for r in shown if r.scenario == scenario]
             if mine:
                 plot_outcomes(mine, folder / "plots" / f"trajectories_{scenario}.png", trajectory_of)
-        plot_metrics_vs_speed(comparison.results, folder / "plots" / "metrics_vs_speed.png")
+        plot_metrics_vs_speed(shown, folder / "plots" / "metrics_vs_speed.png")

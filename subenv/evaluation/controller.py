@@ -95,7 +95,8 @@ class BatchController(Controller, Protocol):
     """
 
     def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
-        """Start ``len(infos)`` episodes: ``infos[i]`` is episode i's reset ``info`` (as ``reset`` gets it)."""
+        """Start ``len(infos)`` episodes: ``infos[i]`` is episode i's reset ``info`` (as ``reset`` gets
+        it)."""
         ...
 
     def act_batch(self, observations: np.ndarray) -> np.ndarray:
@@ -108,9 +109,11 @@ class SingleRowMixin:
     """``reset`` and ``act`` of a :class:`BatchController` as batches of one row."""
 
     def reset(self, info: Mapping[str, Any], vehicle: Vehicle) -> None:
+        """``reset_batch([info], vehicle)``."""
         self.reset_batch([info], vehicle)  # type: ignore[attr-defined]
 
     def act(self, observation: np.ndarray) -> np.ndarray:
+        """The one row of ``act_batch`` on ``observation`` as a batch of one."""
         action: np.ndarray = self.act_batch(np.asarray(observation)[None])[0]  # type: ignore[attr-defined]
         return action
 
@@ -188,10 +191,29 @@ def controller_names() -> list[str]:
 
 
 def make_controller(name: str) -> Controller:
-    """A new controller by registered name; a ValueError lists the known names."""
+    """A new controller by registered name.
+
+    The name it is registered under is its identity: the results, the tables and the replays of the
+    plots know a controller by its ``name`` attribute, so a factory whose controller calls itself
+    anything else (a plugin declared as ``liar`` making a controller named ``lqr``, which would
+    publish rows under another controller's name) is refused.
+
+    Raises
+    ------
+    ValueError
+        ``name`` is not registered (the message lists the known names), or the controller's ``name``
+        attribute is not ``name``.
+    """
     _discover_once()
     try:
         factory = _REGISTRY[name]
     except KeyError:
         raise ValueError(f"controller={name!r} is unknown: must be one of {controller_names()}") from None
-    return factory()
+    controller = factory()
+    own = getattr(controller, "name", None)
+    if own != name:
+        raise ValueError(
+            f"controller {name!r} is invalid: its name attribute is {own!r}, and must be {name!r}, the name "
+            "it is registered under (results are published by name)"
+        )
+    return controller

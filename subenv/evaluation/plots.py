@@ -54,7 +54,8 @@ _OUTCOME_COLORS: Final = {
 
 
 def require_matplotlib() -> None:
-    """Raise :class:`~subenv.extras.MissingExtra` (an ImportError naming the ``plot`` extra) without matplotlib."""
+    """Raise :class:`~subenv.extras.MissingExtra` (an ImportError naming the ``plot`` extra) without
+    matplotlib."""
     require("plot", "the plots", "matplotlib")
 
 
@@ -104,8 +105,8 @@ def replay_trajectory(
         raise ValueError(
             f"replaying {result.controller} on {result.scenario} seed {result.seed} gave outcome "
             f"{again.metrics.outcome!r}, IAE {again.metrics.iae_m_s:.6g} m s; the results say "
-            f"{result.metrics.outcome!r}, {result.metrics.iae_m_s:.6g} m s (another vehicle or time limit, or a "
-            "controller that is not deterministic?)"
+            f"{result.metrics.outcome!r}, {result.metrics.iae_m_s:.6g} m s (another vehicle or time limit, "
+            "or a controller that is not deterministic?)"
         )
     assert again.trajectory is not None
     return again.trajectory
@@ -251,7 +252,8 @@ def outcomes_figure(
         title
         or (
             f"{scenarios[0]}: a typical episode of each outcome\n({len(results)} episodes, {controllers} "
-            f"controller{'s' if controllers > 1 else ''}; success is judged over the final {HOLD_WINDOW_S:g} s)"
+            f"controller{'s' if controllers > 1 else ''}; success is judged over the final "
+            f"{HOLD_WINDOW_S:g} s)"
         ),
         fontsize="medium",
     )

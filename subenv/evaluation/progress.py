@@ -62,6 +62,8 @@ class Progress:
             self._bar.set_description(what)
 
     def update(self, episodes: int = 1) -> None:
+        """Count ``episodes`` more done: the bar advances, or a log line is printed each time another
+        1/:data:`LOG_LINES` of the total is reached."""
         self.done += episodes
         if self._bar is not None:
             self._bar.update(episodes)
@@ -82,6 +84,7 @@ class Progress:
         )
 
     def close(self) -> None:
+        """End the bar (a no-op without one); safe to call more than once."""
         if self._bar is not None:
             self._bar.close()
             self._bar = None

@@ -26,7 +26,7 @@ from subenv.atomic import (
     check_output_dir,
 )
 from subenv.evaluation.metrics import DEPTH_TOLERANCE_M, HOLD_WINDOW_S, OUTCOMES, EpisodeMetrics
-from subenv.evaluation.rollout import EpisodeResult
+from subenv.evaluation.rollout import ControllerFailure, EpisodeResult
 
 __all__ = [
     "CONFIDENCE_LEVEL",
@@ -40,6 +40,7 @@ __all__ = [
     "by_speed_ratio",
     "check_output_dir",
     "episode_table",
+    "failures_markdown",
     "leaderboard_markdown",
     "mean_interval",
     "median_interval",
@@ -300,7 +301,11 @@ def by_speed_ratio(
         which = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, n_bins - 1)
         for c in controllers:
             for b in range(n_bins):
-                group = [(r, float(u)) for r, u, k in zip(mine, x, which) if r.controller == c and k == b]
+                group = [
+                    (r, float(u))
+                    for r, u, k in zip(mine, x, which, strict=True)
+                    if r.controller == c and k == b
+                ]
                 if not group:
                     continue
                 k_ok = sum(r.metrics.success for r, _ in group)
@@ -375,8 +380,8 @@ OUTCOME_NOTE: Final = (
     f"|depth error| <= {DEPTH_TOLERANCE_M:g} m over the final {HOLD_WINDOW_S:g} s); wrong branch (a steady "
     "pitched state with a plane pinned at its limit, off depth, over that window, even if the episode then "
     "broached or left the depth band); steady offset (settled off depth, planes free); the environment's "
-    "termination reason (broached, left depth band, pitch limit, diverged); unsettled (still moving off depth "
-    "at the time limit)."
+    "termination reason (broached, left depth band, pitch limit, diverged); unsettled (still moving off "
+    "depth at the time limit)."
 )
 """How the tables count outcomes (the precedence of :data:`~subenv.evaluation.metrics.OUTCOMES`), in
 the notes of the leaderboard and of ``summary.md``."""
@@ -388,8 +393,25 @@ def _markdown_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str
     return "\n".join(lines)
 
 
+def failures_markdown(failures: Sequence[ControllerFailure]) -> str:
+    """The section of a results file that lists the controllers' failures, one line each ("" if none)."""
+    if not failures:
+        return ""
+    names = ", ".join(dict.fromkeys(f.controller for f in failures))
+    lines = "\n".join(f"- {f.message}" for f in failures)
+    return (
+        f"\n### Failed: {names}\n\nNot ranked: a controller that raised an exception or returned an action "
+        "the environment refused has no episodes on that scenario. Its scenarios that completed are "
+        f"in results.csv and the summary.\n\n{lines}\n"
+    )
+
+
 def leaderboard_markdown(
-    results: Sequence[EpisodeResult], *, title: str = "Leaderboard", confidence: float = CONFIDENCE_LEVEL
+    results: Sequence[EpisodeResult],
+    *,
+    title: str = "Leaderboard",
+    confidence: float = CONFIDENCE_LEVEL,
+    failures: Sequence[ControllerFailure] = (),
 ) -> str:
     """Markdown leaderboard: controllers as rows, success rate per scenario with its interval.
 
@@ -399,8 +421,16 @@ def leaderboard_markdown(
     success rate over all the suite's episodes (pooled), best first, then by name. The last columns
     break the pooled failures down by outcome (:func:`outcome_counts`, the counts :func:`summarize`
     gives per scenario).
+
+    A controller with ``failures`` (:class:`~subenv.evaluation.rollout.ControllerFailure`) is not
+    ranked, whatever it completed: its failures are listed below the table (:func:`failures_markdown`).
     """
+    failed = {f.controller for f in failures}
+    results = [r for r in results if r.controller not in failed]
     if not results:
+        if failures:
+            none = "No controller completed the suite: none is ranked."
+            return f"## {title}\n\n{none}\n{failures_markdown(failures)}"
         raise ValueError("results is empty: nothing to rank")
     scenarios = list(dict.fromkeys(r.scenario for r in results))
     controllers = list(dict.fromkeys(r.controller for r in results))
@@ -455,7 +485,7 @@ def leaderboard_markdown(
         f"(the same seeds for every controller). {ranking}Last columns: episodes per failure outcome, all "
         f"scenarios. {OUTCOME_NOTE}"
     )
-    return f"## {title}\n\n{_markdown_table(header, rows)}\n\n{note}\n"
+    return f"## {title}\n\n{_markdown_table(header, rows)}\n\n{note}\n{failures_markdown(failures)}"
 
 
 _SUMMARY_MEANS: Final = (

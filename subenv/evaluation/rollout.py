@@ -16,6 +16,12 @@ seed ``s`` is, step for step and bit for bit, ``gym.make(id)`` reset with seed `
 (:class:`~subenv.envs.DivePlaneVectorEnv`), so an episode's result does not depend on the episodes
 run beside it: ``tests/evaluation/test_batched_harness.py`` checks every baseline and agent batched
 against one episode at a time.
+
+A controller that raises in ``reset``, ``act`` (or their batch versions), or returns an action the
+environment refuses (NaN, None, a wrong shape), fails: the harness raises :class:`ControllerError`,
+whose :class:`ControllerFailure` names the controller, the scenario, the seed (the seeds of the
+batch, when the failure is the batch's) and the error in one line. :func:`evaluate` raises it, or,
+given ``on_failure``, reports it and runs on with the other scenarios and controllers.
 """
 
 from __future__ import annotations
@@ -25,7 +31,7 @@ import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Any, Final
+from typing import Any, Final, TypeVar
 
 import gymnasium as gym
 import numpy as np
@@ -46,6 +52,8 @@ from subenv.vehicles.vehicle import Vehicle
 
 __all__ = [
     "MAX_BATCH",
+    "ControllerError",
+    "ControllerFailure",
     "EpisodeResult",
     "Trajectory",
     "TrajectoryRecorder",
@@ -108,6 +116,7 @@ class Trajectory:
 
     @property
     def steps(self) -> int:
+        """Steps of the episode (samples less one)."""
         return int(self.time_s.shape[0] - 1)
 
     def metrics(self, **kwargs: Any) -> EpisodeMetrics:
@@ -226,8 +235,8 @@ class EpisodeResult:
     trajectory: Trajectory | None = field(default=None, repr=False, compare=False)
     winnable: bool | None = None
     """Whether the episode's loading has a depth-holding trim within the plane limits and the pitch limit
-    at the speed it is to hold at its end, with every plane pair the vehicle has free (:func:`subenv.analysis.winnable`):
-    where it has none no controller can succeed. None: not determined."""
+    at the speed it is to hold at its end, with every plane pair the vehicle has free
+    (:func:`subenv.analysis.winnable`): where it has none no controller can succeed. None: not determined."""
 
     def row(self) -> dict[str, Any]:
         """One flat row of the tidy per-episode table."""
@@ -249,6 +258,105 @@ class EpisodeResult:
             "winnable": self.winnable,
         }
         return base | self.metrics.as_dict()
+
+
+@dataclass(frozen=True)
+class ControllerFailure:
+    """A controller that failed on a scenario: where, on which episodes, and why.
+
+    The harness stops running the controller on that scenario (its episodes there are not kept); the
+    one-line :attr:`message` is what ``subenv evaluate`` prints and records.
+    """
+
+    controller: str
+    scenario: str
+    seeds: tuple[int, ...]
+    """The episodes it failed on: the one episode run alone, or the batch's rows whose actions the
+    environment refused (NaN or inf); every episode of the batch when the failure is the whole batch's
+    (an exception in ``reset_batch`` or ``act_batch``, actions of the wrong type or shape)."""
+    call: str
+    """The controller's method: ``reset``, ``act``, ``reset_batch`` or ``act_batch``."""
+    step: int | None
+    """The step whose action failed (1: the first action after the reset); None in a reset."""
+    error: str
+    """The exception it raised (``"RuntimeError: ..."``), or the environment's refusal of its action
+    (``"action=[nan] is invalid: must be finite (no NaN or inf)"``), on one line."""
+
+    @property
+    def message(self) -> str:
+        """One line: ``controller 'x' failed on LowSpeed, seed 10000, in act at step 3: <error>``."""
+        where = self.call if self.step is None else f"{self.call} at step {self.step}"
+        return (
+            f"controller {self.controller!r} failed on {self.scenario}, {_seeds_text(self.seeds)}, in "
+            f"{where}: {self.error}"
+        )
+
+    def __str__(self) -> str:
+        return self.message
+
+
+class ControllerError(RuntimeError):
+    """A controller failed (:class:`ControllerFailure`, in :attr:`failure`); the message is its one line,
+    and the exception the controller raised, if any, is the ``__cause__``."""
+
+    def __init__(self, failure: ControllerFailure) -> None:
+        super().__init__(failure)  # (the one argument: the exception pickles, as a Ray task's error does)
+        self.failure = failure
+
+    def __str__(self) -> str:
+        return self.failure.message
+
+
+def _seeds_text(seeds: Sequence[int]) -> str:
+    """``seed 3``, ``seeds 3-9`` (consecutive) or ``seeds 3, 5, 8``."""
+    if len(seeds) == 1:
+        return f"seed {seeds[0]}"
+    if list(seeds) == list(range(seeds[0], seeds[0] + len(seeds))):
+        return f"seeds {seeds[0]}-{seeds[-1]}"
+    return "seeds " + ", ".join(str(s) for s in seeds)
+
+
+def _one_line(text: str) -> str:
+    """``text`` with its line breaks (a plugin's multi-line message) made spaces."""
+    return " ".join(line.strip() for line in text.strip().splitlines() if line.strip())
+
+
+_T = TypeVar("_T")
+
+
+@dataclass(frozen=True)
+class _Blame:
+    """Whose episodes run now: a failure of a controller's call there is reported with these."""
+
+    controller: Controller
+    scenario: str
+    seeds: tuple[int, ...]
+
+    def call(self, method: str, step: int | None, function: Callable[..., _T], *args: Any) -> _T:
+        """``function(*args)``, the controller's ``method``; any exception it raises is its failure."""
+        try:
+            return function(*args)
+        except Exception as exc:
+            text = _one_line(str(exc))
+            raise self.failed(
+                method, step, f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+            ) from exc
+
+    def failed(
+        self, method: str, step: int | None, error: str, seeds: Sequence[int] | None = None
+    ) -> ControllerError:
+        """The error of the controller's ``method`` failing with ``error``, on ``seeds`` if known (the rows
+        the environment refused), otherwise on every episode it runs now."""
+        return ControllerError(
+            ControllerFailure(
+                controller=self.controller.name,
+                scenario=self.scenario,
+                seeds=self.seeds if not seeds else tuple(seeds),
+                call=method,
+                step=step,
+                error=error,
+            )
+        )
 
 
 def _scenario_of(name: str) -> str:
@@ -275,6 +383,7 @@ def _env_args(
     controller: Controller, scenario: str | Scenario, vehicle: str | Vehicle, max_duration_s: float | None
 ) -> tuple[str, dict[str, Any]]:
     """The id and keyword arguments of ``scenario``'s environments for ``controller``."""
+    kwargs: dict[str, Any]
     if isinstance(scenario, Scenario):
         env_id, kwargs = "subenv/DivePlane-v0", {"scenario": scenario}
     else:
@@ -303,7 +412,7 @@ def make_env(
     *,
     vehicle: str | Vehicle = "suboff",
     max_duration_s: float | None = None,
-) -> gym.Env:  # type: ignore[type-arg]
+) -> gym.Env:
     """The environment of ``scenario`` for ``controller``'s action space.
 
     ``scenario`` is a registered name, ``subenv/<Name>-v0``, or an unregistered :class:`Scenario`
@@ -402,6 +511,12 @@ def run_episodes(
         False runs a batch controller one episode at a time as well, with its ``reset`` and ``act``
         (the same results: ``tests/evaluation/test_batched_harness.py``; ``benchmarks/harness.py``
         times both).
+
+    Raises
+    ------
+    ControllerError
+        The controller failed (:class:`ControllerFailure`): an exception in one of its calls, or an
+        action the environment refused. The episodes of ``seeds`` not yet returned are not run.
     """
     seeds = list(seeds)
     results: list[EpisodeResult] = []
@@ -444,7 +559,7 @@ def run_episodes(
 
 def _run_single(
     controller: Controller,
-    env: gym.Env,  # type: ignore[type-arg]
+    env: gym.Env,
     seed: int,
     episode: int,
     keep: bool,
@@ -453,11 +568,17 @@ def _run_single(
     """One episode in ``env``, made by :func:`make_env` for ``controller``."""
     base: Any = env.unwrapped  # a DivePlaneEnv: its episode, vehicle and limits
     obs, info = env.reset(seed=seed, options=options)
-    controller.reset(info, base.base_vehicle)
+    blame = _Blame(controller, base.scenario.key, (seed,))
+    blame.call("reset", None, controller.reset, info, base.base_vehicle)
     recorder = TrajectoryRecorder(info)
+    step = 0
     while True:
-        action = controller.act(obs)
-        obs, _, terminated, truncated, info = env.step(action)
+        step += 1
+        action = blame.call("act", step, controller.act, obs)
+        try:
+            obs, _, terminated, truncated, info = env.step(action)
+        except ValueError as exc:  # the environment checks an action before it steps: this one is refused
+            raise blame.failed("act", step, _one_line(str(exc))) from exc
         recorder.record(action, info)
         if terminated or truncated:
             break
@@ -490,17 +611,21 @@ def _run_batch(
     drawn = env.episodes  # (before an ended sub-environment resets to another episode)
     loadings = list(env.vehicles)
     columns = {key: value.tolist() for key, value in info.items() if not key.startswith("_")}
-    controller.reset_batch(
-        [{key: column[i] for key, column in columns.items()} for i in range(len(seeds))], config.base_vehicle
-    )
+    blame = _Blame(controller, env.scenario.key, tuple(seeds))
+    infos = [{key: column[i] for key, column in columns.items()} for i in range(len(seeds))]
+    blame.call("reset_batch", None, controller.reset_batch, infos, config.base_vehicle)
     recorder = TrajectoryRecorder(info)
     running = np.ones(len(seeds), dtype=bool)
     steps = np.zeros(len(seeds), dtype=int)
     reasons = [""] * len(seeds)
     step = 0
     while running.any():
-        actions = controller.act_batch(obs)
-        obs, _, terminated, truncated, info = env.step(actions)
+        actions = blame.call("act_batch", step + 1, controller.act_batch, obs)
+        try:
+            obs, _, terminated, truncated, info = env.step(actions)
+        except ValueError as exc:  # refused before anything stepped: the rows with NaN or inf, or the batch
+            bad = [seeds[i] for i in _non_finite_rows(actions, len(seeds))]
+            raise blame.failed("act_batch", step + 1, _one_line(str(exc)), bad) from exc
         step += 1
         recorder.record(actions, info)
         ended = running & (terminated | truncated)
@@ -509,7 +634,7 @@ def _run_batch(
             reasons[i] = info["termination_reason"][i] if terminated[i] else ""
         running &= ~ended
     results = []
-    for i, (seed, draw) in enumerate(zip(seeds, drawn)):
+    for i, (seed, draw) in enumerate(zip(seeds, drawn, strict=True)):
         assert draw is not None
         duration_s = _scheduled(float(draw.duration_s), env.max_episode_steps, float(config.dt))
         trajectory = recorder.trajectory(
@@ -522,6 +647,19 @@ def _run_batch(
             _result(controller, env.scenario.key, seed, first_episode + i, trajectory, i < keep, can_win)
         )
     return results
+
+
+def _non_finite_rows(actions: Any, rows: int) -> list[int]:
+    """The rows of a batch of actions that hold a NaN or inf; none when it is not ``rows`` rows of real
+    numbers (then the environment refused the batch as a whole)."""
+    try:
+        array = np.asarray(actions)
+        if array.dtype.kind not in "iuf":
+            return []
+        array = array.reshape(rows, -1)
+    except ValueError:  # ragged, or another number of rows
+        return []
+    return np.flatnonzero(~np.isfinite(array).all(axis=1)).tolist()
 
 
 def _scheduled(duration_s: float, max_episode_steps: int | None, dt: float) -> float:
@@ -598,7 +736,8 @@ def _result(
 
 
 def needs_bow_planes(controller: Controller) -> bool:
-    """Whether ``controller`` moves the bow planes (``control="independent"``, or dual control with alpha != 0)."""
+    """Whether ``controller`` moves the bow planes (``control="independent"``, or dual control with
+    alpha != 0)."""
     return controller.control == "independent" or float(controller.alpha) != 0.0
 
 
@@ -606,8 +745,8 @@ def resolve_controllers(
     controllers: Sequence[Controller | str] | None, vehicle: Vehicle | None = None
 ) -> list[Controller]:
     """Controllers from instances or registered names (None: every registered controller but those whose
-    ``in_default_comparison`` attribute is False, and on a ``vehicle`` without bow planes those that move them,
-    :func:`needs_bow_planes`).
+    ``in_default_comparison`` attribute is False, and on a ``vehicle`` without bow planes those that move
+    them, :func:`needs_bow_planes`).
 
     Raises ValueError for an unknown name (listing the known ones), an empty selection, two
     controllers with one name, or a named controller that moves bow planes ``vehicle`` does not have;
@@ -686,6 +825,7 @@ def evaluate(
     keep_trajectories: int = 1,
     on_episode: Callable[[EpisodeResult], None] | None = None,
     batched: bool = True,
+    on_failure: Callable[[ControllerFailure], None] | None = None,
 ) -> list[EpisodeResult]:
     """Run every controller on the same episodes of every scenario of ``suite``.
 
@@ -709,14 +849,26 @@ def evaluate(
         Attach trajectories to the results of the first this-many episodes of each scenario
         (for plots); 0 keeps none.
     on_episode : callable, optional
-        Called with each result as it is produced.
+        Called with each result of a controller on a scenario once it has run every episode there.
     batched : bool
         Run the episodes of a scenario together (controllers that can; see :func:`run_episodes`).
+    on_failure : callable, optional
+        Called with each :class:`ControllerFailure` instead of raising it: the controller that failed
+        goes on with the next scenario, and the others run as if it had not failed. None (the default)
+        raises the first failure, so that a caller never takes a shorter list for a complete one.
 
     Returns
     -------
     list of EpisodeResult
-        Ordered by controller, then scenario, then episode.
+        Ordered by controller, then scenario, then episode. A controller that failed on a scenario has
+        no results there (not even the episodes that ended before the failure: in a batch those are the
+        early terminations, and the results must not depend on batching), and every result on the
+        scenarios it completed.
+
+    Raises
+    ------
+    ControllerError
+        A controller failed and ``on_failure`` is None.
     """
     design_vehicle = vehicle if isinstance(vehicle, Vehicle) else load_vehicle(vehicle)
     ctrls = resolve_controllers(controllers, design_vehicle)
@@ -728,28 +880,33 @@ def evaluate(
         raise ValueError(f"seed={seed!r} is invalid: must be an integer >= 0")
 
     results: list[EpisodeResult] = []
-
-    def done(result: EpisodeResult) -> None:
-        results.append(result)
-        bar.update(1)
-        if on_episode is not None:
-            on_episode(result)
-
     bar = Progress(len(ctrls) * len(the_suite.scenarios) * n, enabled=progress)
     try:
         for controller in ctrls:
             for scenario in the_suite.scenarios:
                 bar.describe(f"{controller.name} on {scenario}")
-                run_episodes(
-                    controller,
-                    scenario,
-                    range(seed, seed + n),
-                    vehicle=design_vehicle,
-                    max_duration_s=the_suite.max_duration_s,
-                    keep_trajectories=keep_trajectories,
-                    on_episode=done,
-                    batched=batched,
-                )
+                before = bar.done
+                try:
+                    completed = run_episodes(
+                        controller,
+                        scenario,
+                        range(seed, seed + n),
+                        vehicle=design_vehicle,
+                        max_duration_s=the_suite.max_duration_s,
+                        keep_trajectories=keep_trajectories,
+                        on_episode=lambda _: bar.update(1),
+                        batched=batched,
+                    )
+                except ControllerError as error:
+                    if on_failure is None:
+                        raise
+                    bar.update(before + n - bar.done)  # (the episodes left out count as done)
+                    on_failure(error.failure)
+                    continue
+                results += completed
+                if on_episode is not None:
+                    for result in completed:
+                        on_episode(result)
     finally:
         bar.close()
     return results

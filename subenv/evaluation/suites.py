@@ -136,7 +136,9 @@ register_suite(
 register_suite(
     Suite(
         name="reversal",
-        description="Where dive-plane reversal bites: below, near and decelerating through the critical speed.",
+        description=(
+            "Where dive-plane reversal bites: below, near and decelerating through the critical speed."
+        ),
         scenarios=("LowSpeed", "NearCritical", "SpeedTransient"),
         episodes=100,
     )

@@ -115,8 +115,8 @@ MIXED = Scenario(
     reference_length_m=REFERENCE_LENGTH_M,
     description=(
         "Mixed: one of the scenarios above, the low-speed, near-critical and speed-transient ones twice as "
-        "often as the others, mildly randomized (z_GB scaled by 0.9-1.1, C_D in 0.2-0.4, sensor noise, a 0.3 N "
-        "heave-force disturbance): for training agents where the planes reverse."
+        "often as the others, mildly randomized (z_GB scaled by 0.9-1.1, C_D in 0.2-0.4, sensor noise, a "
+        "0.3 N heave-force disturbance): for training agents where the planes reverse."
     ),
     components=(
         "Nominal",

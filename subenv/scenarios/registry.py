@@ -6,7 +6,12 @@ the one whose seeded episodes its users pinned."""
 
 from __future__ import annotations
 
-from subenv.scenarios.scenario import Scenario
+from typing import TYPE_CHECKING
+
+# The registry holds scenarios but runs no code of theirs: the class for the annotations only, so that
+# scenario.py imports this module (a mixture finds its components here) and the two form no cycle.
+if TYPE_CHECKING:
+    from subenv.scenarios.scenario import Scenario
 
 __all__ = ["get_scenario", "register_scenario", "scenario_for_env_id", "scenario_names"]
 

@@ -19,6 +19,7 @@ import numpy as np
 from subenv import _validation as check
 from subenv.dynamics.free_surface import FreeSurface
 from subenv.dynamics.waves import SeaState
+from subenv.scenarios.registry import get_scenario
 from subenv.thesis import THESIS_DESIGN_SPEED_MPS
 from subenv.vehicles.scaling import froude_factor
 
@@ -111,8 +112,8 @@ class EpisodeConfig:
 
     ``speed_knots`` is a piecewise-linear speed profile, held constant after the last knot (a single
     knot is a constant speed): (t [s], u [m/s]) pairs, or with ``speed_relative`` (t [s], u / u_cr)
-    pairs, multiples of the episode's critical speed, which the environment resolves. The metacentric height is
-    ``z_GB_m`` (None: the vehicle's) times ``z_GB_scale``; ``crossflow_drag`` None keeps the
+    pairs, multiples of the episode's critical speed, which the environment resolves. The metacentric
+    height is ``z_GB_m`` (None: the vehicle's) times ``z_GB_scale``; ``crossflow_drag`` None keeps the
     vehicle's C_D.
     """
 
@@ -263,8 +264,8 @@ class Scenario:
             raise ValueError(f"name={self.name!r} is invalid: must be a CamelCase identifier")
         if self.speed_mps is not None and self.speed_ratio is not None:
             raise ValueError(
-                f"speed_mps={self.speed_mps!r}, speed_ratio={self.speed_ratio!r} are invalid: give one of them "
-                "(m/s, or u / u_cr)"
+                f"speed_mps={self.speed_mps!r}, speed_ratio={self.speed_ratio!r} are invalid: give one of "
+                "them (m/s, or u / u_cr)"
             )
         if self.speed_ratio is not None:
             check.interval("speed_ratio", self.speed_ratio, 0.0)
@@ -349,8 +350,6 @@ class Scenario:
             Where ``components`` are looked up (the global registry by default).
         """
         if self.components:
-            from subenv.scenarios.registry import get_scenario
-
             names: Sequence[str] = self.components
             pick = names[int(rng.integers(len(names)))]
             base = registry[pick] if registry is not None else get_scenario(pick)

@@ -23,7 +23,9 @@ from subenv.vehicles.vehicle import LENGTH_RANGE_M, HullOffsets, HydroCoefficien
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover - exercised on Python 3.10 only
-    import tomli as tomllib
+    # (mypy checks this branch, for python_version 3.10, where the tomli backport is a dependency; an
+    # environment of a later Python lacks it.)
+    import tomli as tomllib  # type: ignore[import-not-found, unused-ignore]
 
 __all__ = ["available_vehicles", "load_vehicle", "vehicle_from_dict", "vehicle_to_toml", "write_shipped_file"]
 
@@ -111,9 +113,13 @@ def load_vehicle(name_or_path: str | os.PathLike[str]) -> Vehicle:
     ------
     ValueError
         Unknown name; a path that is not a regular file or not UTF-8 TOML; a missing or unknown
-        key; a value outside its allowed range; a vehicle that is not physically admissible (a mass
-        matrix with added mass that is not positive definite, a hull without area, a plane without
-        effect). The message names the file, the field, the value and what is allowed.
+        key; a value that is not a finite number or outside its allowed range; a vehicle that is not
+        physically admissible or that the model cannot run (a mass matrix with added mass that is not
+        positive definite, buoyancy not within a factor of 2 of the weight, centres of gravity or
+        buoyancy beyond a hull length, a radius of gyration longer than the hull, stern planes without
+        a critical speed, a derived quantity that overflows, a hull without area, a plane without
+        effect): see :class:`~subenv.vehicles.Vehicle`. The message names the file, the field, the
+        value and what is allowed.
     FileNotFoundError
         A path that does not exist.
     """
@@ -184,18 +190,10 @@ def vehicle_from_dict(data: Mapping[str, Any], origin: str = "<dict>") -> Vehicl
             if key not in table and (section, key) not in _OPTIONAL:
                 raise ValueError(f"{where}: missing key {section}.{key}")
             value = table.get(key, _OPTIONAL.get((section, key)))
-            if dimension == "list":
-                if not isinstance(value, list) or not all(check.is_number(v) for v in value):
-                    raise ValueError(
-                        f"{where}: {section}.{key}={value!r} is invalid: must be a list of numbers"
-                    )
-                si[section][key] = [float(v) for v in value]
-            else:
-                if not check.is_number(value):
-                    raise ValueError(f"{where}: {section}.{key}={value!r} is invalid: must be a number")
-                if (section, key) in _POSITIVE and not value > 0:
-                    raise ValueError(f"{where}: {section}.{key}={value!r} is invalid: must be > 0")
-                si[section][key] = float(value) * factors[dimension]
+            try:
+                si[section][key] = _file_value(section, key, value, factors.get(dimension))
+            except ValueError as exc:
+                raise ValueError(f"{where}: {exc}") from None
 
     body, hull = si["rigid_body"], si["hull"]
     hydro = dict(si["hydrodynamics"])
@@ -235,6 +233,23 @@ def vehicle_from_dict(data: Mapping[str, Any], origin: str = "<dict>") -> Vehicl
         )
     except ValueError as exc:
         raise ValueError(f"{where}: {exc}") from exc
+
+
+def _file_value(section: str, key: str, value: Any, to_si: float | None) -> Any:
+    """``section.key`` of a file in SI: a finite number (> 0 for the keys of ``_POSITIVE``) times the
+    factor ``to_si`` of its unit, or with ``to_si`` None a list of finite numbers. Checked before the
+    conversion: an integer beyond the float range (TOML's integers have no bound) is refused by name,
+    not met as an ``OverflowError``."""
+    name = f"{section}.{key}"
+    if to_si is None:
+        ok = isinstance(value, list) and all(check.is_finite(v) for v in value)
+        check.require(name, value, ok, "a list of finite numbers")
+        return [float(v) for v in value]
+    check.require(name, value, check.is_number(value), "a number")
+    check.require(name, value, check.is_finite(value), "a finite number")
+    if (section, key) in _POSITIVE:
+        check.require(name, value, value > 0, "> 0")
+    return float(value) * to_si
 
 
 # Significant digits of the hull's stations and radius ratios in a written file: they are recovered
@@ -310,9 +325,9 @@ def vehicle_to_toml(vehicle: Vehicle, header: str = "") -> str:
 
 
 def write_shipped_file(name: str, text: str, module: str, argv: list[str] | None = None) -> int:
-    """The command line of a module that writes a shipped vehicle file (``python -m <module> [--check]``): write
-    ``text`` as ``subenv/vehicles/data/<name>.toml``, or with ``--check`` only say whether the file is ``text``
-    (exit status 1 if not)."""
+    """The command line of a module that writes a shipped vehicle file (``python -m <module> [--check]``):
+    write ``text`` as ``subenv/vehicles/data/<name>.toml``, or with ``--check`` only say whether the file
+    is ``text`` (exit status 1 if not)."""
     import argparse
 
     parser = argparse.ArgumentParser(description=f"Write (or check) subenv/vehicles/data/{name}.toml.")

@@ -20,12 +20,26 @@ import numpy as np
 from subenv import _validation as check
 
 __all__ = [
+    "BUOYANCY_RATIO_RANGE",
+    "DERIVATIVE_BOUND",
+    "LENGTH_RANGE_M",
     "DimensionalCoefficients",
     "HullOffsets",
     "HydroCoefficients",
     "PlaneCoefficients",
     "Vehicle",
 ]
+
+
+DERIVATIVE_BOUND: Final = 10.0
+"""The largest magnitude of a non-dimensional derivative (hydrodynamic or plane), a typo's bound.
+
+SNAME primes are made non-dimensional by rho/2 L^n so that a hull's are of order (D/L)^2 (a sphere's
+Z'_wdot is -pi/6 = -0.52) and a plane's of order its area over L^2 times its lift slope (at most 2 pi,
+thin-aerofoil theory); SUBOFF's and the REMUS 100's are 1e-4 to 3e-2. A derivative of 10 would need a hull
+broader than it is long or planes larger than L^2: a larger one is a slip of an exponent or a unit, and one
+of 1e300 made eq. 3.9 lose its root (``M_w = -1e300`` loaded, then ``gym.make`` said the vehicle had no
+critical speed)."""
 
 
 @dataclass(frozen=True)
@@ -47,7 +61,9 @@ class HydroCoefficients:
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
-            check.number(f"hydrodynamics.{f.name}", getattr(self, f.name))
+            check.number(
+                f"hydrodynamics.{f.name}", getattr(self, f.name), -DERIVATIVE_BOUND, DERIVATIVE_BOUND
+            )
 
 
 @dataclass(frozen=True)
@@ -67,11 +83,14 @@ class PlaneCoefficients:
 
     def __post_init__(self) -> None:
         for name in ("Z_delta_s", "M_delta_s"):
-            value = check.number(f"planes.{name}", getattr(self, name))
+            value = check.number(f"planes.{name}", getattr(self, name), -DERIVATIVE_BOUND, DERIVATIVE_BOUND)
             # Each plane pair acts behind or ahead of the centre, so it makes a heave force and a pitch
             # moment; a zero derivative leaves a plane without effect (and eq. 3.9 without a critical speed).
             check.require(f"planes.{name}", value, value != 0, "a non-zero number (a plane with effect)")
-        bow = [check.number(f"planes.{name}", getattr(self, name)) for name in ("Z_delta_b", "M_delta_b")]
+        bow = [
+            check.number(f"planes.{name}", getattr(self, name), -DERIVATIVE_BOUND, DERIVATIVE_BOUND)
+            for name in ("Z_delta_b", "M_delta_b")
+        ]
         if (bow[0] == 0) != (bow[1] == 0):  # bow planes with effect, or none at all
             name, value = ("Z_delta_b", bow[0]) if bow[0] == 0 else ("M_delta_b", bow[1])
             check.require(
@@ -167,16 +186,32 @@ class DimensionalCoefficients:
     M_delta_b: float
 
 
-_POSITIVE_FIELDS = ("weight_N", "buoyancy_N", "inertia_y_kg_m2", "gravity_m_s2")
+_POSITIVE_FIELDS = ("weight_N", "buoyancy_N", "inertia_y_kg_m2")
 # The two quantities that scale every hydrodynamic derivative (rho/2 L^2 .. L^5), bounded to physical
 # ranges: any water, fresh to the densest brine, with a wide margin; any hull from a 1 cm model to longer
 # than any vessel afloat. Outside them the derivatives, or their products in the analysis, leave the
 # floating-point range (water_density = 1e-300 made eq. 3.9 underflow; length = 1e308 overflowed).
+# Gravity, which makes the mass of the weight, from a moon's subsurface ocean (Enceladus, 0.11 m/s^2) to ten
+# times the Earth's.
 LENGTH_RANGE_M: Final = (0.01, 1000.0)
 """The lengths a vehicle may have [m]."""
-_RANGES = {"water_density_kg_m3": (500.0, 2000.0), "length_m": LENGTH_RANGE_M}
+_RANGES = {"water_density_kg_m3": (500.0, 2000.0), "length_m": LENGTH_RANGE_M, "gravity_m_s2": (0.1, 100.0)}
+BUOYANCY_RATIO_RANGE: Final = (0.5, 2.0)
+"""The buoyancy a vehicle may have, as a multiple B / W of its weight.
+
+The model is a submerged vehicle near neutral trim: W - B is an imperfection of the pitchfork (Riedel 1993
+Ch. V.C; the scenarios' excess buoyancy is at most 1e-3 W), and no submerged vehicle is twice as heavy or
+as light as the water it displaces. Within a factor of 2, B - W is exact in floating point (Sterbenz's
+lemma), so a loading that keeps W and sets B - W (:meth:`Vehicle.variant`, every scenario's draw) gives B
+back exactly: ``weight = 1e30`` (lbf) made B - W round to -W and every reset's buoyancy 0."""
+# The centres of gravity and buoyancy lie within the vehicle: |x| <= L / 2 from midship, |z| within the hull's
+# radius (or a sail's height). Within a hull length of the origin, with a margin of 2 at least.
+_POSITION_MAX_LENGTHS: Final = 1.0
+# The radius of gyration sqrt(I_y / m) of a body whose mass lies within its length is below L / 2 (SUBOFF's
+# and the REMUS 100's are 0.24 L and 0.25 L): one beyond L is an inertia in the wrong unit or a typo.
+_RADIUS_OF_GYRATION_MAX_LENGTHS: Final = 1.0
 # Checked fields that enter the mass matrix (the hydrodynamic derivatives do too, but never change).
-_MASS_MATRIX_FIELDS = frozenset({*_RANGES, "weight_N", "gravity_m_s2", "inertia_y_kg_m2", "x_G_m"})
+_MASS_MATRIX_FIELDS = frozenset({*_RANGES, "weight_N", "inertia_y_kg_m2", "x_G_m"})
 _CHECKED_FIELDS = (*_RANGES, *_POSITIVE_FIELDS, "x_G_m", "z_G_m", "x_B_m", "z_B_m", "crossflow_drag")
 
 
@@ -188,6 +223,13 @@ class Vehicle:
 
     Positions are body axes with the origin at midship: x forward, z down. Pitch is positive
     nose-up, depth positive down.
+
+    Made (and varied), a vehicle is checked for what the model needs: every field finite and in its
+    range (:data:`LENGTH_RANGE_M`, water density, gravity; |derivatives| <= :data:`DERIVATIVE_BOUND`;
+    G and B within a hull length of midship), B / W in :data:`BUOYANCY_RATIO_RANGE`, a positive-definite
+    mass matrix and a radius of gyration within the length, finite derived quantities, and stern planes
+    with a critical speed (eq. 3.9). Whether a loading has one (z_GB > 0) is the loading's: a scenario
+    may set z_GB, and only scenarios with speeds relative to the critical speed need one.
     """
 
     name: str
@@ -210,9 +252,11 @@ class Vehicle:
 
     def __post_init__(self) -> None:
         self._check(_CHECKED_FIELDS)
+        self._check_stern_planes_reverse()
 
     def _check(self, names: Iterable[str]) -> None:
-        """Validate the fields ``names`` (of :data:`_CHECKED_FIELDS`), then the mass matrix if they enter it."""
+        """Validate the fields ``names`` (of :data:`_CHECKED_FIELDS`), then what they enter: the ratio of
+        buoyancy to weight, the mass matrix and the radius of gyration, the derived quantities."""
         names = tuple(names)
         for name in names:
             value = getattr(self, name)
@@ -222,10 +266,78 @@ class Vehicle:
                 check.positive(name, value)
             elif name == "crossflow_drag":
                 check.non_negative(name, value)
-            else:
-                check.number(name, value)
+            else:  # a centre of gravity or buoyancy: within the vehicle
+                check.number(
+                    name, value, -_POSITION_MAX_LENGTHS * self.length_m, _POSITION_MAX_LENGTHS * self.length_m
+                )
+        if {"weight_N", "buoyancy_N"} & set(names):
+            low, high = BUOYANCY_RATIO_RANGE
+            ratio = self.buoyancy_N / self.weight_N
+            if not low <= ratio <= high:
+                raise ValueError(
+                    f"weight_N={self.weight_N!r} and buoyancy_N={self.buoyancy_N!r} are invalid: B / W = "
+                    f"{ratio:.6g} must be in [{low}, {high}] (a submerged vehicle near neutral trim)"
+                )
+        self._check_derived()
         if not _MASS_MATRIX_FIELDS.isdisjoint(names):
             self._check_mass_matrix()
+            k = math.sqrt(self.inertia_y_kg_m2 / self.mass_kg)
+            check.require(
+                "inertia_y_kg_m2",
+                self.inertia_y_kg_m2,
+                k <= _RADIUS_OF_GYRATION_MAX_LENGTHS * self.length_m,
+                f"at most mass_kg * length_m^2 = {self.mass_kg * self.length_m**2:.6g} kg m^2 (a radius of "
+                f"gyration sqrt(I_y / m) = {k:.6g} m within the length {self.length_m!r} m)",
+            )
+
+    def _check_derived(self) -> None:
+        """The derived quantities the model uses must be finite: finite fields can overflow in a product."""
+        W, B = self.weight_N, self.buoyancy_N
+        (m11, m12), (m21, m22) = self.mass_matrix
+        for formula, value, inputs in (
+            ("mass_kg = W / g", self.mass_kg, ("weight_N", "gravity_m_s2")),
+            ("z_GB_m = z_G - z_B", self.z_GB_m, ("z_G_m", "z_B_m")),
+            ("x_GB_m = x_G - x_B", self.x_GB_m, ("x_G_m", "x_B_m")),
+            (
+                "the hydrostatic moment z_G W - z_B B (eq. 2.39)",
+                self.z_G_m * W - self.z_B_m * B,
+                ("z_G_m", "weight_N", "z_B_m", "buoyancy_N"),
+            ),
+            (
+                "the hydrostatic moment x_G W - x_B B (eq. 2.39)",
+                self.x_G_m * W - self.x_B_m * B,
+                ("x_G_m", "weight_N", "x_B_m", "buoyancy_N"),
+            ),
+            (
+                "the mass matrix's determinant Dv (eqs 2.59-2.68)",
+                m11 * m22 - m12 * m21,
+                ("weight_N", "gravity_m_s2", "inertia_y_kg_m2", "x_G_m"),
+            ),
+        ):
+            if not math.isfinite(value):
+                given = ", ".join(f"{name}={getattr(self, name)!r}" for name in inputs)
+                raise ValueError(f"{formula} = {value!r} with {given} is invalid: must be finite")
+
+    def _check_stern_planes_reverse(self) -> None:
+        """The stern planes must have a critical speed for a statically stable loading.
+
+        Riedel (1993) eq. 3.9, u_cr^2 = z_GB B Z_delta / (M_w Z_delta - Z_w M_delta), has a root for
+        z_GB > 0 only if Z_delta / (M_w Z_delta - Z_w M_delta) > 0: for planes behind the point where the
+        hull's heave force acts (x = -M_w / Z_w), as stern planes are. This is the vehicle's alone (its hull
+        and its planes; the loading, which scenarios change, enters as z_GB B > 0), and every scenario whose
+        speeds are relative to the critical speed needs it. Checked on the primes (rho/2 L^n > 0).
+        """
+        h, p = self.hydro, self.planes
+        coupling = h.M_w * p.Z_delta_s - h.Z_w * p.M_delta_s
+        if p.Z_delta_s * coupling > 0:
+            return
+        ratio = p.Z_delta_s / coupling if coupling else math.inf
+        raise ValueError(
+            f"hydrodynamics.Z_w={h.Z_w!r} and M_w={h.M_w!r} with planes.Z_delta_s={p.Z_delta_s!r} and "
+            f"M_delta_s={p.M_delta_s!r} give the stern planes no critical speed: Z_delta_s / (M_w Z_delta_s "
+            f"- Z_w M_delta_s) = {ratio:.6g} must be > 0 (Riedel 1993 eq. 3.9: stern planes act behind the "
+            "hull's centre of heave force, x = -M_w / Z_w). Check the signs: sources differ in convention"
+        )
 
     def _check_mass_matrix(self) -> None:
         """The mass matrix must be positive definite: kinetic energy > 0 for every motion (w, q)."""
@@ -236,10 +348,11 @@ class Vehicle:
             return
         h = self.hydro
         raise ValueError(
-            f"hydrodynamics.Z_wdot={h.Z_wdot!r}, Z_qdot={h.Z_qdot!r}, M_wdot={h.M_wdot!r}, M_qdot={h.M_qdot!r} "
-            f"with mass_kg={self.mass_kg!r}, inertia_y_kg_m2={self.inertia_y_kg_m2!r} and x_G_m={self.x_G_m!r} "
-            f"give the vertical-plane mass matrix [[{m11:.6g}, {m12:.6g}], [{m21:.6g}, {m22:.6g}]] (SI): "
-            "it must be positive definite (the body and the water it moves have positive kinetic energy)"
+            f"hydrodynamics.Z_wdot={h.Z_wdot!r}, Z_qdot={h.Z_qdot!r}, M_wdot={h.M_wdot!r}, "
+            f"M_qdot={h.M_qdot!r} with mass_kg={self.mass_kg!r}, inertia_y_kg_m2={self.inertia_y_kg_m2!r} "
+            f"and x_G_m={self.x_G_m!r} give the vertical-plane mass matrix [[{m11:.6g}, {m12:.6g}], "
+            f"[{m21:.6g}, {m22:.6g}]] (SI): it must be positive definite (the body and the water it moves "
+            "have positive kinetic energy)"
         )
 
     # --- derived quantities -------------------------------------------------------------

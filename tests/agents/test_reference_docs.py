@@ -1,5 +1,6 @@
-"""The multi-seed reference results shipped in docs/reference/ (made by ``python -m subenv_agents.reference``):
-the README shows their table as the run wrote it, and the table's statistics are those of their scores."""
+"""The multi-seed reference results shipped in docs/reference/ (made by ``python -m
+subenv_agents.reference``): the README shows their table as the run wrote it, and the table's statistics
+are those of their scores."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
-"""The training-only reward shaping: the L1 plane-effort penalty takes exactly weight * mean(|a|) off each
-reward, the depth-band bonus adds exactly its bonus where the true depth error is inside the band; nothing else
-changes."""
+"""The training-only reward shaping: the L1 plane-effort penalty takes exactly weight * mean(|a|) off
+each reward, the depth-band bonus adds exactly its bonus where the true depth error is inside the band;
+nothing else changes."""
 
 from __future__ import annotations
 

@@ -55,7 +55,8 @@ def test_shipped_model_is_a_registered_controller(name: str) -> None:
 
 @pytest.fixture(scope="module")
 def reversal_results():  # type: ignore[no-untyped-def]
-    """The reversal suite (100 episodes per scenario, seeds 10000 + i) for every shipped model and the baseline."""
+    """The reversal suite (100 episodes per scenario, seeds 10000 + i) for every shipped model and the
+    baseline."""
     controllers = [make_controller(n) for n in sorted(SHIPPED)] + [make_controller(BASELINE)]
     return evaluation_record(evaluate(controllers, list(REVERSAL_SCENARIOS), episodes=100, progress=False))
 
@@ -94,7 +95,8 @@ def test_card_states_the_target_as_measured(name: str, reversal_results, report)
 
 
 def test_shipped_ppo_uses_less_plane_effort_than_the_baseline(reversal_results) -> None:  # type: ignore[no-untyped-def]
-    """What the README claims for the shipped PPO: lower plane RMS than reversal_aware on every reversal scenario."""
+    """What the README claims for the shipped PPO: lower plane RMS than reversal_aware on every reversal
+    scenario."""
     for scenario in REVERSAL_SCENARIOS:
         assert (
             reversal_results["ppo"][scenario]["plane_rms_rad"]

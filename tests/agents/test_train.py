@@ -142,7 +142,7 @@ def test_trained_agent_runs_in_the_evaluation_harness_deterministically(trained)
     first = evaluate([controller], "tiny", episodes=1, progress=False)
     second = evaluate([AgentController(runs[1].run_dir, name="agent")], "tiny", episodes=1, progress=False)
     assert [r.trajectory.steps for r in first] == [r.trajectory.steps for r in second]
-    for x, y in zip(first, second):
+    for x, y in zip(first, second, strict=True):
         np.testing.assert_array_equal(x.trajectory.depth_m, y.trajectory.depth_m)
 
 
@@ -316,6 +316,7 @@ def test_command_line_trains_and_rejects_bad_input(tmp_path, capsys) -> None:  #
         "batch_size:128",
         "n_epochs:1",
     ]
+    (tmp_path / "cli").mkdir()  # an existing empty run folder is filled (it loses nothing)
     assert main(args) == 0
     assert "trained ppo on subenv/LowSpeed-v0" in capsys.readouterr().out
     assert load_agent(tmp_path / "cli").config.n_envs == 2

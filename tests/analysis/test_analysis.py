@@ -142,7 +142,7 @@ def test_continuation_over_ballast_finds_the_folds_of_the_exact_equation(thesis_
     assert branch.residual_max < 1e-9
     # Eq. 4.3's terms are of order |Z_delta| W z_GB (about 1e4 in SI); its residual is ~1e-9 of that.
     scale = abs(thesis_boat.coefficients.Z_delta_s) * thesis_boat.weight_N * thesis_boat.z_GB_m
-    for x, theta in zip(branch.values, branch.states[:, 0]):
+    for x, theta in zip(branch.values, branch.states[:, 0], strict=True):
         residual = steady_state_residual(thesis_boat.variant(x_GB_m=float(x)), u, float(theta))
         assert abs(residual) < 1e-9 * scale
     assert len(branch.folds) == 2
@@ -160,7 +160,7 @@ def test_continuation_over_speed_matches_the_closed_form_roots(thesis_boat):
     vehicle = thesis_boat.variant(x_GB_m=-1e-4 * thesis_boat.length_m)
     branch = continue_equilibria(vehicle, "speed", _fn_speed(vehicle, 1.4), _fn_speed(vehicle, 0.7))
     assert branch.values[0] > branch.values[-1] and len(branch.folds) == 0
-    for u, theta in zip(branch.values[::10], branch.states[::10, 0]):
+    for u, theta in zip(branch.values[::10], branch.states[::10, 0], strict=True):
         assert min(abs(np.array(_roots_of_eq_4_3(vehicle, float(u))) - theta)) < 1e-8
 
 
@@ -203,7 +203,7 @@ def test_level_flight_trim_reverses_through_the_critical_speed(thesis_boat):
     assert abs(trim.pitch_rad[1]) > 10 * abs(trim.pitch_rad[0])  # grows without bound at u_cr
     assert abs(trim.plane_rad[1]) > 10 * abs(trim.plane_rad[0])
     # The trim is a steady state of the linear model with the buoyancy bias.
-    for u, theta, delta in zip(trim.speeds_mps, trim.pitch_rad, trim.plane_rad):
+    for u, theta, delta in zip(trim.speeds_mps, trim.pitch_rad, trim.plane_rad, strict=True):
         lm = linear_model(light, float(u))
         x = np.array([theta, u * theta, 0.0, 0.0])
         bias = np.linalg.solve(

@@ -40,12 +40,19 @@ def test_the_environment_grows_and_decays_at_the_eigenvalues_rate_and_crosses_at
     1e-3 rad pitch its oscillation's growth is Re(lambda), and changes sign at u_H."""
     below, above = 0.82, 0.85
     rates = [env_growth_rate(u) for u in (below, above)]
-    for u, rate in zip((below, above), rates):
+    for u, rate in zip((below, above), rates, strict=True):
         expected = max(e.real for e in level_flight_eigenvalues(SUBOFF, u) if abs(e.imag) > 1e-9)
         assert rate == pytest.approx(expected, abs=1e-3)
     assert rates[0] < 0.0 < rates[1]
     crossing = below - rates[0] * (above - below) / (rates[1] - rates[0])
     assert crossing == pytest.approx(hopf.speed_mps, rel=5e-3)
+
+
+def test_the_environment_growth_rate_refuses_an_id_that_is_not_a_subenv_environment() -> None:
+    with pytest.raises(
+        ValueError, match=r"^env_id='CartPole-v1' is invalid: must be a subenv environment id$"
+    ):
+        env_growth_rate(0.8, env_id="CartPole-v1")
 
 
 def test_the_bifurcation_is_supercritical_with_amplitude_linear_in_the_speed_excess(hopf) -> None:  # type: ignore[no-untyped-def]

@@ -1,4 +1,5 @@
-"""The winnable-episode classifier: depth-holding trims with both plane pairs free, on constructed loadings."""
+"""The winnable-episode classifier: depth-holding trims with both plane pairs free, on constructed
+loadings."""
 
 from __future__ import annotations
 

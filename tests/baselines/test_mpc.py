@@ -41,8 +41,8 @@ def _run(controller: DepthMPC, scenario: str, options: dict, seed: int = 0, **en
 
 
 def test_the_prediction_is_the_environments_step():
-    """The one-model check: the controller's prediction of a control period is the environment's step, from the
-    same state with the same planes at a constant speed, bit for bit."""
+    """The one-model check: the controller's prediction of a control period is the environment's step,
+    from the same state with the same planes at a constant speed, bit for bit."""
     controller = DepthMPC()
     env = gym.make("subenv/LowSpeed-v0", control="independent")
     _, info = env.reset(seed=3, options={"speed": 0.45, "initial_state": (0.05, 0.01, -0.002, 12.0)})
@@ -112,9 +112,9 @@ def test_commands_stay_within_the_plane_limit_when_saturated():
 
 @pytest.mark.parametrize("estimate", [True, False], ids=["estimated", "not_estimated"])
 def test_a_ballast_offset_is_trimmed_out(estimate: bool):
-    """A centre of gravity 2 mm aft of the centre of buoyancy (a constant pitch moment, Riedel 1993 Ch. IV) that
-    the design model does not have: with the disturbance estimated the depth error goes to 0 and the estimate
-    is the moment -x_GB W cos(theta) (eq. 2.39); without it the boat settles off depth."""
+    """A centre of gravity 2 mm aft of the centre of buoyancy (a constant pitch moment, Riedel 1993
+    Ch. IV) that the design model does not have: with the disturbance estimated the depth error goes to 0
+    and the estimate is the moment -x_GB W cos(theta) (eq. 2.39); without it the boat settles off depth."""
     noise = (
         ObserverNoise() if estimate else ObserverNoise(disturbance=(0.0, 0.0), initial_disturbance=(0.0, 0.0))
     )
@@ -191,7 +191,7 @@ def test_a_batch_gets_the_one_at_a_time_results_bit_for_bit():
         DepthMPC(), "BallastOffset", seeds, batched=False, max_duration_s=60.0, keep_trajectories=3
     )
     batch = run_episodes(DepthMPC(), "BallastOffset", seeds, max_duration_s=60.0, keep_trajectories=3)
-    for a, b in zip(one, batch):
+    for a, b in zip(one, batch, strict=True):
         assert a.trajectory is not None and b.trajectory is not None
         np.testing.assert_array_equal(a.trajectory.actions, b.trajectory.actions)
         np.testing.assert_array_equal(a.trajectory.depth_error_m, b.trajectory.depth_error_m)
@@ -201,8 +201,9 @@ def test_a_batch_gets_the_one_at_a_time_results_bit_for_bit():
     "scenario", ["Nominal", "LowSpeed", "NearCritical", "SpeedTransient", "PeriscopeDepth", "BallastOffset"]
 )
 def test_it_wins_exactly_the_winnable_episodes(scenario):
-    """Every scenario class: each episode with a depth-holding trim inside the plane limits is won, and the one
-    without (BallastOffset seed 2: x_GB = 2.0 mm at 0.56 m/s) is lost, as it must be by any controller."""
+    """Every scenario class: each episode with a depth-holding trim inside the plane limits is won, and the
+    one without (BallastOffset seed 2: x_GB = 2.0 mm at 0.56 m/s) is lost, as it must be by any
+    controller."""
     results = run_episodes(DepthMPC(), scenario, [0, 1, 2])
     for result in results:  # (the harness records subenv.analysis.winnable for every episode)
         assert (result.metrics.outcome == "success") == result.winnable, (result.seed, result.metrics.outcome)
@@ -252,6 +253,10 @@ def test_the_condensed_qp_is_the_linear_model_stepped_and_its_cost():
             + weights.move * np.sum(moves**2)
         )
 
+    def quadratic(i, U):  # the QP's objective, the slacks 0
+        v = np.r_[U, 0.0, 0.0]
+        return 0.5 * v @ rows.H[i] @ v + rows.f[i] @ v
+
     for i in range(n):
         U0, U1 = 0.2 * rng.normal(size=2 * M), 0.2 * rng.normal(size=2 * M)
         xs, _ = stepped(i, U1)
@@ -260,9 +265,4 @@ def test_the_condensed_qp_is_the_linear_model_stepped_and_its_cost():
         depth = rows.C[i, 2 * K : 3 * K] @ v + (high[i] - rows.upper[i, nv + 2 * K : nv + 3 * K])
         np.testing.assert_allclose(pitch, xs[qp.stages - 1, 0], rtol=1e-12, atol=1e-12)
         np.testing.assert_allclose(depth, xs[qp.stages - 1, 3], rtol=1e-12, atol=1e-12)
-
-        def quadratic(U):
-            v = np.r_[U, 0.0, 0.0]
-            return 0.5 * v @ rows.H[i] @ v + rows.f[i] @ v
-
-        np.testing.assert_allclose(quadratic(U1) - quadratic(U0), cost(i, U1) - cost(i, U0), rtol=1e-10)
+        np.testing.assert_allclose(quadratic(i, U1) - quadratic(i, U0), cost(i, U1) - cost(i, U0), rtol=1e-10)

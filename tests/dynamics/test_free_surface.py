@@ -16,9 +16,9 @@ from subenv.dynamics.free_surface import (
     FreeSurface,
     dipole_suction_N,
     section_load,
-    slender_points,
     suction,
 )
+from subenv.dynamics.hull import slender_points
 from subenv.dynamics.model import pack_params as pack
 from subenv.dynamics.waves import SeaState, encounter_factor, hull_wave_integrals, wave_force_point
 from subenv.scenarios.presets import PERISCOPE_SEA

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import gymnasium as gym
 import numba
@@ -33,13 +34,13 @@ def assert_same(native, reference, where: str = "") -> None:
         return
     if isinstance(reference, tuple):
         assert isinstance(native, tuple) and len(native) == len(reference), where
-        for k, (a, b) in enumerate(zip(native, reference)):
+        for k, (a, b) in enumerate(zip(native, reference, strict=True)):
             assert_same(a, b, f"{where}[{k}]")
         return
     native, reference = np.asarray(native), np.asarray(reference)
     assert (native.dtype, native.shape) == (reference.dtype, reference.shape), where
     if reference.dtype == object:
-        for a, b in zip(native, reference):
+        for a, b in zip(native, reference, strict=True):
             if isinstance(b, np.ndarray):
                 np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12, err_msg=where)
             else:
@@ -141,7 +142,7 @@ def test_results_do_not_depend_on_the_number_of_threads(scenario):
         trace = [env.step(rng.uniform(-1, 1, size=(n, 1))) for _ in range(80)]
         ends = sum(int(np.sum(t[2] | t[3])) for t in trace)
         results.append(trace)
-    for a, b in zip(*results):
+    for a, b in zip(*results, strict=True):
         assert_same(a, b)
     if scenario == "Nominal":
         assert ends > 16  # resets ran between the threaded steps
@@ -401,3 +402,161 @@ def test_every_id_registers_the_vector_entry_point():
     assert env.unwrapped.config == gym.make("subenv/LowSpeed-v0").unwrapped.config
     assert env.single_action_space == gym.make("subenv/LowSpeed-v0").action_space
     assert math.isfinite(env.reset(seed=0)[1]["critical_speed_mps"][0])
+
+
+# --- misuse refused as SyncVectorEnv refuses it (issue 34, finding 11) ------------------------------
+_N = 3
+_ACTIONS = np.zeros((_N, 1), dtype=np.float32)
+
+
+def _reset_then(call):  # type: ignore[no-untyped-def]
+    """A misuse after a seeded reset."""
+
+    def misuse(env):  # type: ignore[no-untyped-def]
+        env.reset(seed=0)
+        return call(env)
+
+    return misuse
+
+
+def _step_after_an_episode_ended(env):  # type: ignore[no-untyped-def]
+    env.reset(seed=0)
+    for _ in range(10_000):  # full planes pitch the boat past the limit within a minute
+        if np.any(np.logical_or(*env.step(np.ones((_N, 1), dtype=np.float32))[2:4])):
+            return env.step(_ACTIONS)
+    raise AssertionError("no episode ended")
+
+
+def _outcome(vectorization_mode: str, misuse, kwargs: dict) -> Exception | None:  # type: ignore[no-untyped-def]
+    """What making a vector env of ``subenv/Nominal-v0`` with ``kwargs`` and ``misuse`` of it raised (None:
+    nothing)."""
+    try:
+        if vectorization_mode == "sync":
+            env = SyncVectorEnv([lambda: gym.make("subenv/Nominal-v0") for _ in range(_N)], **kwargs)
+        else:
+            env = gym.make_vec("subenv/Nominal-v0", num_envs=_N, **kwargs)
+        misuse(env)
+    except Exception as error:  # (any exception: it is what is compared)
+        return error
+    assert isinstance(env, (SyncVectorEnv, DivePlaneVectorEnv))
+    return None
+
+
+# SyncVectorEnv's own checks and those it leaves to the sub-environments (ours): the native env raises the
+# same type with the same message, compared at run time. The type is the one Gymnasium 1.4 raises: before
+# 1.4, SyncVectorEnv checks the seed list and the reset mask with assert statements.
+_SAME_AS_SYNC = {
+    "step before reset": (lambda env: env.step(_ACTIONS), gym.error.ResetNeeded),
+    "a seed list too short": (lambda env: env.reset(seed=[0] * (_N - 1)), ValueError),
+    "a seed list too long": (lambda env: env.reset(seed=list(range(_N + 1))), ValueError),
+    "a seed tuple too short": (lambda env: env.reset(seed=(0,) * (_N - 1)), ValueError),
+    "a negative seed": (lambda env: env.reset(seed=-1), ValueError),
+    "reset_mask a list": (_reset_then(lambda env: env.reset(options={"reset_mask": [True] * _N})), TypeError),
+    "reset_mask too long": (
+        _reset_then(lambda env: env.reset(options={"reset_mask": np.ones(_N + 1, dtype=bool)})),
+        ValueError,
+    ),
+    "reset_mask 2-d": (
+        _reset_then(lambda env: env.reset(options={"reset_mask": np.ones((_N, 1), dtype=bool)})),
+        ValueError,
+    ),
+    "reset_mask of integers": (
+        _reset_then(lambda env: env.reset(options={"reset_mask": np.ones(_N, dtype=int)})),
+        TypeError,
+    ),
+    "reset_mask all False": (
+        _reset_then(lambda env: env.reset(options={"reset_mask": np.zeros(_N, dtype=bool)})),
+        ValueError,
+    ),
+    "options a list": (lambda env: env.reset(options=[("speed", 1.0)]), ValueError),
+    "an unknown option": (lambda env: env.reset(options={"sped": 1.0}), ValueError),
+    "an option out of range": (lambda env: env.reset(options={"speed": -1.0}), ValueError),
+    # Not misuse for either: both go on.
+    "step after close": (_reset_then(lambda env: (env.close(), env.step(_ACTIONS))), None),
+    "actions of shape (num_envs,)": (_reset_then(lambda env: env.step(np.zeros(_N))), None),
+}
+
+
+@pytest.mark.parametrize("case", list(_SAME_AS_SYNC))
+def test_misuse_raises_what_sync_vector_env_raises_with_its_message(case):
+    misuse, error = _SAME_AS_SYNC[case]
+    theirs, ours = _outcome("sync", misuse, {}), _outcome("vector_entry_point", misuse, {})
+    if isinstance(theirs, AssertionError) and error is not AssertionError:  # Gymnasium before 1.4
+        assert type(ours) is error, repr(ours)
+    else:
+        assert (type(ours), str(ours)) == (type(theirs), str(theirs))
+
+
+# SyncVectorEnv passes the batch to its sub-environments, whose message names one action, or zip() finds the
+# batch short or long: the same type, and the native env's message names the batch.
+_SAME_TYPE_AS_SYNC = {
+    "actions for fewer sub-environments": (
+        _reset_then(lambda env: env.step(np.zeros((_N - 1, 1)))),
+        rf"^actions has shape \({_N - 1}, 1\): must have shape \({_N}, 1\) \(num_envs={_N}",
+    ),
+    "actions for more sub-environments": (
+        _reset_then(lambda env: env.step(np.zeros((_N + 1, 1)))),
+        rf"^actions has shape \({_N + 1}, 1\): must have shape \({_N}, 1\)",
+    ),
+    "actions of two planes in dual control": (
+        _reset_then(lambda env: env.step(np.zeros((_N, 2)))),
+        rf"^actions has shape \({_N}, 2\): must have shape \({_N}, 1\)",
+    ),
+    "a NaN action": (
+        _reset_then(lambda env: env.step(np.full((_N, 1), np.nan))),
+        r"^actions\[0\]=\[nan\] is invalid: must be finite",
+    ),
+    "a negative seed in a list": (
+        lambda env: env.reset(seed=[0, -1, 2]),
+        r"^seed\[1\]=-1 is invalid: must be None or an integer >= 0",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", list(_SAME_TYPE_AS_SYNC))
+def test_misuse_of_a_batch_raises_sync_vector_env_s_type_with_a_message_naming_the_batch(case):
+    misuse, message = _SAME_TYPE_AS_SYNC[case]
+    theirs, ours = _outcome("sync", misuse, {}), _outcome("vector_entry_point", misuse, {})
+    assert type(ours) is type(theirs) is ValueError, (repr(theirs), repr(ours))
+    assert re.search(message, str(ours)), str(ours)
+
+
+def test_an_unknown_autoreset_mode_raises_sync_vector_env_s_type_naming_the_argument():
+    theirs = _outcome("sync", lambda env: None, {"autoreset_mode": "Sometimes"})
+    ours = _outcome("vector_entry_point", lambda env: None, {"autoreset_mode": "Sometimes"})
+    assert type(ours) is type(theirs) is ValueError
+    assert str(ours).startswith("autoreset_mode='Sometimes' is invalid: must be one of ['NextStep'")
+
+
+# Where SyncVectorEnv fails in its own code, on a type it does not check (len() of a float, `in` an int), or
+# checks with an assert statement, or takes a bool as an integer, the native env does what the README
+# promises (ValueError naming the argument; numpy integer seeds taken as the integer). Recorded here, so
+# that a Gymnasium that checks these calls for the native env to match it.
+_SYNC_FAILS_IN_ITS_OWN_CODE = {
+    "a float seed": (lambda env: env.reset(seed=1.5), {}, TypeError, (ValueError, r"^seed=1\.5 is invalid")),
+    "a numpy integer seed": (lambda env: env.reset(seed=np.int64(3)), {}, TypeError, None),
+    "a bool seed": (lambda env: env.reset(seed=True), {}, None, (ValueError, r"^seed=True is invalid")),
+    "options not a dict": (
+        lambda env: env.reset(options=5),
+        {},
+        TypeError,
+        (ValueError, r"^options=5 is invalid: must be None or a dict"),
+    ),
+    "a step after an episode ended, autoreset disabled": (
+        _step_after_an_episode_ended,
+        {"autoreset_mode": AutoresetMode.DISABLED},
+        AssertionError,
+        (RuntimeError, r"have ended their episodes and autoreset_mode is DISABLED: reset them with reset\("),
+    ),
+}
+
+
+@pytest.mark.parametrize("case", list(_SYNC_FAILS_IN_ITS_OWN_CODE))
+def test_where_sync_vector_env_does_not_check_the_native_env_refuses_by_name(case):
+    misuse, kwargs, sync_raises, native_raises = _SYNC_FAILS_IN_ITS_OWN_CODE[case]
+    theirs, ours = _outcome("sync", misuse, kwargs), _outcome("vector_entry_point", misuse, kwargs)
+    assert type(theirs) is (sync_raises or type(None)), repr(theirs)
+    if native_raises is None:
+        assert ours is None, repr(ours)
+    else:
+        assert type(ours) is native_raises[0] and re.search(native_raises[1], str(ours)), repr(ours)

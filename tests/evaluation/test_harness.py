@@ -115,7 +115,7 @@ def test_every_controller_meets_the_same_episodes_and_runs_are_reproducible():
     assert all(len(v) == 1 for v in by_episode.values())  # same draw for both controllers
     assert len({next(iter(v)) for v in by_episode.values()}) == 6  # and distinct episodes
     again = evaluate([ThesisFeedback()], suite, seed=7, progress=False, keep_trajectories=3)
-    for a, b in zip([r for r in first if r.controller == "thesis_fsf"], again):
+    for a, b in zip([r for r in first if r.controller == "thesis_fsf"], again, strict=True):
         assert a.metrics == b.metrics
         assert np.array_equal(a.trajectory.depth_error_m, b.trajectory.depth_error_m)
 
@@ -269,6 +269,7 @@ def test_comparison_end_to_end_on_the_tiny_suite(tmp_path: Path, capsys):
 def test_bad_input_is_refused_before_any_episode_runs(tmp_path: Path):
     out = tmp_path / "exists"
     out.mkdir()
+    (out / "notes.txt").write_text("mine")  # (an empty folder would be replaced: it loses nothing)
     calls = []
 
     class Counting(ZeroPlanes):

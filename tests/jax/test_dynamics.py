@@ -10,7 +10,7 @@ import jax.numpy as jnp
 import subenv
 import subenv.jax as sj
 from subenv.dynamics import derivatives, integrate, model, model_params, rk4, stack_params
-from subenv.dynamics._jit import kernel
+from subenv.dynamics._jit import KERNEL_SOURCES, declare_kernel_sources, kernel
 from subenv.dynamics.free_surface import FreeSurface
 from subenv.dynamics.model import pack_params
 from subenv.dynamics.waves import MAX_WAVES, WAVE_FIELDS, SeaState
@@ -173,6 +173,10 @@ def test_deep_water_leaves_the_suction_out_and_refuses_a_free_surface():
         ValueError, match=r"free_surface=False is invalid for these loadings: 400 of them have a free"
     ):
         sj.derivatives(*args, near, hull, free_surface=False)
+
+
+# This file's kernel inlines the dynamics': its cache is dropped when they change (subenv.dynamics._jit).
+declare_kernel_sources(__file__, ("test_dynamics.py",), inlines=(KERNEL_SOURCES,))
 
 
 @kernel  # (the package's compile options and cache, dropped when a kernel's source changes)

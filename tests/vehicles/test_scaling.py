@@ -32,6 +32,8 @@ SCALING_RTOL = 1e-12
 # Jacobian (step 1e-7 in SI state units, so cancellation near 1e-9 of the largest term).
 EQUILIBRIUM_RTOL = 1e-6
 # Ratios from a 0.5 m model to a 200 m boat, for a 4.26 m SUBOFF.
+REPEATABLE = settings(deadline=None, derandomize=True, database=None)
+"""Property tests draw the same examples on every run and machine (from a seed made of the test's source)."""
 RATIOS = st.floats(min_value=0.12, max_value=47.0, allow_nan=False, allow_infinity=False)
 ALLOCATIONS = (-1.0, -0.5, 0.0, 0.5, 1.0, "bow")
 
@@ -49,7 +51,7 @@ def _state_scale(ratio: float) -> np.ndarray:
 
 
 # --- the critical speed: Riedel (1993) eq. 3.9 and Ch. VI's claim ---------------------------------
-@settings(max_examples=40, deadline=None)
+@settings(REPEATABLE, max_examples=40)
 @given(ratio=RATIOS)
 def test_critical_speed_scales_with_sqrt_ratio_and_the_critical_froude_number_stays(suboff, ratio):
     scaled = froude_scaled(suboff, ratio)
@@ -66,7 +68,8 @@ def test_critical_speed_scales_with_sqrt_ratio_and_the_critical_froude_number_st
 
 
 def test_full_scale_suboff_has_the_thesis_critical_froude_numbers():
-    """Fig. 3-9 (eq. 3.9: 0.8033 .. 1.2169 over alpha in [-1, 1]) and Fig. 5-4 (bow only: 2.05), at full scale."""
+    """Fig. 3-9 (eq. 3.9: 0.8033 .. 1.2169 over alpha in [-1, 1]) and Fig. 5-4 (bow only: 2.05), at full
+    scale."""
     full = load_vehicle(SUBOFF_FULLSCALE_NAME)
     assert critical_froude(full, -1.0) == pytest.approx(0.8033, abs=5e-5)
     assert critical_froude(full, 1.0) == pytest.approx(1.2169, abs=5e-5)
@@ -76,7 +79,7 @@ def test_full_scale_suboff_has_the_thesis_critical_froude_numbers():
 
 
 # --- time scales: linear model and equilibria --------------------------------------------------------
-@settings(max_examples=30, deadline=None)
+@settings(REPEATABLE, max_examples=30)
 @given(
     ratio=RATIOS,
     speed_over_critical=st.sampled_from([0.3, 0.8, 1.2, 2.5]),
@@ -112,7 +115,7 @@ def test_equilibria_at_equal_froude_number_correspond(suboff, ratio, speed_over_
     small = equilibria(model, u, 0.0, gain=gain)
     big = equilibria(scaled, froude_factor("speed", ratio) * u, 0.0, gain=gain / S)
     assert len(small) == len(big) >= 1
-    for a, b in zip(small, big):
+    for a, b in zip(small, big, strict=True):
         assert (b.saturated, b.stable) == (a.saturated, a.stable)
         assert b.pitch_rad == pytest.approx(a.pitch_rad, rel=EQUILIBRIUM_RTOL, abs=1e-12)
         assert b.plane_rad == pytest.approx(a.plane_rad, rel=EQUILIBRIUM_RTOL, abs=1e-12)
@@ -187,7 +190,7 @@ def test_each_field_scales_by_its_power_and_the_coefficients_stay(suboff):
         assert getattr(d, name) == pytest.approx(ratio**power * getattr(c, name), rel=SCALING_RTOL), name
 
 
-@settings(max_examples=50, deadline=None)
+@settings(REPEATABLE, max_examples=50)
 @given(ratio=RATIOS)
 def test_scaling_by_a_ratio_then_its_inverse_returns_the_vehicle(suboff, ratio):
     back = froude_scaled(froude_scaled(suboff, ratio), 1.0 / ratio, name=suboff.name)
@@ -283,14 +286,15 @@ def test_a_written_vehicle_file_loads_back_to_the_same_vehicle(tmp_path, name):
 
 
 def test_the_report_compares_the_full_scale_boat_with_the_froude_scaled_published_numbers():
-    # The thesis's dimensional numbers (gains in ft units, u_cr in fps) are the model's: at full scale the report
-    # compares them Froude-scaled, so every row agrees as it does on the model (it printed u_cr 1.8979 against
-    # 9.2978 fps, "difference +7.4").
+    # The thesis's dimensional numbers (gains in ft units, u_cr in fps) are the model's: at full scale the
+    # report compares them Froude-scaled, so every row agrees as it does on the model (it printed u_cr 1.8979
+    # against 9.2978 fps, "difference +7.4").
     from subenv.analysis.report import reproduce_numbers
 
     model, full = (reproduce_numbers(load_vehicle(n)) for n in ("suboff", SUBOFF_FULLSCALE_NAME))
     assert len(model) == len(full)
-    for m, f in zip(model, full):
-        # Froude similarity: each row's relative difference is the model's (the rows in fps and ft units included).
+    for m, f in zip(model, full, strict=True):
+        # Froude similarity: each row's relative difference is the model's (the rows in fps and ft units
+        # included).
         assert f.quantity == m.quantity
         assert f.difference / f.thesis == pytest.approx(m.difference / m.thesis, abs=1e-6), f.quantity
