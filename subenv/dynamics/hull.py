@@ -102,7 +102,7 @@ def slender_points(x_m: FloatArray, breadth_m: FloatArray) -> FloatArray:
     of the dipole weight (S + a_33 / rho) = 2 S (a circle's added mass a_33 = rho S, Newman 1977 ch. 4).
     The panels' points have the hull's exact total source (zero), dipole moment (-u V) and volume, and
     resolve the long parallel midbody that one point per segment lumps (docs/free_surface.md measures
-    the convergence); as many points as segments, so the cost per pair is the sources-only theory's.
+    the convergence); as many points as segments, so the table keeps its shape.
     """
     x = np.asarray(x_m, dtype=float)
     b = np.asarray(breadth_m, dtype=float)

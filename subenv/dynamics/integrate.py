@@ -96,10 +96,12 @@ _SEGMENT_COEFFICIENTS: Final = _SEGMENT + 1  # that segment's column of HullTabl
 _SLOPE_OUT: Final = _SEGMENT_COEFFICIENTS + 6  # the right-hand side's result, 4 rows
 _SLOPES: Final = _SLOPE_OUT + 4  # k1 .. k4, 4 rows each
 LANE_ROWS: Final = _SLOPES + 16
-"""Rows of a block: a block is a float64 array of ``LANE_ROWS * LANES`` (row r, column j at ``r * LANES + j``)."""
+"""Rows of a block: a block is a float64 array of ``LANE_ROWS * LANES`` (row r, column j at
+``r * LANES + j``)."""
 
 NO_WAVES: Final = np.zeros((1, WAVE_FIELDS, MAX_WAVES))
-"""The ``waves`` of :func:`control_period_lanes` for blocks whose lanes have no sea (every ``LANE_WAVES`` 0)."""
+"""The ``waves`` of :func:`control_period_lanes` for blocks whose lanes have no sea (every ``LANE_WAVES``
+0)."""
 NO_WAVES.flags.writeable = False
 _RHO_SUCTION: Final = PARAM_FIELDS.index("rho_suction")
 _SUCTION_MODEL: Final = PARAM_FIELDS.index("suction_model")
@@ -148,7 +150,8 @@ def set_lane(
 @inline_kernel
 def distance_travelled(distance0: float, elapsed: float, speed0: float, speed_slope: float) -> float:
     """Distance travelled [m] ``elapsed`` seconds into a period that starts at ``distance0`` [m] with the
-    speed ``speed0 + speed_slope * elapsed`` [m/s] (a sea's phase: :func:`~subenv.dynamics.waves.wave_force_point`)."""
+    speed ``speed0 + speed_slope * elapsed`` [m/s] (a sea's phase:
+    :func:`~subenv.dynamics.waves.wave_force_point`)."""
     return distance0 + elapsed * (speed0 + 0.5 * speed_slope * elapsed)
 
 
@@ -255,13 +258,12 @@ def control_period_lanes(
     """:func:`rk4` of :func:`~subenv.dynamics.rhs_point` over one control period ``dt`` with ``substeps``
     steps, for columns 0 .. n-1 (n <= :data:`LANES`) of ``block``, in place.
 
-    ``block`` holds the inputs of each column in the ``LANE_*`` rows (:func:`set_lane`); the planes
-    and the heave force are held, the speed follows each column's ramp; ``waves`` (shape (LANES,
-    WAVE_FIELDS, MAX_WAVES), row j column j's sea: :meth:`subenv.dynamics.waves.SeaState.components`;
-    one row such as :data:`NO_WAVES` where no lane has a sea) adds a sea's force at every stage. Afterwards rows
-    ``LANE_PITCH`` .. ``LANE_DEPTH`` hold the states at the end of the period: for each column the
-    bits of ``rk4`` over :func:`~subenv.dynamics.derivatives`.
-    """
+    ``block`` holds the inputs of each column in the ``LANE_*`` rows (:func:`set_lane`); the planes and the
+    heave force are held, the speed follows each column's ramp; ``waves`` (shape (LANES, WAVE_FIELDS,
+    MAX_WAVES), row j column j's sea: :meth:`subenv.dynamics.waves.SeaState.components`; one row such as
+    :data:`NO_WAVES` where no lane has a sea) adds a sea's force at every stage. Afterwards rows
+    ``LANE_PITCH`` .. ``LANE_DEPTH`` hold the states at the end of the period: for each column the bits of
+    ``rk4`` over :func:`~subenv.dynamics.derivatives`."""
     L = LANES
     h = dt / substeps
     half = 0.5 * h

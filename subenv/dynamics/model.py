@@ -138,7 +138,8 @@ def stack_params(params: list[ModelParams]) -> ModelParams:
 
 
 def pack_params(params: ModelParams) -> FloatArray:
-    """The numeric fields of ``params`` as one array, shape ``(..., len(PARAM_FIELDS))``, for :func:`rhs_point`."""
+    """The numeric fields of ``params`` as one array, shape ``(..., len(PARAM_FIELDS))``, for
+    :func:`rhs_point`."""
     fields = params[: len(PARAM_FIELDS)]
     if not any(isinstance(f, np.ndarray) for f in fields):
         return np.array(fields, dtype=float)
@@ -342,9 +343,16 @@ def derivatives(
     )
     states = rows(state, (*shape, 4)).reshape(-1, 4)
     out = np.empty((states.shape[0], 4))
+    u, stern_rows, bow_rows, force_rows, moment_rows = (
+        rows(a, shape) for a in (speed, stern, bow, force, moment)
+    )
     _derivatives_rows(
         states,
-        *(rows(a, shape) for a in (speed, stern, bow, force, moment)),
+        u,
+        stern_rows,
+        bow_rows,
+        force_rows,
+        moment_rows,
         rows(prm, (*shape, prm.shape[-1])).reshape(-1, prm.shape[-1]),
         params.hull.packed,
         out,

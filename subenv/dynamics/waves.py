@@ -184,7 +184,7 @@ class SeaState:
         """The bins' lower edges [rad/s] and width [rad/s]."""
         low, high = (f * self.peak_frequency_radps for f in self.band)
         width = (high - low) / self.waves
-        return low + width * np.arange(self.waves), width
+        return low + width * np.arange(self.waves, dtype=float), width
 
     def frequencies(self, jitter: ArrayLike) -> FloatArray:
         """The waves' frequencies [rad/s], one per bin at ``jitter`` (in [0, 1)) across it."""

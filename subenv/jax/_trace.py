@@ -153,6 +153,6 @@ def traced(kernel: Callable[..., Any], free_surface: bool = True) -> Callable[..
         namespace.update(_NAMES)
         for name in function.__code__.co_names:
             value = namespace.get(name)
-            if hasattr(value, "py_func"):  # a kernel
+            if value is not None and hasattr(value, "py_func"):  # a kernel
                 namespace[name] = traced(value, free_surface)
     return _twins[key]

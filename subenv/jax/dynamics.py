@@ -100,7 +100,8 @@ def control_period(
         heave, pitch = wave_force(t, distance, x[..., 3], speed, waves)
         return derivatives(x, speed, stern, bow, prm, hull, force + heave, pitch, free_surface=free_surface)
 
-    return integrate.rk4(rhs, t0, jnp.asarray(state), dt, substeps)
+    # (the reference's own RK4, typed for NumPy arrays, run on JAX's: the same arithmetic)
+    return integrate.rk4(rhs, t0, jnp.asarray(state), dt, substeps)  # type: ignore[arg-type]
 
 
 def _wave_force(waves: Any) -> Any:

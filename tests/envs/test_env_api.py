@@ -69,7 +69,8 @@ def test_gymnasium_check_env(env_id):
 
 @pytest.mark.parametrize("vehicle", subenv.available_vehicles())
 def test_every_shipped_vehicle_passes_the_checkers(vehicle):
-    """Each vehicle file (the Froude-scaled full-scale SUBOFF too) makes a valid env, Gymnasium's and SB3's."""
+    """Each vehicle file (the Froude-scaled full-scale SUBOFF too) makes a valid env, Gymnasium's and
+    SB3's."""
     from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
     env = gym.make("subenv/DivePlane-v0", vehicle=vehicle, disable_env_checker=True)
@@ -108,7 +109,7 @@ def _same(a, b) -> bool:
     if isinstance(a, dict):
         return a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
     if isinstance(a, (tuple, list)):
-        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
     if isinstance(a, np.ndarray):
         return np.array_equal(a, b)
     if isinstance(a, float) and math.isnan(a):

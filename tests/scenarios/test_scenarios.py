@@ -61,13 +61,13 @@ def test_speeds_are_placed_relative_to_the_critical_speed(name, low, high):
 
 def test_relative_speeds_follow_the_plane_allocation():
     """With alpha = -1 the critical speed is lower (Fig. 3-9); LowSpeed stays below it."""
-    for _, vehicle, info, env in _episodes("LowSpeed", 5, alpha=-1.0):
+    for _, vehicle, info, _env in _episodes("LowSpeed", 5, alpha=-1.0):
         assert info["critical_speed_mps"] == pytest.approx(subenv.analysis.critical_speed(vehicle, -1.0))
         assert info["speed_mps"] < info["critical_speed_mps"] < 0.5
 
 
 def test_periscope_depth_is_near_the_surface_and_light():
-    for episode, vehicle, info, _ in _episodes("PeriscopeDepth", 10):
+    for _episode, vehicle, info, _ in _episodes("PeriscopeDepth", 10):
         assert 1.0 <= info["depth_command_m"] <= 1.2
         assert 2e-4 <= vehicle.excess_buoyancy_N / vehicle.weight_N <= 1e-3
 
@@ -108,7 +108,7 @@ def test_randomized_draws_from_every_scenario_and_randomises_the_loading():
     assert all(e.sensor_noise and e.disturbance_std_N > 0 for e, *_ in episodes)
     # Every component scenario shows up: recognise them by their signatures.
     kinds = collections.Counter()
-    for episode, vehicle, info, _ in episodes:
+    for episode, vehicle, _info, _ in episodes:
         if len(episode.speed_knots) > 1:
             kinds["SpeedTransient"] += 1
         elif vehicle.excess_buoyancy_N > 0:
@@ -245,7 +245,8 @@ def test_sample_puts_every_draw_in_its_place() -> None:
 
 
 def test_sample_draws_one_number_per_random_quantity() -> None:
-    # The 15 random quantities of AllRandom (the sign of x_GB is one), and Nominal's 3 (command, offset, pitch).
+    # The 15 random quantities of AllRandom (the sign of x_GB is one), and Nominal's 3 (command, offset,
+    # pitch).
     for scenario, expected in ((_ALL_RANDOM, 15), (get_scenario("Nominal"), 3)):
         rng, twin = np.random.default_rng(5), np.random.default_rng(5)
         for _ in range(20):
