@@ -1,6 +1,6 @@
 """The free surface's slender-body theory against exact potential flow: a check, not a benchmark of speed.
 
-    .venv/bin/python benchmarks/free_surface_panel.py [--panels 80 24] [--quick]
+    .venv/bin/python benchmarks/free_surface_panel.py [--panels 80 24] [--quick] [--spheroid]
 
 An independent 3-D computation of the potential flow past the hull: a source-panel method (constant
 source density on flat quadrilaterals, point sources beyond three panel sizes, 6 x 6 sub-points nearer;
@@ -14,9 +14,10 @@ tables of docs/free_surface.md:
 2. a hull in the non-uniform flow of an outer point source (no free surface, no incidence): the moment
    against the three candidate slender-body forms (sources alone; with u int a_33 w dx; with
    u int (rho S + a_33) w dx, :func:`subenv.dynamics.free_surface.section_load`);
-3. SUBOFF under the rigid lid in level flight (pitch theta, stream horizontal): the heave force and the
-   pitch derivatives against :func:`subenv.dynamics.free_surface.suction` (both theories), the deep-water
-   moment (Munk's) taken away.
+3. SUBOFF (and with ``--spheroid`` a spheroid of its length and diameter) under the rigid lid in level
+   flight (pitch theta, stream horizontal): the heave force and the pitch derivatives against
+   :func:`subenv.dynamics.free_surface.suction` (both theories), the deep-water moment (Munk's) taken
+   away.
 """
 
 from __future__ import annotations
@@ -26,9 +27,8 @@ import math
 
 import numpy as np
 
-from subenv.dynamics import model_params
-from subenv.dynamics.free_surface import SOURCES_ONLY, FreeSurface, section_load, suction
-from subenv.dynamics.hull import slender_points
+from subenv.dynamics.free_surface import SOURCES_ONLY, section_load, suction
+from subenv.dynamics.hull import HullTable, slender_points
 from subenv.vehicles import load_vehicle
 
 RHO = 1000.0
@@ -72,7 +72,7 @@ def influence(points, centre, area, corners, mirrored: bool, rows=400):
     for start in range(0, len(points), rows):
         p = points[start : start + rows]
         d = p[:, None] - centre[None]
-        r2 = np.maximum((d * d).sum(-1), 1e-300)
+        r2 = np.maximum((d * d).sum(-1), 1e-100)  # (a panel on its own centroid: replaced below)
         K = area[None, :, None] * d / (4 * math.pi * r2[..., None] ** 1.5)
         i, j = np.nonzero(r2 < NEAR * NEAR * area[None])
         sub = np.einsum("qc,mck->mqk", weights, corners[j])
@@ -161,14 +161,14 @@ def outer_source(n_axial: int, n_around: int) -> None:
             )
 
 
-def rigid_lid(n_axial: int, n_around: int, depths) -> None:
-    suboff = load_vehicle("suboff")
-    panels = mesh(suboff.hull.x_m, suboff.hull.breadth_m, n_axial, n_around)
-    hull = model_params(suboff, FreeSurface()).hull
+def rigid_lid(n_axial: int, n_around: int, name: str, x_m, breadth_m, depths) -> None:
+    """The hull (stations ``x_m``, breadths ``breadth_m``) under the rigid lid in level flight."""
+    panels = mesh(x_m, breadth_m, n_axial, n_around)
+    hull = HullTable.from_offsets(tuple(x_m), tuple(breadth_m))
     pitch = 0.02
     deep = {s: loads(panels, s * pitch, 50.0, lid=False) for s in (-1, 1)}
     print(
-        "3. SUBOFF in level flight at 1 m/s: Z [N, up] at 0 rad, dZ/dtheta, dM/dtheta [per rad], "
+        f"3. {name} in level flight at 1 m/s: Z [N, up] at 0 rad, dZ/dtheta, dM/dtheta [per rad], "
         "deep taken away:"
     )
     for h in depths:
@@ -191,10 +191,25 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--panels", type=int, nargs=2, default=(80, 24), metavar=("AXIAL", "AROUND"))
     parser.add_argument("--quick", action="store_true", help="the rigid lid at 1 m only")
+    parser.add_argument("--spheroid", action="store_true", help="the rigid lid on a spheroid too")
     args = parser.parse_args()
     munk(*args.panels)
     outer_source(*args.panels)
-    rigid_lid(*args.panels, (1.0,) if args.quick else (2.0, 1.0, 0.5))
+    suboff = load_vehicle("suboff")
+    rigid_lid(
+        *args.panels,
+        "SUBOFF",
+        suboff.hull.x_m,
+        suboff.hull.breadth_m,
+        (1.0,) if args.quick else (2.0, 1.0, 0.5),
+    )
+    if args.spheroid:
+        # SUBOFF's length and diameter (L/D 8.4), a smooth nose
+        x = np.linspace(-2.13, 2.13, 2001)
+        breadth = 0.508 * np.sqrt(np.clip(1 - (x / 2.13) ** 2, 0.0, None))
+        rigid_lid(
+            *args.panels, "a spheroid of SUBOFF's length and diameter", x, breadth, (3.0, 1.5, 1.0, 0.7)
+        )
 
 
 if __name__ == "__main__":
