@@ -1,4 +1,4 @@
-"""Timing of the analysis: critical_speed per call, and the full reproduction report.
+"""Timing of the analysis: critical_speed per call, and the reproduction's findings (``subenv analyze``).
 
 .venv/bin/python benchmarks/analysis_timing.py
 """
@@ -11,7 +11,7 @@ import timeit
 
 from subenv import load_vehicle
 from subenv.analysis import critical_speed
-from subenv.analysis.report import write_report
+from subenv.analysis.report import write_findings
 
 
 def main() -> None:
@@ -22,8 +22,8 @@ def main() -> None:
     print(f"critical_speed: {per_call * 1e6:.2f} us per call (best of 5 x {n})")
     with tempfile.TemporaryDirectory() as tmp:
         start = time.perf_counter()
-        write_report(f"{tmp}/report", vehicle)
-        print(f"full reproduction report: {time.perf_counter() - start:.1f} s")
+        write_findings(f"{tmp}/report", vehicle)
+        print(f"the reproduction's findings (subenv analyze): {time.perf_counter() - start:.1f} s")
 
 
 if __name__ == "__main__":

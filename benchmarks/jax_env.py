@@ -55,7 +55,7 @@ def jax_rate(env_id: str, n: int, scan: int, seconds: float) -> tuple[float, flo
         def body(carry: tuple[jax.Array, object], _: None) -> tuple[tuple[jax.Array, object], jax.Array]:
             keys, state = carry
             split = jax.vmap(jax.random.split)(keys)
-            _, state, reward, _, _ = step(split[:, 1], state, actions, params)
+            _, state, reward, _, _, _ = step(split[:, 1], state, actions, params)
             return (split[:, 0], state), reward
 
         (keys, state), rewards = jax.lax.scan(body, (keys, state), None, length=scan)

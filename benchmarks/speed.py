@@ -1,6 +1,7 @@
 """How fast subenv steps, next to Gymnasium's own environments, measured in one run on one machine.
 
     .venv/bin/python benchmarks/speed.py [--seconds 1.0] [--repeats 3] [--quick] [--baseline DIR]
+                                         [--json PATH]
 
 Prints Markdown tables of ratios against references measured in the same process (absolute
 numbers depend on the machine; the ratios are what to compare):
@@ -25,7 +26,8 @@ numbers depend on the machine; the ratios are what to compare):
 Every rate is the best of ``--repeats`` runs of ``--seconds`` each, taken in turns across the
 environments of a table (machines share their cores; the two-thread probe printed before and
 after tells whether both cores were free); actions are uniform random, drawn before timing;
-resets are included in the time.
+resets are included in the time. ``--json PATH`` also writes what was printed as a record (machine,
+date, command, the tables: ``benchmarks/_record.py``), from which the documentation draws its figures.
 """
 
 from __future__ import annotations
@@ -706,6 +708,7 @@ def main() -> None:
         "--baseline", type=Path, help="a checkout of another commit to compare with (section 6)"
     )
     parser.add_argument("--only-baseline", action="store_true", help="with --baseline: that section alone")
+    parser.add_argument("--json", type=Path, help="also write the tables as a JSON record to this file")
     parser.add_argument("--cells", action="store_true", help=argparse.SUPPRESS)  # (a child of --baseline)
     parser.add_argument("--sizes", default=",".join(map(str, _BASELINE_SIZES)), help=argparse.SUPPRESS)
     args = parser.parse_args()
@@ -718,7 +721,8 @@ def main() -> None:
         print(json.dumps({**cells, "__file__": subenv.__file__}))
         return
     print(f"Machine: {machine()}")
-    print(f"Before: {free_cores_probe()}\n")
+    before = free_cores_probe()
+    print(f"Before: {before}\n")
     sections: list[tuple[str, Callable[[], list[str]]]] = []
     if args.baseline is not None:
         baseline = args.baseline
@@ -742,11 +746,19 @@ def main() -> None:
         ]
         if not args.quick:
             sections += [("Peak memory", lambda: memory_table(4096)), ("numba compile time", compile_table)]
+    printed = []
     for title, table in sections:
+        lines = table()
+        printed.append((title, lines))
         print(f"### {title}\n")
-        print("\n".join(table()))
+        print("\n".join(lines))
         print(flush=True)
-    print(f"After: {free_cores_probe()}")
+    after = free_cores_probe()
+    print(f"After: {after}")
+    if args.json is not None:
+        from _record import write_record
+
+        write_record(args.json, "speed", machine(), printed, probe_before=before, probe_after=after)
 
 
 if __name__ == "__main__":

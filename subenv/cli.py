@@ -1,7 +1,9 @@
 """The ``subenv`` command line: the submarine depth-control benchmark's commands.
 
-``subenv evaluate`` (the main job) compares the installed controllers on a suite of scenarios; ``subenv sweep``
-runs them over a grid of the physics' parameters on Ray (:mod:`subenv.sweep`);
+``subenv evaluate`` (the main job) compares the installed controllers on a suite of scenarios;
+``subenv sweep`` runs them over a grid of the physics' parameters on Ray (:mod:`subenv.sweep`);
+``subenv analyze`` recomputes Riedel (1993)'s published numbers and the findings beyond them
+(:mod:`subenv.analysis.report`);
 ``subenv demo`` flies the thesis's pole-placement design (Riedel 1993 Ch. II.B, computed here from
 the linear model) once above and once below the critical speed, prints a summary and writes a plot.
 The command line is the composition root: it finds the controllers through their entry points
@@ -14,6 +16,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import importlib.util
+import json
 import math
 import sys
 import time
@@ -37,6 +40,8 @@ from subenv.vehicles import available_vehicles
 
 @dataclass
 class Run:
+    """One episode of ``subenv demo``: its speed, traces and end."""
+
     label: str
     speed_mps: float
     times: np.ndarray
@@ -101,6 +106,7 @@ def _write_plot(runs: Sequence[Run], ucr: float, path: Path) -> None:
 
 
 def demo(args: argparse.Namespace) -> int:
+    """``subenv demo``: the thesis controller above and below the critical speed."""
     env = gym.make(args.env)
     ucr = critical_speed(env.unwrapped.base_vehicle)  # type: ignore[attr-defined]
     env.close()
@@ -134,7 +140,8 @@ def demo(args: argparse.Namespace) -> int:
 
 
 def analyze(args: argparse.Namespace) -> int:
-    from subenv.analysis.report import write_report
+    """``subenv analyze``: :func:`subenv.analysis.report.write_findings`, and its tables printed."""
+    from subenv.analysis import report
     from subenv.atomic import OutputDirError
     from subenv.vehicles import load_vehicle
 
@@ -142,13 +149,39 @@ def analyze(args: argparse.Namespace) -> int:
         vehicle = load_vehicle(args.vehicle)
     except (ValueError, OSError) as exc:
         raise SystemExit(f"subenv analyze: --vehicle {args.vehicle!r}: {exc}") from None
-    require("plot", "the report's figures", "matplotlib")
     try:
-        out = write_report(args.out, vehicle, overwrite=args.force)
+        found = report.write_findings(args.out, vehicle, overwrite=args.force)
     except (FileExistsError, OutputDirError) as exc:
         raise SystemExit(f"subenv analyze: --out: {exc}") from None
-    print((out / "report.md").read_text().split("## Figures")[0].rstrip())
-    print(f"\nreport written to {out}/report.md with {len(list(out.glob('*.png')))} figures")
+    header: tuple[str, ...]
+    cells: list[tuple[str, ...]]
+    if found.suboff_shape:
+        print(f"Riedel (1993)'s published numbers, recomputed for {found.vehicle}:\n")
+        header = ("quantity", "thesis value", "computed value", "difference", "unit", "note")
+        cells = [
+            (r.quantity, f"{r.thesis:.5g}", f"{r.computed:.5g}", f"{r.difference:+.3g}", r.unit, r.note)
+            for r in found.published
+        ]
+    else:
+        print(f"The critical speed and saturation of {found.vehicle} (the thesis studied SUBOFF):\n")
+        header = ("quantity", "value", "unit", "note")
+        cells = [(r.quantity, f"{r.computed:.5g}", r.unit, r.note) for r in found.numbers]
+    for row in (header, ("---",) * len(header), *cells):
+        print("| " + " | ".join(row) + " |")
+    hopf = found.hopf.point
+    print(
+        f"\nPlanes held at zero, level flight loses stability at u_H = {hopf.speed_mps:.4f} m/s "
+        f"({hopf.speed_mps / critical_speed(vehicle):.3f} u_cr; period {hopf.period_s:.1f} s, "
+        f"{hopf.criticality})"
+    )
+    near = found.surface.critical[0]
+    print(
+        f"Near the free surface the critical speed falls: {100 * near.shift:+.1f} % at {near.depth_m:.3g} m"
+    )
+    print(
+        f"\nfindings written to {Path(args.out) / report.REPORT_FILE}; the report with its figures is the "
+        "documentation's Reproduction page"
+    )
     return 0
 
 
@@ -238,7 +271,6 @@ def evaluate(args: argparse.Namespace) -> int:
     from subenv.atomic import OutputDirError
     from subenv.evaluation import (
         DEFAULT_SEED,
-        DEFAULT_SUITE,
         ENTRY_POINT_GROUP,
         controller_names,
         run_comparison,
@@ -256,7 +288,6 @@ def evaluate(args: argparse.Namespace) -> int:
             f"subenv evaluate: no controllers are registered: install a package that declares some "
             f"in the {ENTRY_POINT_GROUP!r} entry-point group, or see --plugins"
         )
-    suite = DEFAULT_SUITE if args.suite is None else args.suite[0] if len(args.suite) == 1 else args.suite
     _note_other_vehicle(args.vehicle, args.controllers)
     if not args.no_plots:
         require("plot", "the plots (or pass --no-plots)", "matplotlib")
@@ -264,7 +295,7 @@ def evaluate(args: argparse.Namespace) -> int:
     try:
         comparison = run_comparison(
             args.controllers,
-            suite,
+            args.suite,  # (None: the default suite)
             args.episodes,
             out,
             overwrite=args.force,
@@ -272,6 +303,7 @@ def evaluate(args: argparse.Namespace) -> int:
             progress=not args.no_progress,
             plots=not args.no_plots,
             vehicle=args.vehicle,
+            env_kwargs=args.env_kwargs,
         )
     except (FileExistsError, OutputDirError) as exc:
         raise SystemExit(f"subenv evaluate: --out: {exc}") from None
@@ -290,13 +322,15 @@ def evaluate(args: argparse.Namespace) -> int:
 
 
 def train(argv: Sequence[str]) -> int:
-    """``subenv train ...`` is ``python -m subenv_agents.train ...`` (imported by name: the composition root)."""
+    """``subenv train ...`` is ``python -m subenv_agents.train ...`` (imported by name: the composition
+    root)."""
     require("rl", "subenv train", "stable_baselines3", "yaml")
     module = importlib.import_module("subenv_agents.train")
     return int(module.main(list(argv)))
 
 
 def list_environments(args: argparse.Namespace) -> int:
+    """``subenv list``: every registered id and its scenario."""
     from subenv.scenarios import get_scenario, scenario_names
 
     for name in scenario_names():
@@ -460,6 +494,20 @@ def _names(text: str) -> list[str]:
     return names
 
 
+def _json_object(text: str) -> dict[str, Any]:
+    """A JSON object (``--env-kwargs``); argparse reports a ValueError's type as the usage error."""
+    try:
+        value = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise argparse.ArgumentTypeError(f"invalid value {text!r}: not JSON ({exc.msg})") from None
+    if not isinstance(value, dict):
+        raise argparse.ArgumentTypeError(
+            f"invalid value {text!r}: must be a JSON object of the environment's arguments, e.g. "
+            "'{\"plane_rate_limit_radps\": 0.05}'"
+        )
+    return value
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="subenv",
@@ -509,6 +557,14 @@ def _parser() -> argparse.ArgumentParser:
         help="vehicle name or file (default: %(default)s); the scenarios are Froude-scaled to "
         "its length (shipped: " + ", ".join(available_vehicles()) + ")",
     )
+    p_eval.add_argument(
+        "--env-kwargs",
+        type=_json_object,
+        metavar="JSON",
+        help="the environments' other arguments, a JSON object, e.g. '{\"plane_rate_limit_radps\": 0.05}' "
+        "(checked by the environment before anything runs; recorded in run.json; a controller that takes "
+        "them, such as mpc, is told them: name it <name>:uninformed to run it untold)",
+    )
     p_eval.add_argument("--list", action="store_true", help="list the controllers and suites, and exit")
     p_demo = sub.add_parser("demo", help="fly the thesis controller above and below the critical speed")
     p_demo.add_argument("--env", default="subenv/Nominal-v0", help="environment id (default: %(default)s)")
@@ -528,9 +584,9 @@ def _parser() -> argparse.ArgumentParser:
         "--out", type=_path, default="results/demo.png", help="plot file (default: %(default)s)"
     )
     p_demo.add_argument("--no-plot", action="store_true", help="print the summary only")
-    p_analyze = sub.add_parser("analyze", help="write the report that reproduces Riedel (1993)")
+    p_analyze = sub.add_parser("analyze", help="recompute the numbers of Riedel (1993), into report.json")
     p_analyze.add_argument(
-        "--out", type=_path, default="results/analysis", help="report folder (default: %(default)s)"
+        "--out", type=_path, default="results/analysis", help="output folder (default: %(default)s)"
     )
     p_analyze.add_argument("--vehicle", default="suboff", help="vehicle name or file (default: %(default)s)")
     p_analyze.add_argument(

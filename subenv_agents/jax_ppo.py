@@ -13,12 +13,15 @@ accelerator that is the fast path; on a CPU it runs too (``benchmarks/jax_ppo.py
   environments observed, as PureJaxRL's ``NormalizeVecObservation`` and SB3's ``VecNormalize``),
   rewards scaled by the running deviation of the discounted return; the statistics are saved with
   the network.
-- Truncated episodes (time limit) bootstrap from the value of their last state, terminated ones
-  from zero (the environment's ``info["discount"]``).
+- A truncated episode (the scenario's duration, the time limit) bootstraps from the value of the
+  observation its last step reached (gymnax 1.0's ``info["final_observation"]``: the step's own
+  observation is already the next episode's), a terminated one from zero (:func:`advantages`).
 - Optimisation is optax's (global-norm clipping, Adam with a linearly annealed step).
 
 ``python -m subenv_agents.jax_ppo --out DIR`` trains and writes a model folder (:func:`save`):
 ``network.npz``, ``config.json`` and ``train.json``, complete or absent (:mod:`subenv.atomic`).
+:func:`load` checks a folder whole (a damaged or inconsistent file is refused, by its name and the
+field).
 :class:`JaxPPOController` loads one as a controller of :mod:`subenv.evaluation`; the shipped one,
 ``subenv_agents/models/ppo_jax/``, is the ``ppo_jax`` entry point (``subenv evaluate``).
 
@@ -34,29 +37,24 @@ import math
 import os
 import platform
 import shlex
+import struct
 import sys
 import time
+import zipfile
+import zlib
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, NamedTuple
 
+import gymnasium as gym
 import numpy as np
 
-from subenv import _validation as check
-from subenv.extras import require
-
-require("jax-rl", "PPO on the JAX environment (subenv_agents.jax_ppo)", "jax", "optax")
-
-import gymnasium as gym
-import jax
-import jax.numpy as jnp
-import optax
-
 import subenv.envs
-import subenv.jax as sj
+from subenv import _validation as check
 from subenv.atomic import atomic_output_dir, check_output_dir
-from subenv.envs.config import DivePlaneConfig
+from subenv.envs.config import OBSERVATION_NAMES, DivePlaneConfig
 from subenv.evaluation import SingleRowMixin, check_batch
+from subenv.extras import require
 from subenv.vehicles import Vehicle
 from subenv_agents.records import (
     BASELINE,
@@ -67,9 +65,19 @@ from subenv_agents.records import (
     target_met,
 )
 
+require("jax-rl", "PPO on the JAX environment (subenv_agents.jax_ppo)", "jax", "optax")
+
+# (after require(), which names the extra to install where they are missing)
+import jax  # noqa: E402
+import jax.numpy as jnp  # noqa: E402
+import optax  # noqa: E402
+
+import subenv.jax as sj  # noqa: E402
+
 __all__ = [
     "JaxPPOController",
     "PPOConfig",
+    "advantages",
     "load",
     "main",
     "make_train",
@@ -82,6 +90,7 @@ __all__ = [
 
 _LOG_2PI = math.log(2.0 * math.pi)
 _OBS_CLIP = 10.0  # normalised observations are clipped to +-this (SB3's VecNormalize default)
+_FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -143,9 +152,13 @@ class PPOConfig:
         check.require(
             "hidden",
             self.hidden,
-            len(self.hidden) > 0 and all(isinstance(w, int) and w > 0 for w in self.hidden),
+            isinstance(self.hidden, tuple | list)
+            and len(self.hidden) > 0
+            and all(isinstance(w, int) and not isinstance(w, bool) and w > 0 for w in self.hidden),
             "a non-empty tuple of positive widths",
         )
+        for name in ("anneal_lr", "normalize_reward"):
+            check.require(name, getattr(self, name), isinstance(getattr(self, name), bool), "True or False")
         batch = self.num_envs * self.num_steps
         check.require(
             "num_minibatches",
@@ -160,12 +173,23 @@ class PPOConfig:
             f"at least num_envs * num_steps = {batch} (one update)",
         )
         object.__setattr__(self, "hidden", tuple(self.hidden))
+        check.require("env_kwargs", self.env_kwargs, isinstance(self.env_kwargs, Mapping), "a mapping")
         object.__setattr__(self, "env_kwargs", dict(self.env_kwargs))
-        check.require("env_id", self.env_id, self.env_id in subenv.envs.env_ids(), "a registered subenv id")
+        check.require(
+            "env_id",
+            self.env_id,
+            isinstance(self.env_id, str) and self.env_id in subenv.envs.env_ids(),
+            "a registered subenv id",
+        )
         try:  # (the environment's own checks, before anything is drawn or compiled)
             DivePlaneConfig(**{**gym.spec(self.env_id).kwargs, **self.env_kwargs})
         except TypeError as exc:
             raise ValueError(f"env_kwargs={self.env_kwargs!r} is invalid: {exc}") from None
+
+    @property
+    def n_actions(self) -> int:
+        """Components of the environment's action."""
+        return DivePlaneConfig(**{**gym.spec(self.env_id).kwargs, **self.env_kwargs}).n_actions
 
     @property
     def num_updates(self) -> int:
@@ -175,12 +199,13 @@ class PPOConfig:
 
 # --- the network -----------------------------------------------------------------------------------
 def init_network(key: jax.Array, obs_dim: int, act_dim: int, hidden: Sequence[int]) -> dict[str, Any]:
-    """The actor's and the critic's layers (orthogonal weights, zero biases) and the log standard deviations."""
+    """The actor's and the critic's layers (orthogonal weights, zero biases) and the log standard
+    deviations."""
 
     def mlp(key: jax.Array, sizes: Sequence[int], last_scale: float) -> list[dict[str, jax.Array]]:
         layers = []
         for i, (k, n_in, n_out) in enumerate(
-            zip(jax.random.split(key, len(sizes) - 1), sizes[:-1], sizes[1:])
+            zip(jax.random.split(key, len(sizes) - 1), sizes[:-1], sizes[1:], strict=True)
         ):
             scale = last_scale if i == len(sizes) - 2 else math.sqrt(2.0)
             layers.append(
@@ -252,13 +277,38 @@ def normalize(stats: RunningStats, obs: jax.Array) -> jax.Array:
 
 # --- the training ------------------------------------------------------------------------------------
 class Rollout(NamedTuple):
+    """One step of every environment (a leading time axis in a rollout)."""
+
     obs: jax.Array  # normalised
     action: jax.Array
     log_prob: jax.Array
     value: jax.Array
     reward: jax.Array  # scaled
     terminated: jax.Array
-    done: jax.Array
+    done: jax.Array  # terminated or truncated: the next step is a new episode's
+    final_value: jax.Array  # the value of the observation the step reached (info["final_observation"])
+
+
+def advantages(
+    rollout: Rollout, last_value: jax.Array, gamma: float, lam: float
+) -> tuple[jax.Array, jax.Array]:
+    """GAE(gamma, lambda) advantages of a rollout (time first) and the value targets, ``last_value`` the
+    value of the observation after its last step.
+
+    Each step bootstraps from the value of where it led: zero after a termination, the final
+    observation's after a truncation (the next step of the rollout is a new episode's), the next
+    step's otherwise; the advantages do not run on across an episode's end.
+    """
+
+    def back(carry: tuple[jax.Array, jax.Array], t: Rollout) -> tuple[tuple[jax.Array, jax.Array], jax.Array]:
+        gae, next_value = carry
+        bootstrap = jnp.where(t.terminated, 0.0, jnp.where(t.done, t.final_value, next_value))
+        delta = t.reward + gamma * bootstrap - t.value
+        gae = delta + gamma * lam * (1.0 - t.done) * gae
+        return (gae, t.value), gae
+
+    _, adv = jax.lax.scan(back, (jnp.zeros_like(last_value), last_value), rollout, reverse=True)
+    return adv, adv + rollout.value
 
 
 class Metrics(NamedTuple):
@@ -305,9 +355,13 @@ def make_train(
         mean, value = _mlp(state.network["actor"], obs), _value(state.network, obs)
         log_std = state.network["log_std"]
         action = mean + jnp.exp(log_std) * jax.random.normal(key_action, mean.shape)
-        next_obs, env_state, reward, done, info = step_envs(
+        next_obs, env_state, reward, terminated, truncated, info = step_envs(
             jax.random.split(key_env, n), state.env_state, action, params
         )
+        done = terminated | truncated
+        obs_stats = state.obs_stats.update(next_obs)
+        # (normalised as the next step's observation is: its value is the next step's where no episode ended)
+        final_value = _value(state.network, normalize(obs_stats, info["final_observation"]))
         returns = state.returns * gamma + reward
         return_stats = (
             state.return_stats.update(returns[:, None]) if config.normalize_reward else state.return_stats
@@ -319,8 +373,9 @@ def make_train(
             _log_prob(mean, log_std, action),
             value,
             scaled.astype(jnp.float32),
-            info["terminated"] > 0.0,
+            terminated,
             done,
+            final_value,
         )
         state = state._replace(
             env_state=env_state,
@@ -328,23 +383,9 @@ def make_train(
             key=key,
             return_stats=return_stats,
             returns=jnp.where(done, 0.0, returns),
-            obs_stats=state.obs_stats.update(next_obs),
+            obs_stats=obs_stats,
         )
         return state, (rollout, reward)
-
-    def advantages(rollout: Rollout, last_value: jax.Array) -> tuple[jax.Array, jax.Array]:
-        def back(
-            carry: tuple[jax.Array, jax.Array], t: Rollout
-        ) -> tuple[tuple[jax.Array, jax.Array], jax.Array]:
-            gae, next_value = carry
-            # The next state's value; a truncated episode's last state stands in for its final one.
-            bootstrap = jnp.where(t.terminated, 0.0, jnp.where(t.done, t.value, next_value))
-            delta = t.reward + gamma * bootstrap - t.value
-            gae = delta + gamma * lam * (1.0 - t.done) * gae
-            return (gae, t.value), gae
-
-        _, adv = jax.lax.scan(back, (jnp.zeros_like(last_value), last_value), rollout, reverse=True)
-        return adv, adv + rollout.value
 
     def loss(network: Any, batch: Rollout, adv: jax.Array, target: jax.Array) -> jax.Array:
         mean, value = _mlp(network["actor"], batch.obs), _value(network, batch.obs)
@@ -362,7 +403,7 @@ def make_train(
     def update(state: TrainState, index: jax.Array) -> tuple[TrainState, Metrics]:
         state, (rollout, rewards) = jax.lax.scan(env_step, state, None, steps)
         last_value = _value(state.network, normalize(state.obs_stats, state.obs))
-        adv, target = advantages(rollout, last_value)
+        adv, target = advantages(rollout, last_value, gamma, lam)
         batch = jax.tree_util.tree_map(lambda x: x.reshape((n * steps, *x.shape[2:])), (rollout, adv, target))
 
         def epoch(carry: tuple[Any, Any, jax.Array], _: None) -> tuple[tuple[Any, Any, jax.Array], None]:
@@ -444,26 +485,139 @@ def save(
 
 
 def load(path: str | Path) -> tuple[PPOConfig, dict[str, Any], RunningStats]:
-    """A model folder's settings, network and observation statistics (:func:`save`)."""
+    """A model folder's settings, network and observation statistics (:func:`save`), checked whole.
+
+    Raises ``FileNotFoundError`` for a folder without the model's files, and ``ValueError`` naming the
+    file and the field for a damaged or inconsistent one: a file that does not read (truncated, not
+    JSON, not NumPy's archive), a setting :class:`PPOConfig` refuses, arrays missing or unknown to the
+    network ``config.json`` describes, of another shape, not floating point, NaN or infinite, large
+    enough that the network could overflow float32 for some observation (so a model that loads acts
+    with finite numbers on every observation), or variances of the observations that are not > 0.
+    """
     folder = Path(path)
     missing = [name for name in _FILES if not (folder / name).is_file()]
     if missing:
         raise FileNotFoundError(f"path={str(path)!r} is not a jax-ppo model folder: it lacks {missing}")
-    settings = json.loads((folder / "config.json").read_text())
-    config = PPOConfig(**{**settings, "hidden": tuple(settings["hidden"])})
-    with np.load(folder / "network.npz") as data:
-        arrays = {name: data[name] for name in data.files}
-    depth = len(config.hidden) + 1
-    network = {
-        part: [
-            {"w": jnp.asarray(arrays[f"{part}/{i}/w"]), "b": jnp.asarray(arrays[f"{part}/{i}/b"])}
-            for i in range(depth)
-        ]
-        for part in ("actor", "critic")
+    config = _load_config(folder / "config.json")
+    _read_json_object(folder / "train.json")  # (the training's record: not used here, but part of the model)
+    file = folder / "network.npz"
+    try:
+        data = np.load(file, allow_pickle=False)
+        if not isinstance(data, np.lib.npyio.NpzFile):
+            raise ValueError(f"it holds one array, not an archive of named arrays ({type(data).__name__})")
+        with data:
+            arrays = {name: data[name] for name in data.files}
+    # (a damaged archive fails in zipfile's, zlib's, struct's or NumPy's format's own ways)
+    except (
+        OSError,
+        ValueError,
+        EOFError,
+        KeyError,
+        MemoryError,
+        NotImplementedError,
+        struct.error,
+        zipfile.BadZipFile,
+        zlib.error,
+    ) as exc:
+        raise ValueError(f"{file} does not read as np.savez's arrays: {type(exc).__name__}: {exc}") from None
+    return config, *_network_of(arrays, config, file)
+
+
+def _read_json_object(file: Path) -> dict[str, Any]:
+    """The JSON object in ``file``, or ``ValueError`` naming it."""
+    try:
+        value = json.loads(file.read_bytes())
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{file} is not a JSON file: {exc}") from None
+    if not isinstance(value, dict):
+        raise ValueError(f"{file} is invalid: must hold a JSON object (it holds a {type(value).__name__})")
+    return value
+
+
+def _load_config(file: Path) -> PPOConfig:
+    """The :class:`PPOConfig` of a model's ``config.json``, checked as :class:`PPOConfig` checks its
+    fields."""
+    settings = _read_json_object(file)
+    known = [field.name for field in dataclasses.fields(PPOConfig)]
+    unknown = sorted(set(settings) - set(known))
+    if unknown:
+        raise ValueError(f"{file} is invalid: unknown settings {unknown} (known: {known})")
+    if isinstance(settings.get("hidden"), list):
+        settings["hidden"] = tuple(settings["hidden"])
+    try:
+        return PPOConfig(**settings)
+    except (ValueError, TypeError) as exc:
+        raise ValueError(f"{file} is invalid: {exc}") from None
+
+
+def _network_of(
+    arrays: Mapping[str, np.ndarray], config: PPOConfig, file: Path
+) -> tuple[dict[str, Any], RunningStats]:
+    """The network and the observation statistics of ``network.npz``'s arrays, checked against ``config``."""
+    obs_dim, act_dim = len(OBSERVATION_NAMES), config.n_actions
+    described = (
+        f"the network config.json describes: hidden={list(config.hidden)}, {act_dim} action components"
+    )
+    layers = {
+        "actor": (obs_dim, *config.hidden, act_dim),
+        "critic": (obs_dim, *config.hidden, 1),
     }
-    network["log_std"] = jnp.asarray(arrays["log_std"])
-    stats = RunningStats(jnp.asarray(arrays["obs_mean"]), jnp.asarray(arrays["obs_var"]), jnp.asarray(0.0))
-    return config, network, stats
+    shapes: dict[str, tuple[int, ...]] = {
+        "obs_mean": (obs_dim,),
+        "obs_var": (obs_dim,),
+        "log_std": (act_dim,),
+    }
+    for part, sizes in layers.items():
+        for i, (n_in, n_out) in enumerate(zip(sizes[:-1], sizes[1:], strict=True)):
+            shapes[f"{part}/{i}/w"], shapes[f"{part}/{i}/b"] = (n_in, n_out), (n_out,)
+    lacking, unknown = sorted(set(shapes) - set(arrays)), sorted(set(arrays) - set(shapes))
+    if lacking or unknown:
+        raise ValueError(
+            f"{file} does not hold {described}: "
+            + "; ".join(
+                f"{what} {names}" for what, names in (("it lacks", lacking), ("unknown", unknown)) if names
+            )
+        )
+    checked = {}
+    for name, shape in shapes.items():
+        array = arrays[name]
+        if array.dtype.kind != "f":
+            raise ValueError(f"{file}: {name} has dtype {array.dtype}: must be floating point")
+        if array.shape != shape:
+            raise ValueError(f"{file}: {name} has shape {array.shape}: must have shape {shape} ({described})")
+        # (the network computes in float32, the statistics in float64; what overflows is refused below)
+        with np.errstate(over="ignore", invalid="ignore"):
+            array = array.astype(np.float64 if name.startswith("obs_") else np.float32)
+        bad = int(np.count_nonzero(~np.isfinite(array)))
+        if bad:
+            raise ValueError(f"{file}: {name} has {bad} NaN or infinite values (as float32): must be finite")
+        checked[name] = array
+    if np.any(checked["obs_var"] <= 0.0):
+        raise ValueError(
+            f"{file}: obs_var={checked['obs_var'].tolist()} is invalid: must be > 0 (the variances of the "
+            "observations, by which they are normalised)"
+        )
+    for part, sizes in layers.items():
+        bound = _OBS_CLIP  # |input| of the first layer: the normalised observation, clipped
+        for i in range(len(sizes) - 1):
+            w, b = checked[f"{part}/{i}/w"].astype(np.float64), checked[f"{part}/{i}/b"].astype(np.float64)
+            largest = float(np.max(bound * np.abs(w).sum(axis=0) + np.abs(b)))
+            if not largest < _FLOAT32_MAX:
+                raise ValueError(
+                    f"{file}: {part}/{i}/w and {part}/{i}/b are invalid: they reach {largest:.3g} for some "
+                    f"observation, beyond float32's range: must keep |sum| below {_FLOAT32_MAX:.3g}"
+                )
+            bound = 1.0  # (tanh's outputs)
+    network: dict[str, Any] = {
+        part: [
+            {"w": jnp.asarray(checked[f"{part}/{i}/w"]), "b": jnp.asarray(checked[f"{part}/{i}/b"])}
+            for i in range(len(sizes) - 1)
+        ]
+        for part, sizes in layers.items()
+    }
+    network["log_std"] = jnp.asarray(checked["log_std"])
+    stats = RunningStats(jnp.asarray(checked["obs_mean"]), jnp.asarray(checked["obs_var"]), jnp.asarray(0.0))
+    return network, stats
 
 
 class JaxPPOController(SingleRowMixin):
@@ -502,6 +656,7 @@ class JaxPPOController(SingleRowMixin):
         self._episodes = len(infos)
 
     def act_batch(self, observations: np.ndarray) -> np.ndarray:
+        """The policy's mean actions of a batch of observations, clipped to [-1, 1] (float32)."""
         obs = check_batch(observations, self._episodes)
         mean = np.asarray(self._act(self._network, jnp.asarray(obs, dtype=jnp.float32), self._stats))
         return np.clip(mean, -1.0, 1.0).astype(np.float32)
@@ -519,6 +674,7 @@ def shipped() -> JaxPPOController:
 
 # --- the command line ----------------------------------------------------------------------------------
 def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m subenv_agents.jax_ppo``: train, evaluate and write a model folder; the exit status."""
     parser = argparse.ArgumentParser(
         prog="python -m subenv_agents.jax_ppo", description=__doc__.split("\n\n")[0]
     )
@@ -615,7 +771,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def evaluation_of(controller: JaxPPOController, episodes: int) -> dict[str, Any]:
     """The controller and the ``reversal_aware`` baseline on the reversal scenarios, ``episodes`` each
-    (the harness of ``subenv evaluate``, seeds 10000 + i): ``{"episodes", "suite", "target_met", "target"}``."""
+    (the harness of ``subenv evaluate``, seeds 10000 + i): ``{"episodes", "suite", "target_met",
+    "target"}``."""
     from subenv.evaluation import evaluate, make_controller
 
     results = evaluate(
@@ -649,10 +806,10 @@ Gymnasium environment observes (no extra features); its observation statistics a
 
 - Command: `{record["command"]}`
 - {record["env_steps"]:,} env-steps: {config.num_updates} updates of {config.num_envs} environments x \
-{config.num_steps} steps, {config.update_epochs} epochs of {config.num_minibatches} minibatches each, Adam at \
-{config.lr:g}{" annealed to 0" if config.anneal_lr else ""}, gamma {config.gamma}, GAE lambda {config.gae_lambda}, \
-clip {config.clip_eps}, entropy coefficient {config.ent_coef}, hidden layers {list(config.hidden)} (tanh); \
-{rewards}.
+{config.num_steps} steps, {config.update_epochs} epochs of {config.num_minibatches} minibatches each, \
+Adam at {config.lr:g}{" annealed to 0" if config.anneal_lr else ""}, gamma {config.gamma}, \
+GAE lambda {config.gae_lambda}, clip {config.clip_eps}, entropy coefficient {config.ent_coef}, \
+hidden layers {list(config.hidden)} (tanh); {rewards}.
 - Episodes: a table of {config.episodes} episodes of the scenario, those of the seeds {config.seed} to \
 {config.seed + config.episodes - 1} (`reset(seed=...)` of the Gymnasium environment), reset from at random.
 - Wall time: {record["wall_time_s"]} s on {record["machine"]} ({record["device"]}), compilation included: \

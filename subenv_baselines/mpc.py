@@ -238,8 +238,9 @@ class DepthMPC(SingleRowMixin):
 
     It knows what the other controllers know: the observation (its measured state; the planes it applied),
     the design vehicle at reset, and the environment's limits as constructor arguments (defaults: the
-    environment's). The planes' rate limit is not in the reset ``info``: pass the environment's
-    ``plane_rate_limit_radps``.
+    environment's). The planes' rate limit is not in the reset ``info``: the harness tells it the
+    environment's settings before each scenario (:meth:`inform`; ``mpc:uninformed`` runs it untold, on its
+    constructor's values), and a caller running it elsewhere passes ``plane_rate_limit_radps``.
     """
 
     name = "mpc"
@@ -279,6 +280,7 @@ class DepthMPC(SingleRowMixin):
         self.weights, self.noise = weights, noise
         self.dt_s, self.substeps = dt_s, substeps
         self.plane_rate_limit_radps = plane_rate_limit_radps
+        self.pitch_fraction = pitch_fraction
         self.pitch_bound_rad = pitch_fraction * max_pitch_rad
         self.max_depth_error_m, self.depth_band_margin_m = max_depth_error_m, depth_band_margin_m
         self.band_m = math.nan  # (the environment's depth band less the margin: set with the vehicle)
@@ -313,6 +315,16 @@ class DepthMPC(SingleRowMixin):
         return self._d.copy()
 
     # --- the protocol -------------------------------------------------------------------------------
+    def inform(self, settings: Mapping[str, Any]) -> None:
+        """Take the environment's limits and period (the harness's
+        :class:`~subenv.evaluation.controller.InformedController` hook): ``plane_rate_limit_radps``,
+        ``max_pitch_rad``, ``max_depth_error_m``, ``dt`` and ``substeps``, as the constructor takes them."""
+        self.dt_s, self.substeps = float(settings["dt"]), int(settings["substeps"])
+        self.plane_rate_limit_radps = settings["plane_rate_limit_radps"]
+        self.pitch_bound_rad = self.pitch_fraction * float(settings["max_pitch_rad"])
+        self.max_depth_error_m = settings["max_depth_error_m"]
+        self._vehicle = None  # (the depth band is set again with the vehicle at the next reset)
+
     def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
         """Take the design model and limits of ``vehicle`` (once per vehicle), and start one observer per
         episode of ``infos``: no disturbance estimated yet, no planes applied yet."""

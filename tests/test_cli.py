@@ -20,6 +20,8 @@ from hypothesis import strategies as st
 import subenv.analysis.report
 import subenv.cli
 import subenv.evaluation.comparison
+from subenv.analysis.free_surface import SurfaceCriticalSpeed
+from subenv.atomic import MARKER_FILE
 from subenv.cli import main
 from subenv.evaluation import controller
 
@@ -49,13 +51,47 @@ def test_list_names_every_id(capsys):
     assert "subenv/LowSpeed-v0" in text and "subenv/DivePlane-v0" in text
 
 
+def _stand_in_findings(monkeypatch, hopf) -> list[str]:  # type: ignore[no-untyped-def]
+    """Make ``reproduction(vehicle)`` return at once: the session's Hopf findings and a stand-in for the
+    rest. Returns the list of the vehicles it was called for."""
+    from subenv.analysis import report as report_module
+
+    surface = report_module.SurfaceFindings(
+        critical=(SurfaceCriticalSpeed(1.0, 0.57, 0.57, 0.58, 0.0, 0.0),),
+        held={},
+        suction_N=(),
+        growth_per_s=(),
+    )
+    calls = []
+
+    def quick(vehicle):  # type: ignore[no-untyped-def]
+        calls.append(vehicle.name)
+        return report_module.Reproduction(vehicle.name, True, (), (), hopf, surface)
+
+    monkeypatch.setattr(report_module, "reproduction", quick)
+    return calls
+
+
+def test_analyze_needs_no_matplotlib(tmp_path: Path, analysis_report, monkeypatch, capsys):
+    # Its findings are numbers (report.json); the figures are the documentation's.
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # as if not installed: `import matplotlib` fails
+    calls = _stand_in_findings(monkeypatch, analysis_report.hopf)
+    assert main(["analyze", "--out", str(tmp_path / "out")]) == 0
+    assert calls == ["suboff"] and (tmp_path / "out" / "report.json").is_file()
+    assert "findings written to" in capsys.readouterr().out
+
+
 def test_analyze_writes_the_report_and_refuses_to_overwrite(tmp_path: Path, analysis_report, monkeypatch):
     # `subenv analyze --out <folder>` into a folder that did not exist, once per session (tests/conftest.py).
+    from subenv.analysis import report as report_module
+
     out = analysis_report.folder
     assert analysis_report.exit_code == 0
     text = analysis_report.printed
-    assert "| quantity | thesis value | computed value | difference |" in text
-    assert (out / "report.md").is_file() and len(list(out.glob("*.png"))) == 16
+    assert "| quantity | thesis value | computed value | difference | unit | note |" in text
+    assert "| u_cr, eq. 3.9 closed form | 1.8979 | 1.8979 |" in text
+    assert f"level flight loses stability at u_H = {analysis_report.hopf.point.speed_mps:.4f} m/s" in text
+    assert sorted(p.name for p in out.iterdir()) == sorted([report_module.REPORT_FILE, MARKER_FILE])
     mask = os.umask(0)
     os.umask(mask)
     assert stat.S_IMODE(out.stat().st_mode) == 0o777 & ~mask  # the usual mode, not mkdtemp's 0o700
@@ -63,23 +99,16 @@ def test_analyze_writes_the_report_and_refuses_to_overwrite(tmp_path: Path, anal
         main(["analyze", "--out", str(out)])
     existing = tmp_path / "analysis"  # the shared report stays as it is: --force replaces a copy of it
     shutil.copytree(out, existing)
+    (existing / "notes.txt").write_text("a file the earlier report did not have")
     # --force replaces an earlier report (its marker file says so) through the same atomic replacement,
-    # without computing the report a second time (tens of seconds).
-    from subenv.analysis import report as report_module
-    from subenv.atomic import atomic_output_dir
-
-    calls = []
-
-    def quick(out_dir, vehicle=None, overwrite=False):  # type: ignore[no-untyped-def]
-        calls.append(overwrite)
-        with atomic_output_dir(out_dir, overwrite=overwrite, kind=report_module.REPORT_KIND) as folder:
-            (folder / "report.md").write_text("# replaced\n\n## Figures\n")
-        return Path(out_dir)
-
-    monkeypatch.setattr(report_module, "write_report", quick)
+    # without computing the findings a second time (tens of seconds).
+    calls = _stand_in_findings(monkeypatch, analysis_report.hopf)
     assert main(["analyze", "--out", str(existing), "--force"]) == 0
-    assert calls == [True] and (existing / "report.md").read_text().startswith("# replaced")
-    assert not list(existing.glob("*.png"))  # the earlier report was replaced, not written into
+    assert (
+        calls == ["suboff"]
+        and json.loads((existing / report_module.REPORT_FILE).read_text())["published"] == []
+    )
+    assert not (existing / "notes.txt").exists()  # the earlier report was replaced, not written into
 
 
 def test_evaluate_end_to_end_on_the_tiny_suite(tmp_path: Path, capsys):
@@ -128,7 +157,7 @@ def no_work(monkeypatch):
     def refuse(*args, **kwargs):
         pytest.fail("the command started its work before checking its arguments")
 
-    monkeypatch.setattr(subenv.evaluation.comparison, "evaluate", refuse)
+    monkeypatch.setattr(subenv.evaluation.comparison, "roll_out", refuse)
     monkeypatch.setattr(subenv.analysis.report, "reproduce_numbers", refuse)
 
 
@@ -196,7 +225,7 @@ def test_an_empty_out_folder_is_accepted(tmp_path: Path, monkeypatch, command, f
     def started(*args, **kwargs):  # the command got past its checks of --out
         raise _WorkStarted
 
-    monkeypatch.setattr(subenv.evaluation.comparison, "evaluate", started)
+    monkeypatch.setattr(subenv.evaluation.comparison, "roll_out", started)
     monkeypatch.setattr(subenv.analysis.report, "reproduce_numbers", started)
     (tmp_path / "empty").mkdir()
     with pytest.raises(_WorkStarted):
@@ -346,7 +375,7 @@ def test_evaluate_arguments_are_refused_in_one_line_or_reach_the_work(options, t
     def reached(*args, **kwargs):  # type: ignore[no-untyped-def]
         raise _Reached
 
-    monkeypatch.setattr(subenv.evaluation.comparison, "evaluate", reached)
+    monkeypatch.setattr(subenv.evaluation.comparison, "roll_out", reached)
     argv = ["evaluate", "--no-progress", "--out", str(tmp_path_factory.mktemp("fuzz") / "out")]
     for flag, word in options:
         argv += [flag, word]
@@ -382,8 +411,8 @@ def test_no_command_prints_the_help_as_a_usage_error(capsys):
 
 @pytest.mark.parametrize(
     "command",
-    [["demo"], ["analyze"], ["evaluate", "--suite", "tiny", "--controllers", "thesis"]],
-    ids=["demo", "analyze", "evaluate"],
+    [["demo"], ["evaluate", "--suite", "tiny", "--controllers", "thesis"]],
+    ids=["demo", "evaluate"],
 )
 def test_a_missing_matplotlib_is_one_line_naming_the_extra(tmp_path: Path, monkeypatch, no_work, command):
     monkeypatch.setitem(sys.modules, "matplotlib", None)  # as if not installed: `import matplotlib` fails
@@ -416,7 +445,7 @@ def test_controllers_that_cannot_load_are_skipped_with_a_note(tmp_path: Path, mo
     )
 
     monkeypatch.setattr(
-        subenv.evaluation.comparison, "evaluate", lambda *a, **k: pytest.fail("reached the work")
+        subenv.evaluation.comparison, "roll_out", lambda *a, **k: pytest.fail("reached the work")
     )
     assert main(["evaluate", "--list"]) == 0
     printed = capsys.readouterr()
@@ -459,3 +488,64 @@ def test_evaluate_takes_a_vehicle_and_says_what_is_not_scaled(tmp_path: Path, ca
     ):
         main(["evaluate", "--vehicle", "boat", "--out", str(tmp_path / "none")])
     assert not (tmp_path / "none").exists()
+
+
+@pytest.mark.parametrize(
+    ("value", "message"),
+    [
+        (
+            '{"plane_rate_limit_radps": -1}',
+            "subenv evaluate: env_kwargs: plane_rate_limit_radps=-1 is invalid",
+        ),
+        ('{"plane_rate": 0.05}', "subenv evaluate: env_kwargs: 'plane_rate' is unknown: must be one of"),
+        ('{"control": "independent"}', "subenv evaluate: env_kwargs: 'control' cannot be set there"),
+    ],
+)
+def test_evaluate_refuses_bad_env_kwargs_in_one_line_before_any_work(tmp_path: Path, no_work, value, message):
+    with pytest.raises(SystemExit) as exit_:
+        main([*EVALUATE, "--env-kwargs", value, "--out", str(tmp_path / "out")])
+    assert str(exit_.value.code).startswith(message) and "\n" not in str(exit_.value.code)
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(("value", "reason"), [("{nope", "not JSON"), ("[0.05]", "must be a JSON object")])
+def test_evaluate_env_kwargs_must_be_a_json_object(tmp_path: Path, capsys, no_work, value, reason):
+    with pytest.raises(SystemExit) as exit_:
+        main([*EVALUATE, "--env-kwargs", value, "--out", str(tmp_path / "out")])
+    assert (
+        exit_.value.code == 2
+        and f"argument --env-kwargs: invalid value {value!r}: {reason}" in capsys.readouterr().err
+    )
+
+
+def test_evaluate_passes_env_kwargs_to_the_environments_and_records_them(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    settings = '{"plane_rate_limit_radps": 0.05, "max_pitch_rad": 0.4}'
+    assert (
+        main(
+            [
+                *EVALUATE,
+                "--controllers",
+                "thesis,mpc,mpc:uninformed",
+                "--no-plots",
+                "--env-kwargs",
+                settings,
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
+    record = json.loads((out / "run.json").read_text())
+    assert record["env_kwargs"] == {"plane_rate_limit_radps": 0.05, "max_pitch_rad": 0.4}
+    assert [(c["name"], c["informed"]) for c in record["controllers"]] == [
+        ("thesis", False),
+        ("mpc", True),
+        ("mpc:uninformed", False),
+    ]
+    rows = list(csv.DictReader((out / "results.csv").open()))
+    assert {r["controller"]: r["informed"] for r in rows} == {
+        "thesis": "False",
+        "mpc": "True",
+        "mpc:uninformed": "False",
+    }

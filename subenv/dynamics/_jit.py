@@ -39,7 +39,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache, cached_property
 from pathlib import Path
-from typing import Any, Final, TypeVar, cast
+from typing import Annotated, Any, Final, TypeVar, cast
 
 import numba
 import numpy as np
@@ -49,9 +49,14 @@ __all__ = [
     "KERNEL_SOURCES",
     "KernelSources",
     "declare_kernel_sources",
+    "STATIC",
+    "Static",
+    "clip",
     "inline_kernel",
     "kernel_sources",
     "kernel",
+    "maximum",
+    "minimum",
     "parallel_kernel",
     "rows",
     "select",
@@ -138,6 +143,16 @@ KERNEL_SOURCES: Final = declare_kernel_sources(
 no other package's)."""
 
 FunctionT = TypeVar("FunctionT", bound=Callable[..., Any])
+T = TypeVar("T")
+Number = TypeVar("Number", int, float)
+
+STATIC: Final = "static"
+"""The mark of :data:`Static`."""
+Static = Annotated[T, STATIC]
+"""``Static[X]``: a kernel's parameter of type X whose value is fixed when :mod:`subenv.jax` traces the
+kernel (a Python value, not a traced array), so that the kernel may branch on it (``if``, a ``range``
+bound): the configuration record ``cfg`` of the transition, a count of columns. numba ignores it; the
+contract of the traced kernels (``tests/jax/test_contract.py``) reads it."""
 
 
 def kernel(fn: FunctionT) -> FunctionT:
@@ -259,3 +274,42 @@ def select(condition: bool, if_true: Any, if_false: Any) -> Any:
     expressions are written as this call, so that the same source also traces under JAX (where
     :mod:`subenv.jax` makes it ``jax.numpy.where``), and the compiler makes it a select, not a branch."""
     return if_true if condition else if_false
+
+
+# The comparisons the physics makes, as calls with one defined result on both backends. (Python's
+# ``max(a, b)``, which numba compiles as ``select(b > a, b, a)``, drops a NaN in the second position;
+# ``jax.numpy.maximum`` keeps it in either.) Written with ``select`` and comparisons only, so that
+# subenv.jax traces this same code.
+@inline_kernel
+def maximum(a: Number, b: Number) -> Number:
+    """The larger of ``a`` and ``b`` (floats or integers), with NaN: a NaN in either position gives NaN
+    (that argument), as ``numpy.maximum``.
+
+    Infinities order as numbers (``maximum(x, inf)`` is inf, ``maximum(x, -inf)`` is x). Where ``a``
+    and ``b`` compare equal the result is ``a``: ``maximum(-0.0, 0.0)`` is -0.0 and
+    ``maximum(0.0, -0.0)`` is 0.0 (as Python's ``max``, which this is wherever no NaN is second).
+    The same bits compiled by numba and traced by JAX (``tests/dynamics/test_jit_helpers.py``), but
+    for subnormal numbers, which XLA compares as zeros on a CPU (numba as numbers).
+    """
+    return select(b != b, b, select(b > a, b, a))
+
+
+@inline_kernel
+def minimum(a: Number, b: Number) -> Number:
+    """The smaller of ``a`` and ``b`` (floats or integers), with NaN: a NaN in either position gives
+    NaN (that argument), as ``numpy.minimum``.
+
+    Infinities order as numbers. Where ``a`` and ``b`` compare equal the result is ``a``:
+    ``minimum(0.0, -0.0)`` is 0.0 (as Python's ``min``, which this is wherever no NaN is second).
+    The same bits compiled by numba and traced by JAX (``tests/dynamics/test_jit_helpers.py``), but
+    for subnormal numbers, which XLA compares as zeros on a CPU (numba as numbers).
+    """
+    return select(b != b, b, select(b < a, b, a))
+
+
+@inline_kernel
+def clip(x: Number, lo: Number, hi: Number) -> Number:
+    """``x`` clipped to [``lo``, ``hi``]: ``minimum(maximum(x, lo), hi)``, so NaN where ``x`` (or a bound)
+    is NaN, never a bound in its place; ``hi`` where ``lo > hi``; a zero of either sign inside
+    the interval is kept as it is."""
+    return minimum(maximum(x, lo), hi)

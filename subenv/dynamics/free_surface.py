@@ -3,8 +3,8 @@
 A hull moving at speed u below the free surface draws the water over its top faster than under its
 keel; the pressure there drops and the hull is pulled up (and pitched) towards the surface. This
 module gives that force and moment as a function of depth, pitch, heave velocity, pitch rate and speed,
-for :func:`subenv.dynamics.rhs_point`, the one right-hand side, and (batched) for the analysis. The
-derivation, its sources and the checks of it are in ``docs/free_surface.md``.
+for :func:`subenv.dynamics.model.rhs_point`, the one right-hand side, and (batched) for the analysis.
+The derivation, its sources and the checks of it are in ``docs/free_surface.md``.
 
 The model, and where it comes from
 ----------------------------------
@@ -82,7 +82,7 @@ import numpy as np
 
 from subenv import _validation as check
 from subenv._typing import ArrayLike, FloatArray
-from subenv.dynamics._jit import inline_kernel, kernel, rows
+from subenv.dynamics._jit import inline_kernel, kernel, maximum, rows
 from subenv.dynamics.hull import SLENDER_ROW, SOURCE_ROW, HullTable
 
 __all__ = [
@@ -221,7 +221,7 @@ def sources_suction(
 def station_depth(depth: float, x: float, sin_theta: float, radius: float) -> float:
     """Depth [m] of the hull's sources at station ``x`` [m] (a station above the surface is taken at its
     radius)."""
-    return max(depth - x * sin_theta, radius)
+    return maximum(depth - x * sin_theta, radius)
 
 
 @inline_kernel

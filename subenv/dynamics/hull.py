@@ -13,7 +13,7 @@ The integral is written once, for one state, in four steps compiled with numba (
 :mod:`subenv.dynamics._jit`): the root (:func:`crossflow_root`), its segment (:func:`hull_segment`),
 the moments there (:func:`moments_on_segment`) and the integrals from them
 (:func:`crossflow_from_moments`). :func:`crossflow_point` chains them, and the right-hand side
-(:func:`subenv.dynamics.rhs_point`) calls it; the block integrator
+(:func:`subenv.dynamics.model.rhs_point`) calls it; the block integrator
 (:func:`subenv.dynamics.integrate.control_period_lanes`) runs the same steps over a block of
 states, each as one loop. :func:`crossflow_integrals` is the batched form for NumPy callers.
 
@@ -31,7 +31,7 @@ from typing import Final
 import numpy as np
 
 from subenv._typing import FloatArray
-from subenv.dynamics._jit import inline_kernel, kernel, rows, select
+from subenv.dynamics._jit import clip, inline_kernel, kernel, rows, select
 
 __all__ = [
     "SLENDER_ROW",
@@ -224,7 +224,7 @@ def moments_on_segment(
 def cumulative_moments_point(s: float, hull: FloatArray) -> tuple[float, float, float, float]:
     """C_0..C_3 at one position ``s`` [m] (clipped to the hull); ``hull`` is :attr:`HullTable.packed`."""
     n_seg = hull.shape[1] - 1
-    s = select(s == s, min(max(s, hull[0, 0]), hull[0, n_seg]), s)
+    s = select(s == s, clip(s, hull[0, 0], hull[0, n_seg]), s)
     i = hull_segment(s, hull)
     return moments_on_segment(s, hull[1, i], hull[2, i], hull[3, i], hull[4, i], hull[5, i], hull[6, i])
 
@@ -237,7 +237,7 @@ def crossflow_root(w: float, q: float, hull: FloatArray) -> float:
     # (w / 1.0 where q == 0, unused: no division by zero, which raises in a caller compiled with numba's
     # default error model, and whose inf would poison JAX's gradients through the select)
     root = select(q != 0, w / select(q != 0, q, 1.0), select(w >= 0, hi, lo))
-    return select(root == root, min(max(root, lo), hi), root)
+    return select(root == root, clip(root, lo, hi), root)
 
 
 @inline_kernel

@@ -7,7 +7,7 @@ accuracy tests in ``tests/dynamics/test_integrator.py``, which compare against
 
 :func:`rk4` integrates any batched right-hand side ``f(t, x)``: with
 :func:`subenv.dynamics.derivatives` it is the NumPy reference. :func:`control_period_lanes` is the
-same scheme, compiled, over one control period of :func:`subenv.dynamics.rhs_point` for a block of
+same scheme, compiled, over one control period of :func:`subenv.dynamics.model.rhs_point` for a block of
 up to :data:`LANES` states, one per column, so that the compiler turns each stage into SIMD code
 over the block; the environments integrate every step with it, one sub-environment or many. It
 performs the same floating-point operations in the same order as ``rk4`` over ``derivatives``, so
@@ -23,7 +23,7 @@ from typing import Final
 import numpy as np
 
 from subenv._typing import FloatArray
-from subenv.dynamics._jit import inline_kernel, kernel
+from subenv.dynamics._jit import inline_kernel, kernel, minimum
 from subenv.dynamics.free_surface import suction_point
 from subenv.dynamics.hull import (
     SOURCE_ROW,
@@ -100,8 +100,8 @@ LANE_ROWS: Final = _SLOPES + 16
 ``r * LANES + j``)."""
 
 NO_WAVES: Final = np.zeros((1, WAVE_FIELDS, MAX_WAVES))
-"""The ``waves`` of :func:`control_period_lanes` for blocks whose lanes have no sea (every ``LANE_WAVES``
-0)."""
+"""The ``waves`` of :func:`control_period_lanes` for blocks whose lanes have no sea (every
+``LANE_WAVES`` 0)."""
 NO_WAVES.flags.writeable = False
 _RHO_SUCTION: Final = PARAM_FIELDS.index("rho_suction")
 _SUCTION_MODEL: Final = PARAM_FIELDS.index("suction_model")
@@ -128,7 +128,7 @@ def set_lane(
     """Put one state's inputs of :func:`control_period_lanes` into column ``j`` of a block: the state
     (theta, w, q, depth), the period's start ``t0`` [s] and speed ``speed0 + speed_slope (t - t0)``
     [m/s], the planes and heave ``force`` held over the period, the packed model parameters
-    ``prm`` (:func:`subenv.dynamics.pack_params`), and for a lane in a sea the distance travelled at
+    ``prm`` (:func:`subenv.dynamics.model.pack_params`), and for a lane in a sea the distance travelled at
     ``t0`` [m] and the number of its waves (in row ``j`` of :func:`control_period_lanes`'s ``waves``)."""
     L = LANES
     block[LANE_PITCH * L + j] = theta
@@ -184,7 +184,7 @@ def _free_surface_lanes(block: FloatArray, n: int, hull: FloatArray, waves: Floa
             block[_DISTANCE * L + j],
             block[depth + j],
             block[_SPEED * L + j],
-            waves[min(j, waves.shape[0] - 1)],
+            waves[minimum(j, waves.shape[0] - 1)],
             int(block[LANE_WAVES * L + j]),
         )
         block[_FREE_SURFACE * L + j] = Z_fs + Z_w
@@ -255,15 +255,16 @@ def _rhs_lanes(block: FloatArray, n: int, hull: FloatArray, waves: FloatArray, f
 def control_period_lanes(
     block: FloatArray, n: int, dt: float, substeps: int, hull: FloatArray, waves: FloatArray
 ) -> None:
-    """:func:`rk4` of :func:`~subenv.dynamics.rhs_point` over one control period ``dt`` with ``substeps``
-    steps, for columns 0 .. n-1 (n <= :data:`LANES`) of ``block``, in place.
+    """:func:`rk4` of :func:`~subenv.dynamics.model.rhs_point` over one control period ``dt`` with
+    ``substeps`` steps, for columns 0 .. n-1 (n <= :data:`LANES`) of ``block``, in place.
 
-    ``block`` holds the inputs of each column in the ``LANE_*`` rows (:func:`set_lane`); the planes and the
-    heave force are held, the speed follows each column's ramp; ``waves`` (shape (LANES, WAVE_FIELDS,
-    MAX_WAVES), row j column j's sea: :meth:`subenv.dynamics.waves.SeaState.components`; one row such as
-    :data:`NO_WAVES` where no lane has a sea) adds a sea's force at every stage. Afterwards rows
-    ``LANE_PITCH`` .. ``LANE_DEPTH`` hold the states at the end of the period: for each column the bits of
-    ``rk4`` over :func:`~subenv.dynamics.derivatives`."""
+    ``block`` holds the inputs of each column in the ``LANE_*`` rows (:func:`set_lane`); the planes
+    and the heave force are held, the speed follows each column's ramp; ``waves`` (shape (LANES,
+    WAVE_FIELDS, MAX_WAVES), row j column j's sea: :meth:`subenv.dynamics.waves.SeaState.components`;
+    one row such as :data:`NO_WAVES` where no lane has a sea) adds a sea's force at every stage.
+    Afterwards rows ``LANE_PITCH`` .. ``LANE_DEPTH`` hold the states at the end of the period: for
+    each column the bits of ``rk4`` over :func:`~subenv.dynamics.derivatives`.
+    """
     L = LANES
     h = dt / substeps
     half = 0.5 * h

@@ -81,5 +81,5 @@ def sincos_point(x: float) -> tuple[float, float]:
     quadrant = n - 4.0 * np.floor(0.25 * n)  # n mod 4 (a float: no integer conversion of a nan)
     sin_x = select(quadrant == 0.0, s, select(quadrant == 1.0, c, select(quadrant == 2.0, -s, -c)))
     cos_x = select(quadrant == 0.0, c, select(quadrant == 1.0, -s, select(quadrant == 2.0, -c, s)))
-    in_range = abs(x) < MAX_ARGUMENT  # false for inf and nan
+    in_range = math.fabs(x) < MAX_ARGUMENT  # false for inf and nan
     return select(in_range, sin_x, math.nan), select(in_range, cos_x, math.nan)

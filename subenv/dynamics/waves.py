@@ -76,7 +76,7 @@ import numpy as np
 
 from subenv import _validation as check
 from subenv._typing import ArrayLike, FloatArray
-from subenv.dynamics._jit import inline_kernel
+from subenv.dynamics._jit import Static, inline_kernel
 
 __all__ = [
     "MAX_WAVES",
@@ -184,7 +184,7 @@ class SeaState:
         """The bins' lower edges [rad/s] and width [rad/s]."""
         low, high = (f * self.peak_frequency_radps for f in self.band)
         width = (high - low) / self.waves
-        return low + width * np.arange(self.waves, dtype=float), width
+        return np.asarray(low + width * np.arange(self.waves), dtype=np.float64), width
 
     def frequencies(self, jitter: ArrayLike) -> FloatArray:
         """The waves' frequencies [rad/s], one per bin at ``jitter`` (in [0, 1)) across it."""
@@ -297,12 +297,13 @@ def encounter_factor(omega_radps: ArrayLike, speed_mps: ArrayLike, gravity_m_s2:
 
 @inline_kernel
 def wave_force_point(
-    t: float, distance: float, depth: float, u: float, waves: FloatArray, n: int
+    t: float, distance: float, depth: float, u: float, waves: FloatArray, n: Static[int]
 ) -> tuple[float, float]:
     """The sea's heave force [N, down positive] and pitch moment [N m, nose-up positive] on the hull at
     time ``t`` [s], distance travelled ``distance`` [m], depth ``depth`` [m] and speed ``u`` [m/s]: the
     first ``n`` waves of ``waves`` (:meth:`SeaState.components`), first order plus the second-order mean;
-    (0.0, 0.0) with ``n`` = 0."""
+    (0.0, 0.0) with ``n`` = 0. (``n`` is static for :mod:`subenv.jax`, which passes the columns of
+    ``waves``.)"""
     if n == 0:
         return 0.0, 0.0
     up = 0.0

@@ -2,7 +2,7 @@
 
 from subenv.envs.config import DivePlaneConfig
 from subenv.envs.dive_plane import OBSERVATION_NAMES, DivePlaneEnv
-from subenv.envs.registration import HEADLINE_ID, env_ids, register_envs
+from subenv.envs.registration import HEADLINE_ID, env_ids, register_env, register_envs
 from subenv.envs.vector import DivePlaneVectorEnv
 
 __all__ = [
@@ -12,5 +12,6 @@ __all__ = [
     "DivePlaneEnv",
     "DivePlaneVectorEnv",
     "env_ids",
+    "register_env",
     "register_envs",
 ]

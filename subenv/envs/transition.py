@@ -29,9 +29,11 @@ the episode's end), the reward (:func:`reward_terms`), the observation (:func:`n
 :func:`observation_values`) and the ``info`` (:func:`report_values`), around one control period of
 the shared right-hand side, integrated by :func:`subenv.dynamics.integrate.control_period_lanes` for
 a block of up to :data:`~subenv.dynamics.integrate.LANES` sub-environments (one SIMD-compiled path
-for any number of them). :func:`step` only reads the records, calls them and writes the results. The functions are
-branch-free (selects, fixed loops), so that :mod:`subenv.jax` traces these same functions into its
-functional environment (:func:`subenv.jax.make`), the randomness given as standard normal numbers.
+for any number of them). :func:`step` only reads the records, calls them and writes the results.
+The functions are branch-free (selects, fixed loops, branches on the static configuration only), so
+that :mod:`subenv.jax` traces these same functions into its functional environment
+(:func:`subenv.jax.make`), the randomness given as standard normal numbers; the contract they keep
+for it is :mod:`subenv.jax._trace`'s (``tests/jax/test_contract.py`` checks it).
 
 Random numbers come from each sub-environment's own ``numpy.random.Generator`` (numba runs NumPy's
 algorithms over the generator's own bit generator), in one order per step: the disturbance's
@@ -42,7 +44,7 @@ its own seed, never on the number of sub-environments, the blocks or the threads
 from __future__ import annotations
 
 import math
-from typing import Any, Final
+from typing import Any, Final, Protocol, TypeAlias
 
 import numba
 import numpy as np
@@ -50,9 +52,12 @@ import numpy as np
 from subenv._typing import FloatArray
 from subenv.dynamics._jit import KERNEL_SOURCES as DYNAMICS_KERNEL_SOURCES
 from subenv.dynamics._jit import (
+    Static,
+    clip,
     declare_kernel_sources,
     inline_kernel,
     kernel,
+    minimum,
     parallel_kernel,
     select,
     threading_layer_available,
@@ -72,11 +77,15 @@ __all__ = [
     "BLOCKS_PER_RUN",
     "CONFIG_DTYPE",
     "EPISODE_DTYPE",
+    "ConfigRecord",
+    "EpisodeRecord",
     "MAX_KNOTS",
     "N_OBS",
     "REASONS",
     "REPORT_KEYS",
     "STATE_DTYPE",
+    "Record",
+    "StateRecord",
     "draw_reset_numbers",
     "episode_end",
     "episode_outcome",
@@ -170,6 +179,26 @@ CONFIG_DTYPE: Final = np.dtype(
 )
 """The environment's constants (one record)."""
 
+
+class Record(Protocol):
+    """One record of a structured dtype (an ``np.void``; in :mod:`subenv.jax`, a dataclass of arrays),
+    whose fields the kernels read and write by name. The dtype is the one list of its fields: this type
+    lets any name through, and the contract test of the traced kernels (``tests/jax/test_contract.py``)
+    checks each name a kernel reads against the dtype of its parameter's alias below."""
+
+    def __getattr__(self, name: str) -> Any: ...
+    def __setattr__(self, name: str, value: Any) -> None: ...
+
+
+StateRecord: TypeAlias = Record
+"""A record of :data:`STATE_DTYPE`."""
+EpisodeRecord: TypeAlias = Record
+"""A record of :data:`EPISODE_DTYPE`."""
+ConfigRecord: TypeAlias = Static[Record]
+"""The record of :data:`CONFIG_DTYPE`: static (:data:`~subenv.dynamics._jit.Static`), the kernels
+branch on it (``if cfg.dual:``); :mod:`subenv.jax` passes its values as Python's."""
+
+
 REASONS: Final = ("", "diverged", "pitch_limit", "broached", "left_depth_band")
 """``info["termination_reason"]`` for each reason code of the report."""
 _DIVERGED, _PITCH_LIMIT, _BROACHED, _LEFT_DEPTH_BAND = 1, 2, 3, 4
@@ -240,7 +269,7 @@ def speed_at(t: float, n_knots: int, knot_time_s: FloatArray, knot_speed_mps: Fl
     j = 0
     for k in range(1, MAX_KNOTS):
         j = j + select((k <= last) & (t >= xs[k]), 1, 0)
-    after = min(j + 1, last)
+    after = minimum(j + 1, last)
     x0, x1, y0, y1 = xs[j], xs[after], ys[j], ys[after]
     slope = (y1 - y0) / select(x1 != x0, x1 - x0, 1.0)  # (x1 == x0 only where the slope is not used)
     u = slope * (t - x0) + y0
@@ -255,29 +284,29 @@ def speed_at(t: float, n_knots: int, knot_time_s: FloatArray, knot_speed_mps: Fl
 
 @inline_kernel
 def plane_angles(
-    stern_rad: float, bow_rad: float, action0: float, action1: float, cfg: np.void
+    stern_rad: float, bow_rad: float, action0: float, action1: float, cfg: ConfigRecord
 ) -> tuple[float, float, float]:
     """The applied (stern, bow) angles [rad] after an action (finite; clipped to [-1, 1]; ``action1``
     only with independent control) from the angles before, and the effort term's mean squared command."""
     limit = cfg.plane_limit_rad
-    a0 = min(max(action0, -1.0), 1.0)
+    a0 = clip(action0, -1.0, 1.0)
     stern = a0 * limit
     if cfg.dual:
         effort = a0 * a0
         bow = cfg.alpha * stern  # Riedel (1993) eq. 2.58
     else:
-        a1 = min(max(action1, -1.0), 1.0)
+        a1 = clip(action1, -1.0, 1.0)
         effort = (a0 * a0 + a1 * a1) / 2.0
         bow = a1 * limit
     if cfg.rate_limited:
         move = cfg.max_move_rad
-        stern = stern_rad + min(max(stern - stern_rad, -move), move)
-        bow = bow_rad + min(max(bow - bow_rad, -move), move)
-    return min(max(stern, -limit), limit), min(max(bow, -limit), limit), effort
+        stern = stern_rad + clip(stern - stern_rad, -move, move)
+        bow = bow_rad + clip(bow - bow_rad, -move, move)
+    return clip(stern, -limit, limit), clip(bow, -limit, limit), effort
 
 
 @inline_kernel
-def episode_end(x0: float, x1: float, x2: float, x3: float, depth_command_m: float, cfg: np.void) -> int:
+def episode_end(x0: float, x1: float, x2: float, x3: float, depth_command_m: float, cfg: ConfigRecord) -> int:
     """The reason code (:data:`REASONS`) of the state (theta, w, q, Z) at the end of a step: 0 while
     the episode goes on (the first reason that holds, in the order of :data:`REASONS`)."""
     bounded = (
@@ -285,24 +314,24 @@ def episode_end(x0: float, x1: float, x2: float, x3: float, depth_command_m: flo
         & math.isfinite(x1)
         & math.isfinite(x2)
         & math.isfinite(x3)
-        & (abs(x1) <= cfg.max_heave_mps)
-        & (abs(x2) <= cfg.max_pitch_rate_radps)
+        & (math.fabs(x1) <= cfg.max_heave_mps)
+        & (math.fabs(x2) <= cfg.max_pitch_rate_radps)
     )
-    reason = select(abs(x3 - depth_command_m) > cfg.max_depth_error_m, _LEFT_DEPTH_BAND, 0)
+    reason = select(math.fabs(x3 - depth_command_m) > cfg.max_depth_error_m, _LEFT_DEPTH_BAND, 0)
     reason = select(x3 < cfg.broach_depth_m, _BROACHED, reason)
-    reason = select(abs(x0) > cfg.max_pitch_rad, _PITCH_LIMIT, reason)
+    reason = select(math.fabs(x0) > cfg.max_pitch_rad, _PITCH_LIMIT, reason)
     return select(bounded, reason, _DIVERGED)
 
 
 @inline_kernel
 def reward_terms(
-    pitch_rad: float, depth_error_m: float, effort: float, terminated: bool, cfg: np.void
+    pitch_rad: float, depth_error_m: float, effort: float, terminated: bool, cfg: ConfigRecord
 ) -> tuple[float, float, float, float]:
     """(depth, pitch, effort, termination) terms of the reward (``DivePlaneEnv``'s Rewards section)."""
     ratio = pitch_rad / cfg.max_pitch_rad
     # 1 - tanh(x) as 2 / (1 + e^(2x)), the same number: libm's exp costs a third of its tanh, and the
     # small rewards far off depth keep their relative precision.
-    r_depth = 2.0 / (1.0 + math.exp(2.0 * abs(depth_error_m) / cfg.depth_scale_m))
+    r_depth = 2.0 / (1.0 + math.exp(2.0 * math.fabs(depth_error_m) / cfg.depth_scale_m))
     r_pitch = -cfg.pitch_weight * (ratio * ratio)
     r_effort = -cfg.effort_weight * effort
     r_termination = select(terminated, -cfg.termination_penalty, 0.0)
@@ -311,7 +340,7 @@ def reward_terms(
 
 @inline_kernel
 def period_start(
-    s: np.void, e: np.void, action0: float, action1: float, cfg: np.void
+    s: StateRecord, e: EpisodeRecord, action0: float, action1: float, cfg: ConfigRecord
 ) -> tuple[float, float, float, float, float, float]:
     """What a control period of state ``s`` in episode ``e`` holds, after the action (``action1``
     read only with independent control): the applied planes (stern, bow) [rad], the effort term's
@@ -326,8 +355,8 @@ def period_start(
 
 @inline_kernel
 def period_end(
-    s: np.void,
-    e: np.void,
+    s: StateRecord,
+    e: EpisodeRecord,
     x0: float,
     x1: float,
     x2: float,
@@ -336,7 +365,7 @@ def period_end(
     u1: float,
     reason: int,
     disturbance_draw: float,
-    cfg: np.void,
+    cfg: ConfigRecord,
 ) -> tuple[Any, ...]:
     """The state's fields after a control period from ``s`` that integrated to (theta, w, q, Z) =
     (``x0``, ``x1``, ``x2``, ``x3``) with the speed going from ``u0`` to ``u1``, and ended for
@@ -365,7 +394,7 @@ def period_end(
 
 @inline_kernel
 def episode_outcome(
-    reason: int, time_s: float, steps: int, duration_s: float, cfg: np.void
+    reason: int, time_s: float, steps: int, duration_s: float, cfg: ConfigRecord
 ) -> tuple[bool, bool]:
     """(terminated, truncated) of a state reached at ``time_s`` after ``steps`` steps, ended for
     ``reason`` (:func:`episode_end`) in an episode of ``duration_s``."""
@@ -375,12 +404,12 @@ def episode_outcome(
     return terminated, truncated
 
 
-_NO_NOISE: Final = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+_NO_NOISE: Final[tuple[float, ...]] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
 @inline_kernel
 def noise_values(
-    z0: float, z1: float, z2: float, z3: float, z4: float, z5: float, z6: float, z7: float, cfg: np.void
+    z0: float, z1: float, z2: float, z3: float, z4: float, z5: float, z6: float, z7: float, cfg: ConfigRecord
 ) -> tuple[float, ...]:
     """The observation's noise from :data:`N_OBS` standard normal numbers: each times its standard
     deviation, one depth sensor for components 0 and 7."""
@@ -390,7 +419,7 @@ def noise_values(
 
 
 @inline_kernel
-def sensor_noise(rng: np.random.Generator, cfg: np.void) -> tuple[float, ...]:
+def sensor_noise(rng: np.random.Generator, cfg: ConfigRecord) -> tuple[float, ...]:
     """The observation's noise, :data:`N_OBS` values drawn from ``rng``: ``rng.normal(0, 1, size=8) *
     std``, one depth sensor for components 0 and 7 (:func:`noise_values`)."""
     z0 = rng.normal(0.0, 1.0)
@@ -405,7 +434,9 @@ def sensor_noise(rng: np.random.Generator, cfg: np.void) -> tuple[float, ...]:
 
 
 @inline_kernel
-def observation_values(s: np.void, e: np.void, noise: tuple[float, ...], cfg: np.void) -> tuple[float, ...]:
+def observation_values(
+    s: StateRecord, e: EpisodeRecord, noise: tuple[float, ...], cfg: ConfigRecord
+) -> tuple[float, ...]:
     """The observation (:data:`N_OBS` values, float64) of state ``s`` in episode ``e``, with ``noise``
     (:func:`noise_values`) added when the episode has sensor noise."""
     depth = s.depth_m
@@ -422,20 +453,20 @@ def observation_values(s: np.void, e: np.void, noise: tuple[float, ...], cfg: np
     # Only a terminal state (or noise at zero speed) can reach the bounds.
     lo, hi = cfg.obs_low, cfg.obs_high
     return (
-        min(max(v0, lo[0]), hi[0]),
-        min(max(v1, lo[1]), hi[1]),
-        min(max(v2, lo[2]), hi[2]),
-        min(max(v3, lo[3]), hi[3]),
-        min(max(v4, lo[4]), hi[4]),
-        min(max(v5, lo[5]), hi[5]),
-        min(max(v6, lo[6]), hi[6]),
-        min(max(v7, lo[7]), hi[7]),
+        clip(v0, lo[0], hi[0]),
+        clip(v1, lo[1], hi[1]),
+        clip(v2, lo[2], hi[2]),
+        clip(v3, lo[3], hi[3]),
+        clip(v4, lo[4], hi[4]),
+        clip(v5, lo[5], hi[5]),
+        clip(v6, lo[6], hi[6]),
+        clip(v7, lo[7], hi[7]),
     )
 
 
 @inline_kernel
 def observation(
-    s: np.void, e: np.void, noise: tuple[float, ...], i: int, cfg: np.void, obs: np.ndarray
+    s: StateRecord, e: EpisodeRecord, noise: tuple[float, ...], i: int, cfg: ConfigRecord, obs: np.ndarray
 ) -> None:
     """Write :func:`observation_values` into row ``i`` of ``obs`` (float32, :data:`N_OBS` columns)."""
     v0, v1, v2, v3, v4, v5, v6, v7 = observation_values(s, e, noise, cfg)
@@ -445,8 +476,8 @@ def observation(
 
 @inline_kernel
 def report_values(
-    s: np.void,
-    e: np.void,
+    s: StateRecord,
+    e: EpisodeRecord,
     r_depth: float,
     r_pitch: float,
     r_effort: float,
@@ -492,8 +523,8 @@ def report_values(
 def _report(
     report: FloatArray,
     j: int,
-    s: np.void,
-    e: np.void,
+    s: StateRecord,
+    e: EpisodeRecord,
     r_depth: float,
     r_pitch: float,
     r_effort: float,
@@ -594,7 +625,7 @@ def _step_block(
     active: np.ndarray,
     obs: np.ndarray,
     rngs: numba.typed.List,
-    cfg: np.void,
+    cfg: ConfigRecord,
     hull: FloatArray,
     report: FloatArray,
     b: int,
@@ -609,12 +640,12 @@ def _step_block(
 ) -> None:
     """Block ``b`` of :func:`step_blocks`, in its work arrays."""
     in_sea = False
-    for i in range(b * LANES, min((b + 1) * LANES, n_rows)):
+    for i in range(b * LANES, minimum((b + 1) * LANES, n_rows)):
         in_sea = in_sea or (active[i] and episode[i].n_waves > 0)
     # (the seas' rows only where a lane has one: a block of them is larger than the rest of the step's memory)
     waves = np.zeros((LANES if in_sea else 1, WAVE_FIELDS, MAX_WAVES))
     n = 0
-    for i in range(b * LANES, min((b + 1) * LANES, n_rows)):
+    for i in range(b * LANES, minimum((b + 1) * LANES, n_rows)):
         if active[i]:
             s, e = state[i], episode[i]
             stern, bow, efforts[n], u0, speeds_end[n], slope = period_start(
@@ -703,7 +734,8 @@ def _step(
     hull: FloatArray,
     report: FloatArray,
 ) -> int:
-    """The blocks of :func:`step_blocks`, in one run (:func:`step`) or one run per thread (:func:`step_parallel`)."""
+    """The blocks of :func:`step_blocks`, in one run (:func:`step`) or one run per thread
+    (:func:`step_parallel`)."""
     bad = _first_non_finite(actions, active)
     if bad >= 0:
         return bad
@@ -738,7 +770,8 @@ state : ndarray of STATE_DTYPE, shape (n,)
     Updated in place.
 episode : ndarray of EPISODE_DTYPE, shape (n,)
 seas : ndarray, shape (n, WAVE_FIELDS, MAX_WAVES)
-    Row i: the sea of sub-environment i, read where ``episode[i].n_waves`` > 0 (:func:`subenv.envs.episodes.write_sea`).
+    Row i: the sea of sub-environment i, read where ``episode[i].n_waves`` > 0
+    (:func:`subenv.envs.episodes.write_sea`).
 actions : ndarray, shape (n, n_actions)
     Clipped to [-1, 1]; a non-finite one stops the step before anything changes (see Returns).
 active : ndarray of bool, shape (n,)

@@ -1,17 +1,27 @@
-"""The comparison behind ``subenv evaluate``: run a suite, aggregate, write the results folder.
+"""The comparison behind ``subenv evaluate``: the evaluation's stages, one after the other.
 
-:func:`run_comparison` checks every input before the first episode (unknown controller, suite or
-scenario names, an existing output folder or one that cannot be created, a missing matplotlib), then
-rolls out, aggregates and writes::
+1. **resolve** (:func:`subenv.evaluation.plan.resolve`): the suite, the controllers, the episodes and
+   seeds, the vehicle and the environment's settings, once, each checked before the first episode
+   (with an existing output folder or one that cannot be created, and a missing matplotlib);
+2. **roll out** (:func:`subenv.evaluation.rollout.roll_out`), batched, each batch then
+3. **classified** (:mod:`subenv.evaluation.classify`: winnable, and whether the score counts it) and
+4. **measured** (:mod:`subenv.evaluation.measure`, :mod:`subenv.evaluation.metrics`);
+5. **report**: the scores with their intervals and the paired comparisons
+   (:mod:`subenv.evaluation.score`), the tables (:mod:`subenv.evaluation.results`) and the figures
+   (:mod:`subenv.evaluation.plots`), written as::
 
     <out_dir>/
-        leaderboard.md      success rate per controller and scenario, 95% Wilson intervals
+        leaderboard.md      the score per controller (and per scenario), success, quality, intervals,
+                            paired comparisons, success and failures per scenario
         summary.md          every metric per controller x scenario, with intervals
         summary.csv         the same, machine-readable
         results.csv         the tidy per-episode table (one row per controller x scenario x episode)
-        run.json            what was run: suite, scenarios, episodes, seeds, controllers, tolerances
+        run.json            what was run (suite, scenarios, episodes, seeds, controllers, settings,
+                            tolerances) and the scores, intervals and paired tests
         plots/trajectories_<Scenario>.png   a typical episode of each outcome that occurred
         plots/metrics_vs_speed.png          success rate and IAE against u / u_cr, per scenario
+
+The fields and units of ``results.csv`` and ``run.json`` are :mod:`subenv.evaluation.results_format`.
 
 The folder appears complete or not at all, and replaces an earlier one atomically
 (:func:`subenv.atomic.atomic_output_dir`); it holds a marker file saying it is a result of
@@ -33,16 +43,19 @@ import json
 import math
 import os
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
 from typing import Any
 
 from subenv.evaluation import metrics as m
-from subenv.evaluation.controller import Controller
+from subenv.evaluation import score as sc
+from subenv.evaluation.controller import Controller, informed
+from subenv.evaluation.failures import ControllerFailure
+from subenv.evaluation.measure import EpisodeResult
+from subenv.evaluation.plan import Plan, resolve, resolve_controllers
 from subenv.evaluation.results import (
-    CONFIDENCE_LEVEL,
     atomic_output_dir,
     atomic_write_text,
     episode_table,
@@ -52,16 +65,11 @@ from subenv.evaluation.results import (
     summary_markdown,
     write_csv,
 )
-from subenv.evaluation.rollout import (
-    ControllerFailure,
-    EpisodeResult,
-    Trajectory,
-    evaluate,
-    resolve_controllers,
-    resolve_suite,
-)
+from subenv.evaluation.results_format import FORMAT_VERSION
+from subenv.evaluation.rollout import roll_out
+from subenv.evaluation.stats import CONFIDENCE_LEVEL
 from subenv.evaluation.suites import DEFAULT_SEED, DEFAULT_SUITE, Suite
-from subenv.vehicles.loader import load_vehicle
+from subenv.evaluation.trajectory import Trajectory
 from subenv.vehicles.vehicle import Vehicle
 
 __all__ = ["DEFAULT_OUT_DIR", "RESULTS_KIND", "Comparison", "run_comparison", "write_comparison"]
@@ -98,6 +106,18 @@ class Comparison:
     failures : tuple of ControllerFailure
         The controllers' failures, in the order they happened (empty when every controller ran
         every episode); a controller with one is not ranked.
+    scores : list of Score
+        Per controller that completed the suite: its score on each scenario and pooled
+        (:func:`~subenv.evaluation.score.scores`).
+    paired : list of PairedComparison
+        Every pair of those controllers, pooled and per scenario
+        (:func:`~subenv.evaluation.score.paired_comparisons`).
+    env_kwargs : dict
+        The environment's settings the caller gave.
+    informed : tuple of str
+        The controllers told the environment's settings.
+    report_s : float
+        Wall-clock time of the scores, intervals, paired tests and tables [s].
     """
 
     suite: Suite
@@ -110,6 +130,12 @@ class Comparison:
     out_dir: Path | None
     elapsed_s: float
     failures: tuple[ControllerFailure, ...] = ()
+    scores: list[sc.Score] = field(default_factory=list, repr=False)
+    paired: list[sc.PairedComparison] = field(default_factory=list, repr=False)
+    env_kwargs: dict[str, Any] = field(default_factory=dict)
+    informed: tuple[str, ...] = ()
+    report_s: float = 0.0
+    vehicle_name: str = "suboff"
 
     @property
     def failed(self) -> tuple[str, ...]:
@@ -120,7 +146,7 @@ class Comparison:
 
 def run_comparison(
     controllers: Sequence[Controller | str] | None = None,
-    suite: Suite | str | Sequence[str] = DEFAULT_SUITE,
+    suite: Suite | str | Sequence[str] | None = DEFAULT_SUITE,
     episodes: int | None = None,
     out_dir: str | os.PathLike[str] | None = DEFAULT_OUT_DIR,
     overwrite: bool = False,
@@ -129,14 +155,15 @@ def run_comparison(
     *,
     plots: bool = True,
     vehicle: str | Vehicle = "suboff",
+    env_kwargs: Mapping[str, Any] | None = None,
 ) -> Comparison:
     """Compare controllers on a suite and write the results folder.
 
     Parameters
     ----------
     controllers : sequence of Controller or str, optional
-        Registered names (``subenv.evaluation.controller_names()``) or instances; None runs
-        every registered controller.
+        Registered names (``subenv.evaluation.controller_names()``; ``<name>:uninformed`` for one not
+        told the environment's settings) or instances; None runs every registered controller.
     suite : Suite, str or sequence of str
         A registered suite name (``suite_names()``), a :class:`Suite`, or scenario names.
     episodes : int, optional
@@ -154,12 +181,14 @@ def run_comparison(
         Write the figures (needs matplotlib, checked before any episode).
     vehicle : str or Vehicle
         The vehicle of every environment.
+    env_kwargs : mapping, optional
+        The environment's other arguments (:func:`subenv.evaluation.evaluate`), recorded in ``run.json``.
 
     Raises
     ------
     ValueError
         Unknown controller, suite or scenario (the message lists the known names); bad
-        ``episodes`` or ``seed``.
+        ``episodes``, ``seed`` or ``env_kwargs``.
     FileExistsError
         ``out_dir`` exists and ``overwrite`` is false, or it is not an earlier results folder.
     OutputDirError
@@ -167,12 +196,7 @@ def run_comparison(
     ImportError
         ``plots`` without matplotlib installed.
     """
-    boat = vehicle if isinstance(vehicle, Vehicle) else load_vehicle(vehicle)
-    ctrls = resolve_controllers(controllers, boat)
-    the_suite = resolve_suite(suite)
-    n = the_suite.episodes if episodes is None else episodes
-    if not (isinstance(n, int) and not isinstance(n, bool) and n >= 1):
-        raise ValueError(f"episodes={episodes!r} is invalid: must be an integer >= 1")
+    plan = resolve(controllers, suite, episodes, seed, vehicle=vehicle, env_kwargs=env_kwargs)
     if out_dir is not None and plots:
         from subenv.evaluation.plots import require_matplotlib
 
@@ -187,34 +211,67 @@ def run_comparison(
     with folder_block as folder:
         start = time.perf_counter()
         failures: list[ControllerFailure] = []
-        results = evaluate(
-            ctrls, the_suite, n, seed, progress, vehicle=boat, keep_trajectories=1, on_failure=failures.append
-        )
+        results = roll_out(plan, progress, keep_trajectories=1, on_failure=failures.append)
         elapsed = time.perf_counter() - start
-        summary = summarize(results)
-        board = leaderboard_markdown(
-            results, title=f"Leaderboard: suite '{the_suite.name}'", failures=failures
-        )
-        comparison = Comparison(
-            suite=the_suite,
-            controllers=tuple(c.name for c in ctrls),
-            episodes=n,
-            seed=seed,
-            results=results,
-            summary=summary,
-            leaderboard=board,
-            out_dir=None if out_dir is None else Path(out_dir),
-            elapsed_s=elapsed,
-            failures=tuple(failures),
+        comparison = report(
+            plan, results, failures, elapsed, out_dir=None if out_dir is None else Path(out_dir)
         )
         if folder is not None:
-            _write_files(comparison, folder, plots=plots, controllers=ctrls, vehicle=vehicle)
+            _write_files(comparison, folder, plots=plots, controllers=plan.controllers, vehicle=plan.vehicle)
     return comparison
 
 
-def _run_record(
-    comparison: Comparison, controllers: Sequence[Controller] | None, vehicle: str | Vehicle
-) -> dict[str, Any]:
+def report(
+    plan: Plan,
+    results: list[EpisodeResult],
+    failures: Sequence[ControllerFailure] = (),
+    elapsed_s: float = math.nan,
+    *,
+    out_dir: Path | None = None,
+) -> Comparison:
+    """The report stage of ``plan``'s ``results``: scores with intervals, paired comparisons, tables."""
+    start = time.perf_counter()
+    failed = {f.controller for f in failures}
+    ranked = [r for r in results if r.controller not in failed]
+    every_score = sc.scores(results)  # (each controller's on its own: the failed ones' for the summary)
+    score_table = [s for s in every_score if s.controller not in failed]
+    summary = summarize(results, score_table=every_score)
+    board = leaderboard_markdown(
+        ranked, title=f"Leaderboard: suite '{plan.suite.name}'", failures=failures, score_table=score_table
+    )
+    paired = sc.paired_comparisons(ranked)
+    return Comparison(
+        suite=plan.suite,
+        controllers=tuple(c.name for c in plan.controllers),
+        episodes=plan.episodes,
+        seed=plan.seed,
+        results=results,
+        summary=summary,
+        leaderboard=board,
+        out_dir=out_dir,
+        elapsed_s=elapsed_s,
+        failures=tuple(failures),
+        scores=score_table,
+        paired=paired,
+        env_kwargs=dict(plan.env_kwargs),
+        informed=tuple(c.name for c in plan.controllers if informed(c)),
+        report_s=time.perf_counter() - start,
+        vehicle_name=plan.vehicle_name,
+    )
+
+
+def _json_safe(value: Any) -> Any:
+    """``value`` with every nan or inf float made None (JSON has neither)."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, Mapping):
+        return {k: _json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(v) for v in value]
+    return value
+
+
+def _run_record(comparison: Comparison, controllers: Sequence[Controller] | None) -> dict[str, Any]:
     try:
         version = metadata.version("subenv")
     except metadata.PackageNotFoundError:
@@ -222,14 +279,17 @@ def _run_record(
     suite = comparison.suite
     by_name = {c.name: c for c in controllers or ()}
     failed = comparison.failed
-    return {
+    record = {
+        "format": FORMAT_VERSION,
         "subenv_version": version,
         "suite": suite.name,
         "scenarios": list(suite.scenarios),
         "max_duration_s": suite.max_duration_s,
-        "vehicle": vehicle if isinstance(vehicle, str) else vehicle.name,
+        "vehicle": comparison.vehicle_name,
         "episodes": comparison.episodes,
         "seeds": [comparison.seed, comparison.seed + comparison.episodes - 1],
+        "env_kwargs": comparison.env_kwargs,
+        "scored_by": suite.scored_by,
         "controllers": [
             {"name": name}
             | (
@@ -237,7 +297,7 @@ def _run_record(
                 if name in by_name
                 else {}
             )
-            | {"complete": name not in failed}
+            | {"informed": name in comparison.informed, "complete": name not in failed}
             for name in comparison.controllers
         ],
         "failures": [dataclasses.asdict(f) | {"message": f.message} for f in comparison.failures],
@@ -248,9 +308,23 @@ def _run_record(
         "non_level_pitch_deg": math.degrees(m.NON_LEVEL_PITCH_RAD),
         "steady_pitch_rate_degps": math.degrees(m.STEADY_PITCH_RATE_RADPS),
         "steady_depth_change_m": m.STEADY_DEPTH_CHANGE_M,
+        "regulation_band_m": m.REGULATION_BAND_M,
+        "approach_s": m.APPROACH_S,
         "confidence_level": CONFIDENCE_LEVEL,
+        "score": {
+            "formula": sc.SCORE_FORMULA,
+            "quality": f"q = {m.QUALITY_ACCURACY_WEIGHT:g} a + {m.QUALITY_EFFORT_WEIGHT:g} (1 - e^2)",
+            "quality_accuracy_weight": m.QUALITY_ACCURACY_WEIGHT,
+            "quality_effort_weight": m.QUALITY_EFFORT_WEIGHT,
+            "bootstrap_resamples": sc.BOOTSTRAP_RESAMPLES,
+            "bootstrap_seed": sc.BOOTSTRAP_SEED,
+        },
+        "scores": [s.as_dict() for s in comparison.scores],
+        "paired": [p.as_dict() for p in comparison.paired],
         "rollout_seconds": round(comparison.elapsed_s, 2),
+        "report_seconds": round(comparison.report_s, 2),
     }
+    return dict(_json_safe(record))
 
 
 def write_comparison(
@@ -289,7 +363,8 @@ def _write_files(
         + failures_markdown(comparison.failures),
     )
     atomic_write_text(
-        folder / "run.json", json.dumps(_run_record(comparison, controllers, vehicle), indent=2) + "\n"
+        folder / "run.json",
+        json.dumps(_run_record(comparison, controllers), indent=2, allow_nan=False) + "\n",
     )
     # The figures compare the controllers that completed the suite (and replay no failed controller).
     shown = [r for r in comparison.results if r.controller not in comparison.failed]
@@ -300,7 +375,11 @@ def _write_files(
 
         def trajectory_of(r: EpisodeResult) -> Trajectory:
             return replay_trajectory(
-                r, by_name[r.controller], vehicle=vehicle, max_duration_s=comparison.suite.max_duration_s
+                r,
+                by_name[r.controller],
+                vehicle=vehicle,
+                max_duration_s=comparison.suite.max_duration_s,
+                env_kwargs=comparison.env_kwargs,
             )
 
         for scenario in comparison.suite.scenarios:

@@ -13,6 +13,14 @@ a controller without the batch methods is run one episode at a time. :class:`Sin
 gives a batch controller its single-episode ``reset`` and ``act``, so that there is one copy of
 the control law.
 
+A controller may also be told the environment's settings (:class:`InformedController`: an ``inform``
+method). The harness calls it before the episodes of each scenario with that scenario's settings (the
+planes' rate limit, the pitch limit, the control period, ...:
+:func:`subenv.evaluation.environments.env_settings`), so that a controller that designs for the limits
+(the MPC) meets the environment it runs in; a controller without the method is not told, and
+:func:`uninformed` runs one that has it without telling it. Whether a controller was told is in its
+results (``informed``) and its leaderboard row.
+
 Controllers come from other packages, never from ``subenv`` itself (which imports none of them):
 
 - an installed package declares each of its controllers in the ``subenv.controllers`` entry-point
@@ -42,13 +50,18 @@ __all__ = [
     "ENTRY_POINT_GROUP",
     "BatchController",
     "Controller",
+    "UNINFORMED_SUFFIX",
     "ControllerFactory",
+    "InformedController",
     "SingleRowMixin",
+    "Uninformed",
     "check_batch",
     "controller_names",
     "discover_controllers",
+    "informed",
     "make_controller",
     "register_controller",
+    "uninformed",
 ]
 
 ControlMode = Literal["dual", "independent"]
@@ -103,6 +116,65 @@ class BatchController(Controller, Protocol):
         """Actions for ``observations`` of shape (N, obs_dim), one row per episode: shape (N, n_actions),
         float32 in [-1, 1]."""
         ...
+
+
+@runtime_checkable
+class InformedController(Controller, Protocol):
+    """A :class:`Controller` that is told the environment's settings before it runs a scenario."""
+
+    def inform(self, settings: Mapping[str, Any]) -> None:
+        """Take the settings of the environment the next episodes run in: every argument of
+        :class:`~subenv.envs.DivePlaneEnv` but the scenario, vehicle, control and alpha
+        (:func:`subenv.evaluation.environments.env_settings`: ``dt``, ``substeps``,
+        ``plane_rate_limit_radps``, ``max_pitch_rad``, ``max_depth_error_m`` (None: the environment's
+        default for the vehicle), ...), each with its value there."""
+        ...
+
+
+def informed(controller: Controller) -> bool:
+    """Whether the harness tells ``controller`` the environment's settings (it has ``inform``)."""
+    return isinstance(controller, InformedController)
+
+
+UNINFORMED_SUFFIX: Final = ":uninformed"
+"""The name of a controller run without being told the settings is its own with this suffix
+(``mpc:uninformed``); :func:`~subenv.evaluation.rollout.resolve_controllers` makes one from that name."""
+
+
+class Uninformed:
+    """``controller`` as it is, but never told the environment's settings (it keeps its own defaults).
+
+    Named ``<name>:uninformed``, so that it can run beside the informed original in one comparison; it
+    acts on batches when the original does.
+    """
+
+    def __init__(self, controller: Controller) -> None:
+        self.controller = controller
+        self.name = controller.name + UNINFORMED_SUFFIX
+        self.control = controller.control
+        self.alpha = controller.alpha
+
+    def reset(self, info: Mapping[str, Any], vehicle: Vehicle) -> None:
+        """The original's ``reset``."""
+        self.controller.reset(info, vehicle)
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        """The original's ``act``."""
+        return self.controller.act(observation)
+
+    def __getattr__(self, name: str) -> Any:
+        # The batch methods are the original's where it has them (so isinstance(..., BatchController)
+        # tells the truth); never its inform.
+        if name in ("reset_batch", "act_batch"):
+            return getattr(self.controller, name)
+        raise AttributeError(name)
+
+
+def uninformed(controller: Controller) -> Uninformed:
+    """``controller`` run without being told the environment's settings (:class:`Uninformed`)."""
+    if isinstance(controller, Uninformed):
+        return controller
+    return Uninformed(controller)
 
 
 class SingleRowMixin:

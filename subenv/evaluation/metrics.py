@@ -10,6 +10,20 @@ plane angles of sample ``k >= 1`` are the angles applied during the step that en
 ``time_s[k]`` (zero-order hold), so time fractions and RMS values of the planes weight sample
 ``k`` by ``time_s[k] - time_s[k-1]`` and ignore sample 0 (the planes before the first command).
 Integrals of the state use the trapezoidal rule.
+
+Windows (on SUBOFF; every length and time below is Froude-scaled on a vehicle of another size):
+
+- the **hold window**: the final :data:`HOLD_WINDOW_S` (60 s) of the record, on which success and the
+  wrong branch are judged;
+- the **regulation window**: the control periods that start at least :data:`APPROACH_S` (60 s) after
+  the depth order in force was given (today the order is given once, at the reset), up to the
+  scheduled end of the episode; regulation accuracy is judged on it.
+
+The metrics a score is built from (:mod:`subenv.evaluation.score`): success; the regulation accuracy
+``a`` (time fraction of the regulation window within :data:`REGULATION_BAND_M`); the plane effort ``e``
+(RMS plane angle per plane over the limit); and the quality ``q = 0.8 a + 0.2 (1 - e^2)`` of
+:func:`episode_quality`. The others (IAE, settling, overshoot, peak pitch, time saturated, safety
+events) are what a control engineer reads beside them.
 """
 
 from __future__ import annotations
@@ -25,17 +39,24 @@ from subenv import _validation as check
 from subenv.vehicles.scaling import froude_factor
 
 __all__ = [
+    "APPROACH_S",
     "DEPTH_TOLERANCE_M",
     "HOLD_WINDOW_S",
     "NON_LEVEL_PITCH_RAD",
     "OUTCOMES",
     "PINNED_FRACTION",
+    "QUALITY_ACCURACY_WEIGHT",
+    "QUALITY_EFFORT_WEIGHT",
+    "REGULATION_BAND_M",
+    "SAFETY_EVENTS",
     "SATURATION_LEVEL",
     "STEADY_DEPTH_CHANGE_M",
     "STEADY_PITCH_RATE_RADPS",
     "EpisodeMetrics",
     "episode_metrics",
+    "episode_quality",
     "episode_success",
+    "regulation_window",
 ]
 
 DEPTH_TOLERANCE_M: Final = 0.5
@@ -101,6 +122,42 @@ Half the tolerance in 60 s (0.004 m/s): an order of magnitude slower than the dr
 saturated equilibria (0.014-0.026 m/s at 0.2-0.9 u_cr), so a boat that moves less than this has
 settled, not drifted. Used by ``steady_offset`` only.
 """
+
+
+REGULATION_BAND_M: Final = 0.1
+"""|depth error| within which the depth counts as regulated [m] (regulation accuracy).
+
+A fifth of the success tolerance (:data:`DEPTH_TOLERANCE_M`, about a fifth of SUBOFF's hull diameter):
+success asks whether the boat is where it was sent, this band how tightly it holds there. It is twice
+the ``Randomized`` scenario's depth-sensor noise (0.05 m), so a controller that filters its measurement
+can hold it (the metrics judge the true depth), and the best baselines do: ``mpc`` and
+``reversal_aware`` enter it within a minute of the reset (the median, in every scenario of the default
+suite: the note of :data:`APPROACH_S`), while a controller without integral action settles outside it with a
+ballast offset.
+"""
+
+APPROACH_S: Final = 60.0
+"""Time after a depth order before the regulation window starts [s].
+
+The approach to the ordered depth (up to 2 m away at the reset) is not regulation: the IAE and the
+settling time measure it. Measured on the default suite (20 episodes per scenario, seeds 10000-10019),
+the first entry into the 0.1 m band takes ``mpc`` 12-49 s (the median per scenario; 90th percentile
+16-84 s, the slowest on LowSpeed) and ``reversal_aware`` 11-35 s (90th percentile 17-68 s); ``lqr`` and
+``scheduled`` take 10-75 s. 60 s lets every baseline's typical approach end before the window starts,
+so that the window judges holding, and leaves 140 s of the shortest episodes (Nominal's 200 s) to judge
+it on. A controller that is still approaching after 60 s is charged for it, as it should be.
+"""
+
+QUALITY_ACCURACY_WEIGHT: Final = 0.8
+QUALITY_EFFORT_WEIGHT: Final = 0.2
+"""The weights of :func:`episode_quality`: 4/5 on the task (regulation accuracy), 1/5 on small plane
+motion, DeepMind Control Suite's split (``dm_control/suite/cartpole.py``: ``small_control = (4 +
+small_control) / 5``, the control term quadratic in the action, 1 - u^2, as here 1 - e^2)."""
+
+SAFETY_EVENTS: Final = ("broached", "pitch_limit")
+"""The termination reasons that are safety events: the hull broke the surface, or the pitch passed the
+environment's limit. (Leaving the depth band and a diverged state end an episode too, but are failures
+of control, not hazards to the boat.)"""
 
 
 OUTCOMES: Final = (
@@ -180,6 +237,19 @@ class EpisodeMetrics:
         |depth error| at the last sample [m].
     duration_s : float
         Recorded length of the episode [s].
+    regulation_accuracy : float
+        Time fraction of the regulation window with |depth error| <= :data:`REGULATION_BAND_M`, in
+        [0, 1]; the time a terminated episode did not run counts as outside.
+    plane_effort : float
+        RMS plane angle per plane of the vehicle over the plane limit, in [0, 1]: 0 with the planes
+        still, 1 with every plane held at its limit.
+    pitch_limit : bool
+        Terminated by the pitch limit.
+    safety_event : bool
+        Terminated by a safety event (:data:`SAFETY_EVENTS`: broached or the pitch limit).
+    quality : float
+        :func:`episode_quality` of the regulation accuracy and the plane effort, in [0, 1]. Defined
+        for every episode; the score reads it on the won ones.
     """
 
     outcome: str
@@ -198,6 +268,11 @@ class EpisodeMetrics:
     hold_max_abs_error_m: float
     final_abs_error_m: float
     duration_s: float
+    regulation_accuracy: float
+    plane_effort: float
+    pitch_limit: bool
+    safety_event: bool
+    quality: float
 
     def as_dict(self) -> dict[str, Any]:
         """The fields as a flat dict (for tables)."""
@@ -215,11 +290,15 @@ def _vector(name: str, value: ArrayLike, n: int | None) -> np.ndarray:
     return a
 
 
+def _slack(end_s: float) -> float:
+    """A small slack that absorbs float sums of dt in the windows' comparisons."""
+    return 1e-9 * max(1.0, abs(end_s))
+
+
 def _hold_window(start_s: float, end_s: float, hold_window_s: float) -> tuple[float, bool]:
     """The start of the hold window of an episode sampled from ``start_s`` to ``end_s`` (the samples
     at or after it are in the window), and whether the episode covers the window."""
-    # A small slack absorbs float sums of dt.
-    slack = 1e-9 * max(1.0, abs(end_s))
+    slack = _slack(end_s)
     window_start = end_s - hold_window_s - slack
     return window_start, start_s <= window_start + 2 * slack
 
@@ -260,6 +339,163 @@ def episode_success(
     return (not terminated) and covers_window and last_outside_s < window_start
 
 
+def episode_quality(regulation_accuracy: ArrayLike, plane_effort: ArrayLike) -> np.ndarray:
+    """The quality q = 0.8 a + 0.2 (1 - e^2): how well a won episode held depth, in [0, 1] (vectorised).
+
+    ``a`` is the regulation accuracy and ``e`` the plane effort (:class:`EpisodeMetrics`). The task
+    takes 4/5 of the weight and small plane motion 1/5 (:data:`QUALITY_ACCURACY_WEIGHT`), as the
+    DeepMind Control Suite weighs them; the control term is quadratic, as DMC's ``small_control``
+    (``rewards.tolerance(u, margin=1, value_at_margin=0, sigmoid="quadratic")`` = 1 - u^2), so
+    1 - e^2 is the time mean of 1 - (plane / limit)^2 per plane. The terms are added (DMC multiplies
+    the task reward by ``(4 + small_control) / 5``) so that the mean quality of a set of episodes is
+    0.8 times their mean accuracy plus 0.2 times their mean 1 - e^2, each readable in the tables.
+
+    References
+    ----------
+    Tassa, Y. et al. (2018). DeepMind Control Suite. arXiv:1801.00690 (Sec. 4: rewards in [0, 1];
+    ``dm_control/suite/cartpole.py``, ``_get_reward``).
+    """
+    a = np.asarray(regulation_accuracy, dtype=float)
+    e = np.asarray(plane_effort, dtype=float)
+    return QUALITY_ACCURACY_WEIGHT * a + QUALITY_EFFORT_WEIGHT * (1.0 - e * e)
+
+
+def regulation_window(
+    time_s: np.ndarray, approach_s: float = APPROACH_S, order_times_s: ArrayLike | None = None
+) -> np.ndarray:
+    """Which control periods are in the regulation window: a boolean per step (``time_s[k - 1]`` to
+    ``time_s[k]``, k = 1 .. n - 1), True when the step starts at least ``approach_s`` after the depth
+    order in force then was given.
+
+    Parameters
+    ----------
+    time_s : ndarray, shape (n,)
+        Sample times [s], increasing.
+    approach_s : float
+        See :data:`APPROACH_S` (already Froude-scaled, if the episode is).
+    order_times_s : array_like, optional
+        Times at which a depth order was given [s], increasing, the first at or before ``time_s[0]``;
+        default: once, at the reset (``time_s[0]``). An episode whose order changes restarts the
+        window at each change.
+    """
+    start = time_s[:-1]
+    if order_times_s is None:
+        given: np.ndarray | float = float(time_s[0])
+    else:
+        orders = np.atleast_1d(np.asarray(order_times_s, dtype=float))
+        given = orders[np.clip(np.searchsorted(orders, start, side="right") - 1, 0, None)]
+    result: np.ndarray = start - given >= approach_s - _slack(float(time_s[-1]))
+    return result
+
+
+def _regulation_accuracy(
+    t: np.ndarray,
+    dts: np.ndarray,
+    abs_e: np.ndarray,
+    band_m: float,
+    approach_s: float,
+    scheduled_end_s: float,
+) -> float:
+    """Time fraction of the regulation window within ``band_m``: each step counts as within when the
+    sample that ends it is (zero-order hold, as the planes); the window runs to ``scheduled_end_s``,
+    and the part of it after the record's end (a terminated episode) counts as outside."""
+    window = regulation_window(t, approach_s)
+    held = float(np.dot(dts, window & (abs_e[1:] <= band_m)))
+    recorded = float(np.dot(dts, window))
+    window_start = float(t[0]) + approach_s
+    missing = max(0.0, scheduled_end_s - max(float(t[-1]), window_start))
+    total = recorded + missing
+    return held / total if total > 0 else 0.0
+
+
+def _plane_effort(mean_square: float, limit: float, count: int) -> float:
+    """sqrt(``mean_square`` / count) / limit, at most 1: ``mean_square`` the time mean of the sum of the
+    squared plane angles [rad^2]."""
+    return min(1.0, math.sqrt(mean_square / count) / limit)
+
+
+def _overshoot(e: np.ndarray, abs_e: np.ndarray) -> float:
+    """The largest excursion past the ordered depth on the side opposite the initial error."""
+    e0 = e[0]
+    if e0 > 0:
+        return max(0.0, float(-e.min()))
+    if e0 < 0:
+        return max(0.0, float(e.max()))
+    return float(abs_e.max())
+
+
+def _settling_time(t: np.ndarray, within: np.ndarray, terminated: bool) -> float:
+    """The time from the reset to the first sample after the last one outside the tolerance."""
+    if terminated or not within[-1]:
+        return math.inf
+    outside = np.flatnonzero(~within)
+    return 0.0 if outside.size == 0 else float(t[outside[-1] + 1] - t[0])
+
+
+def _iae(
+    abs_e: np.ndarray, dts: np.ndarray, terminated: bool, duration: float, scheduled: float | None
+) -> float:
+    """Trapezoidal integral of |e|; a terminated episode is charged its final |e| until ``scheduled``."""
+    iae = float(np.sum(0.5 * (abs_e[1:] + abs_e[:-1]) * dts))
+    if terminated and scheduled is not None and scheduled > duration:
+        iae += float(abs_e[-1]) * (scheduled - duration)
+    return iae
+
+
+def _steady_states(
+    t: np.ndarray,
+    dts: np.ndarray,
+    e: np.ndarray,
+    theta: np.ndarray,
+    q: np.ndarray,
+    planes: np.ndarray,
+    *,
+    window_start: float,
+    level: float,
+    off_depth: bool,
+    terminated: bool,
+    steady_rate: float,
+    steady_change: float,
+) -> tuple[bool, bool]:
+    """(wrong_branch, steady_offset) over a hold window the record covers (the definitions of
+    :func:`episode_metrics`)."""
+    in_window = t >= window_start
+    steps = t[:-1] >= window_start
+    window_time = float(np.sum(dts[steps]))
+    pinned = max(
+        float(np.sum(dts[steps & (sign * planes[p] >= level)])) / window_time
+        for p in (0, 1)
+        for sign in (1.0, -1.0)
+    )
+    steady_pitch = float(np.abs(q[in_window]).max()) <= steady_rate
+    wrong_branch = (
+        pinned > PINNED_FRACTION
+        and steady_pitch
+        and float(np.abs(theta[in_window]).min()) > NON_LEVEL_PITCH_RAD
+        and off_depth
+    )
+    e_window = e[in_window]
+    steady_offset = (
+        not terminated
+        and not wrong_branch
+        and steady_pitch
+        and abs(float(e_window[-1] - e_window[0])) <= steady_change
+        and off_depth
+    )
+    return bool(wrong_branch), bool(steady_offset)
+
+
+def _outcome(success: bool, wrong_branch: bool, steady_offset: bool, termination_reason: str) -> str:
+    """The first outcome of :data:`OUTCOMES` that applies."""
+    if success:
+        return "success"
+    if wrong_branch:
+        return "wrong_branch"
+    if steady_offset:
+        return "steady_offset"
+    return termination_reason or "unsettled"
+
+
 def episode_metrics(
     time_s: ArrayLike,
     depth_error_m: ArrayLike,
@@ -274,6 +510,7 @@ def episode_metrics(
     depth_tolerance_m: float = DEPTH_TOLERANCE_M,
     hold_window_s: float = HOLD_WINDOW_S,
     length_ratio: float = 1.0,
+    plane_count: int = 2,
 ) -> EpisodeMetrics:
     """Compute the :class:`EpisodeMetrics` of one recorded episode.
 
@@ -296,22 +533,28 @@ def episode_metrics(
     episode_duration_s : float, optional
         The scheduled length of the episode [s]. If given and the episode terminated early, the
         IAE charges the final |depth error| for the rest of that time, so that ending an episode
-        early (broaching, leaving the depth band) never lowers it.
+        early (broaching, leaving the depth band) never lowers it, and the regulation window runs to
+        it (the time not run counts as outside the band).
     depth_tolerance_m : float
         See :data:`DEPTH_TOLERANCE_M`.
     hold_window_s : float
         See :data:`HOLD_WINDOW_S`.
     length_ratio : float
         lambda of an episode Froude-scaled to a vehicle of another size
-        (:attr:`subenv.envs.config.DivePlaneConfig.length_ratio`): the tolerances above and the
-        steadiness thresholds are the reference vehicle's (SUBOFF's) and are scaled with it, lengths
-        x lambda, times x sqrt(lambda), rates x 1/sqrt(lambda). 1 on SUBOFF.
+        (:attr:`subenv.envs.config.DivePlaneConfig.length_ratio`): the tolerances above, the
+        regulation band and window, and the steadiness thresholds are the reference vehicle's
+        (SUBOFF's) and are scaled with it, lengths x lambda, times x sqrt(lambda), rates x
+        1/sqrt(lambda). 1 on SUBOFF.
+    plane_count : int
+        The planes the vehicle has (2: stern and bow; 1: stern planes alone, whose bow angles are
+        zero): the plane effort is per plane of the vehicle.
 
     Returns
     -------
     EpisodeMetrics
         With these definitions (W: the hold window, the samples with t >= t_end - W; tol: the
-        depth tolerance; "steady": max |q| over W <= 0.2 deg/s):
+        depth tolerance; "steady": max |q| over W <= 0.2 deg/s; R: the regulation window of
+        :func:`regulation_window`, the steps starting at least :data:`APPROACH_S` after the order):
 
         - ``success``: not terminated, the record covers at least W, and |e| <= tol at every
           sample of W (:func:`episode_success`).
@@ -325,7 +568,18 @@ def episode_metrics(
         - ``peak_pitch_deg``: max |theta|.
         - ``plane_rms_rad``: sqrt of the time mean of stern^2 + bow^2.
         - ``saturated_fraction``: time fraction with max(|stern|, |bow|) >= 0.99 limit.
-        - ``broached``: ``termination_reason == "broached"``.
+        - ``broached``, ``pitch_limit``: the termination reason is that; ``safety_event``: either.
+        - ``regulation_accuracy`` (a): the time fraction of R with |e| <= 0.1 m (the state at the
+          end of each step), R running to the scheduled end (a terminated episode's missing time
+          counts as outside); 0 if R is empty (an episode shorter than the approach).
+        - ``plane_effort`` (e): sqrt(time mean of (stern^2 + bow^2) / plane_count) / limit, that is
+          ``plane_rms_rad / (limit sqrt(plane_count))``: the RMS angle per plane of the vehicle as a
+          fraction of the limit. With ``control="dual"`` the bow planes move as the allocation alpha
+          moves them (not at all with alpha = 0) and count as they move; with ``"independent"`` both
+          are the controller's. Every plane the vehicle has is in the mean, so a controller that
+          leaves its bow planes still is charged for the stern planes only, not credited for an idle
+          plane twice; a stern-only vehicle (plane_count = 1) has its stern planes alone.
+        - ``quality``: :func:`episode_quality` (a, e).
         - ``wrong_branch``: the record covers W (whatever ended it) and over W: one plane is at
           one and the same limit (>= 0.99 of it, same sign) more than 90% of the time, the pitch
           is steady, |theta| > 0.5 deg at every sample, and max |e| > tol. This is the
@@ -361,7 +615,8 @@ def episode_metrics(
     check.positive("plane_limit_rad", plane_limit_rad)
     check.positive("depth_tolerance_m", depth_tolerance_m)
     check.positive("hold_window_s", hold_window_s)
-    length, time, rate = (froude_factor(q, length_ratio) for q in ("length", "time", "rate"))
+    check.integer("plane_count", plane_count, 1, 2)
+    length, time, rate = (froude_factor(kind, length_ratio) for kind in ("length", "time", "rate"))
     depth_tolerance_m, hold_window_s = depth_tolerance_m * length, hold_window_s * time
     steady_rate, steady_change = STEADY_PITCH_RATE_RADPS * rate, STEADY_DEPTH_CHANGE_M * length
     if episode_duration_s is not None:
@@ -372,99 +627,64 @@ def episode_metrics(
     duration = float(t[-1] - t[0])
     within = abs_e <= depth_tolerance_m
 
-    # Hold window W: the samples of the final W seconds, and the steps (zero-order-hold intervals)
-    # lying wholly in it.
     start_s, end_s = float(t[0]), float(t[-1])
     window_start, covers_window = _hold_window(start_s, end_s, hold_window_s)
-    in_window = t >= window_start
-    hold_max = float(abs_e[in_window].max())
+    hold_max = float(abs_e[t >= window_start].max())
     outside = np.flatnonzero(~within)
-    last_outside_s = float(t[outside[-1]]) if outside.size else -math.inf
     success = episode_success(
         terminated=terminated,
         start_s=start_s,
         end_s=end_s,
-        last_outside_s=last_outside_s,
+        last_outside_s=float(t[outside[-1]]) if outside.size else -math.inf,
         hold_window_s=hold_window_s,
     )
-
-    # Settling: the first sample after the last one outside the tolerance.
-    if terminated or not within[-1]:
-        settling = math.inf
-    else:
-        settling = 0.0 if outside.size == 0 else float(t[outside[-1] + 1] - t[0])
-
-    e0 = e[0]
-    if e0 > 0:
-        overshoot = max(0.0, float(-e.min()))
-    elif e0 < 0:
-        overshoot = max(0.0, float(e.max()))
-    else:
-        overshoot = float(abs_e.max())
-
-    iae = float(np.sum(0.5 * (abs_e[1:] + abs_e[:-1]) * dts))
-    if terminated and episode_duration_s is not None and episode_duration_s > duration:
-        iae += float(abs_e[-1]) * (episode_duration_s - duration)
 
     # Planes: zero-order hold, sample k (k >= 1) weighted by the step that ended at t_k.
     level = SATURATION_LEVEL * plane_limit_rad
     planes = np.stack([stern[1:], bow[1:]])  # (2, n - 1)
     saturated = (np.abs(planes) >= level).any(axis=0)
-    plane_rms = math.sqrt(float(np.sum((planes**2).sum(axis=0) * dts)) / duration)
-    saturated_fraction = float(np.sum(dts[saturated])) / duration
-
     wrong_branch = steady_offset = False
     if covers_window:
-        steps = t[:-1] >= window_start
-        window_time = float(np.sum(dts[steps]))
-        pinned = max(
-            float(np.sum(dts[steps & (sign * planes[p] >= level)])) / window_time
-            for p in (0, 1)
-            for sign in (1.0, -1.0)
+        wrong_branch, steady_offset = _steady_states(
+            t,
+            dts,
+            e,
+            theta,
+            q,
+            planes,
+            window_start=window_start,
+            level=level,
+            off_depth=hold_max > depth_tolerance_m,
+            terminated=terminated,
+            steady_rate=steady_rate,
+            steady_change=steady_change,
         )
-        steady_pitch = float(np.abs(q[in_window]).max()) <= steady_rate
-        off_depth = hold_max > depth_tolerance_m
-        wrong_branch = (
-            pinned > PINNED_FRACTION
-            and steady_pitch
-            and float(np.abs(theta[in_window]).min()) > NON_LEVEL_PITCH_RAD
-            and off_depth
-        )
-        e_window = e[in_window]
-        steady_offset = (
-            not terminated
-            and not wrong_branch
-            and steady_pitch
-            and abs(float(e_window[-1] - e_window[0])) <= steady_change
-            and off_depth
-        )
-
-    if success:
-        outcome = "success"
-    elif wrong_branch:
-        outcome = "wrong_branch"
-    elif steady_offset:
-        outcome = "steady_offset"
-    elif terminated:
-        outcome = termination_reason
-    else:
-        outcome = "unsettled"
-
+    scheduled_end = start_s + (duration if episode_duration_s is None else max(duration, episode_duration_s))
+    accuracy = _regulation_accuracy(
+        t, dts, abs_e, REGULATION_BAND_M * length, APPROACH_S * time, scheduled_end
+    )
+    mean_square = float(np.sum((planes**2).sum(axis=0) * dts)) / duration
+    effort = _plane_effort(mean_square, plane_limit_rad, plane_count)
     return EpisodeMetrics(
-        outcome=outcome,
+        outcome=_outcome(success, wrong_branch, steady_offset, termination_reason),
         success=success,
         terminated=terminated,
         termination_reason=termination_reason,
         broached=termination_reason == "broached",
-        wrong_branch=bool(wrong_branch),
-        steady_offset=bool(steady_offset),
-        iae_m_s=iae,
-        settling_time_s=settling,
-        overshoot_m=overshoot,
+        wrong_branch=wrong_branch,
+        steady_offset=steady_offset,
+        iae_m_s=_iae(abs_e, dts, terminated, duration, episode_duration_s),
+        settling_time_s=_settling_time(t, within, terminated),
+        overshoot_m=_overshoot(e, abs_e),
         peak_pitch_deg=math.degrees(float(np.abs(theta).max())),
-        plane_rms_rad=plane_rms,
-        saturated_fraction=saturated_fraction,
+        plane_rms_rad=math.sqrt(mean_square),
+        saturated_fraction=float(np.sum(dts[saturated])) / duration,
         hold_max_abs_error_m=hold_max,
         final_abs_error_m=float(abs_e[-1]),
         duration_s=duration,
+        regulation_accuracy=accuracy,
+        plane_effort=effort,
+        pitch_limit=termination_reason == "pitch_limit",
+        safety_event=termination_reason in SAFETY_EVENTS,
+        quality=float(episode_quality(accuracy, effort)),
     )

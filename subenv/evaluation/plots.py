@@ -10,7 +10,7 @@ from __future__ import annotations
 import io
 import math
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, Final
 
@@ -18,9 +18,12 @@ import numpy as np
 
 from subenv.atomic import atomic_write_bytes
 from subenv.evaluation.controller import Controller
+from subenv.evaluation.measure import EpisodeResult
 from subenv.evaluation.metrics import DEPTH_TOLERANCE_M, HOLD_WINDOW_S
-from subenv.evaluation.results import CONFIDENCE_LEVEL, by_speed_ratio, representative_episodes
-from subenv.evaluation.rollout import EpisodeResult, Trajectory, run_episode
+from subenv.evaluation.results import by_speed_ratio, representative_episodes
+from subenv.evaluation.rollout import run_episode
+from subenv.evaluation.stats import CONFIDENCE_LEVEL
+from subenv.evaluation.trajectory import Trajectory
 from subenv.extras import require
 from subenv.vehicles.vehicle import Vehicle
 
@@ -77,13 +80,14 @@ def replay_trajectory(
     *,
     vehicle: str | Vehicle = "suboff",
     max_duration_s: float | None = None,
+    env_kwargs: Mapping[str, Any] | None = None,
 ) -> Trajectory:
     """The trajectory of ``result``: its own if kept, else the episode run again from its seed.
 
     Seeded episodes are deterministic, so running ``controller`` (the one that produced ``result``)
-    on the same scenario, seed, vehicle and time limit gives the same episode. The replay is checked
-    against the recorded metrics (outcome and IAE); a mismatch raises ValueError, since a figure of
-    a different episode would mislabel it.
+    on the same scenario, seed, vehicle, time limit and environment settings gives the same episode.
+    The replay is checked against the recorded metrics (outcome and IAE); a mismatch raises ValueError,
+    since a figure of a different episode would mislabel it.
     """
     if result.trajectory is not None:
         return result.trajectory
@@ -98,6 +102,7 @@ def replay_trajectory(
         episode=result.episode,
         vehicle=vehicle,
         max_duration_s=max_duration_s,
+        env_kwargs=env_kwargs,
     )
     if again.metrics.outcome != result.metrics.outcome or not math.isclose(
         again.metrics.iae_m_s, result.metrics.iae_m_s, rel_tol=1e-6, abs_tol=1e-9

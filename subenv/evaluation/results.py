@@ -1,15 +1,20 @@
-"""Result tables: the tidy per-episode table, aggregates with confidence intervals, the leaderboard.
+"""The report stage's tables: the tidy per-episode table, aggregates with confidence intervals and
+scores, the leaderboard.
 
 All tables are lists of flat dicts (one row per observation, one column per variable), written as
-CSV and Markdown. Every file is written atomically, and a results folder is assembled beside its
-place and swapped in (:mod:`subenv.atomic`, whose functions are re-exported here), so a reader
-never sees a half-written file or folder.
+CSV and Markdown, and every one is a function of the per-episode table: :func:`read_results` reads a
+``results.csv`` back, and :func:`summarize` and :func:`leaderboard_markdown` of what it reads are the
+run's ``summary.csv`` and ``leaderboard.md``. Every file is written atomically, and a results folder is
+assembled beside its place and swapped in (:mod:`subenv.atomic`, whose functions are re-exported
+here), so a reader never sees a half-written file or folder.
 """
 
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
+import itertools
 import math
 import os
 from collections.abc import Iterable, Mapping, Sequence
@@ -25,8 +30,29 @@ from subenv.atomic import (
     atomic_write_text,
     check_output_dir,
 )
-from subenv.evaluation.metrics import DEPTH_TOLERANCE_M, HOLD_WINDOW_S, OUTCOMES, EpisodeMetrics
-from subenv.evaluation.rollout import ControllerFailure, EpisodeResult
+from subenv.evaluation.failures import ControllerFailure
+from subenv.evaluation.measure import EpisodeResult
+from subenv.evaluation.metrics import (
+    APPROACH_S,
+    DEPTH_TOLERANCE_M,
+    HOLD_WINDOW_S,
+    OUTCOMES,
+    QUALITY_ACCURACY_WEIGHT,
+    QUALITY_EFFORT_WEIGHT,
+    REGULATION_BAND_M,
+    EpisodeMetrics,
+)
+from subenv.evaluation.score import (
+    POOLED,
+    SCORE_FORMULA,
+    PairedComparison,
+    Score,
+    paired_comparisons,
+    rank_by_score,
+    rank_by_success,
+    scores,
+)
+from subenv.evaluation.stats import CONFIDENCE_LEVEL, mean_interval, median_interval, wilson_interval
 
 __all__ = [
     "CONFIDENCE_LEVEL",
@@ -45,6 +71,7 @@ __all__ = [
     "mean_interval",
     "median_interval",
     "outcome_counts",
+    "read_results",
     "representative_episodes",
     "summarize",
     "summary_markdown",
@@ -52,9 +79,6 @@ __all__ = [
     "wilson_interval",
     "write_csv",
 ]
-
-CONFIDENCE_LEVEL: Final = 0.95
-"""Two-sided level of every confidence interval in the tables."""
 
 RATE_METRICS: Final = OUTCOMES
 """The outcomes, each aggregated as a rate with a Wilson interval.
@@ -71,102 +95,14 @@ CONTINUOUS_METRICS: Final = {
     "plane_rms_rad": (0.0, math.inf),
     "saturated_fraction": (0.0, 1.0),
     "hold_max_abs_error_m": (0.0, math.inf),
+    "regulation_accuracy": (0.0, 1.0),
+    "plane_effort": (0.0, 1.0),
 }
 """Continuous metrics aggregated as a mean with a Student-t interval, and the range each can take.
 
 ``settling_time_s`` is averaged over the episodes that settled (finite values; their number is
 the ``settled`` column), since a never-settling episode has no settling time.
 """
-
-
-# --- confidence intervals -------------------------------------------------------------------
-def wilson_interval(successes: int, n: int, confidence: float = CONFIDENCE_LEVEL) -> tuple[float, float]:
-    """Wilson score interval for a binomial proportion (``scipy.stats.binomtest``).
-
-    Chosen over the normal (Wald) interval because it stays inside [0, 1] and keeps its coverage
-    at rates of 0 or 1 and small n, which is exactly where controllers that always or never
-    succeed put a leaderboard. ``n == 0`` gives (nan, nan).
-
-    References
-    ----------
-    Wilson, E. B. (1927). Probable inference, the law of succession, and statistical inference.
-    JASA 22, 209-212.
-    """
-    if not (isinstance(n, (int, np.integer)) and n >= 0 and 0 <= successes <= n):
-        raise ValueError(f"successes={successes!r}, n={n!r} are invalid: need 0 <= successes <= n")
-    if n == 0:
-        return (math.nan, math.nan)
-    from scipy import stats  # imported on use: importing subenv.evaluation stays light
-
-    ci = stats.binomtest(int(successes), int(n)).proportion_ci(confidence_level=confidence, method="wilson")
-    return (float(ci.low), float(ci.high))
-
-
-def mean_interval(
-    values: Sequence[float] | np.ndarray,
-    confidence: float = CONFIDENCE_LEVEL,
-    support: tuple[float, float] = (-math.inf, math.inf),
-) -> tuple[float, float, float]:
-    """(mean, low, high): the mean and its Student-t confidence interval.
-
-    The t interval assumes a roughly normal sample mean, which the central limit theorem gives
-    with tens of episodes; with a handful it is wide, as it should be. Its bounds are clipped to
-    ``support``, the range the metric can take (the true mean lies inside it, so clipping never
-    excludes it). Fewer than 2 values give nan bounds; values that are all equal give a
-    zero-width interval.
-    """
-    x = np.asarray(values, dtype=float)
-    if x.size == 0:
-        return (math.nan, math.nan, math.nan)
-    mean = float(x.mean())
-    if x.size < 2:
-        return (mean, math.nan, math.nan)
-    from scipy import stats
-
-    sem = float(stats.sem(x))
-    if sem == 0.0 or not math.isfinite(sem):
-        return (mean, mean, mean) if sem == 0.0 else (mean, math.nan, math.nan)
-    low, high = stats.t.interval(confidence, x.size - 1, loc=mean, scale=sem)
-    return (mean, max(float(low), support[0]), min(float(high), support[1]))
-
-
-_BOOTSTRAP_RESAMPLES: Final = 4999
-"""Resamples of :func:`median_interval`: enough that the percentile bounds move by well under the
-interval's own width from one seed to another, few enough for hundreds of intervals per figure."""
-
-_BOOTSTRAP_SEED: Final = 0
-"""Fixed, so the same results give the same intervals (and the same figure) every time."""
-
-
-def median_interval(
-    values: Sequence[float] | np.ndarray, confidence: float = CONFIDENCE_LEVEL
-) -> tuple[float, float, float]:
-    """(median, low, high): the median and its percentile-bootstrap confidence interval
-    (``scipy.stats.bootstrap``, fixed seed).
-
-    For skewed metrics such as the IAE, where one terminated episode (charged its final error until
-    the scheduled end) can outweigh twenty good ones in a mean. Fewer than 2 values give nan
-    bounds; values that are all equal give a zero-width interval.
-    """
-    x = np.asarray(values, dtype=float)
-    if x.size == 0:
-        return (math.nan, math.nan, math.nan)
-    median = float(np.median(x))
-    if x.size < 2:
-        return (median, math.nan, math.nan)
-    if np.all(x == x[0]):
-        return (median, median, median)
-    from scipy import stats
-
-    ci = stats.bootstrap(
-        (x,),
-        np.median,
-        confidence_level=confidence,
-        n_resamples=_BOOTSTRAP_RESAMPLES,
-        method="percentile",
-        rng=np.random.default_rng(_BOOTSTRAP_SEED),
-    ).confidence_interval
-    return (median, float(ci.low), float(ci.high))
 
 
 # --- tables ---------------------------------------------------------------------------------
@@ -199,7 +135,12 @@ def outcome_counts(metrics: Iterable[EpisodeMetrics]) -> dict[str, int]:
     return counts | dict(sorted(others.items()))
 
 
-def summarize(results: Sequence[EpisodeResult], confidence: float = CONFIDENCE_LEVEL) -> list[dict[str, Any]]:
+def summarize(
+    results: Sequence[EpisodeResult],
+    confidence: float = CONFIDENCE_LEVEL,
+    *,
+    score_table: Sequence[Score] | None = None,
+) -> list[dict[str, Any]]:
     """Aggregate per controller x scenario (in the order first seen).
 
     Columns: ``controller``, ``scenario``, ``episodes``; for each outcome (:data:`RATE_METRICS`,
@@ -208,9 +149,17 @@ def summarize(results: Sequence[EpisodeResult], confidence: float = CONFIDENCE_L
     :data:`CONTINUOUS_METRICS` ``<m>_mean``, ``<m>_ci_low``, ``<m>_ci_high`` (Student t);
     ``settled`` (episodes with a finite settling time); where the results say which episodes are
     winnable (:attr:`EpisodeResult.winnable`), ``winnable`` (their number), ``winnable_successes`` and
-    ``winnable_success_rate``, ``winnable_ci_low``, ``winnable_ci_high``.
+    ``winnable_success_rate``, ``winnable_ci_low``, ``winnable_ci_high``; ``safety_events`` (episodes
+    ended by one); and the score's (:class:`~subenv.evaluation.score.Score`, from ``score_table`` if
+    given, as :func:`~subenv.evaluation.score.scores` gives it): ``scored``, ``wins``,
+    ``scored_success_rate``, ``scored_success_ci_low``, ``scored_success_ci_high``, ``quality``,
+    ``quality_ci_low``, ``quality_ci_high``, ``score``, ``score_ci_low``, ``score_ci_high``.
     """
     extra = [o for o in _outcomes(results) if o not in OUTCOMES]
+    by_key = {
+        (x.controller, x.scenario): x
+        for x in (scores(results, confidence) if score_table is None else score_table)
+    }
     rows = []
     for (controller, scenario), group in _groups(results).items():
         row: dict[str, Any] = {"controller": controller, "scenario": scenario, "episodes": len(group)}
@@ -238,8 +187,27 @@ def summarize(results: Sequence[EpisodeResult], confidence: float = CONFIDENCE_L
                 "winnable_ci_low": low,
                 "winnable_ci_high": high,
             }
+        row["safety_events"] = sum(m.safety_event for m in metrics)
+        row |= _score_columns(by_key[(controller, scenario)])
         rows.append(row)
     return rows
+
+
+def _score_columns(score: Score) -> dict[str, Any]:
+    """The score's columns of a summary row."""
+    return {
+        "scored": score.scored,
+        "wins": score.wins,
+        "scored_success_rate": score.success_rate,
+        "scored_success_ci_low": score.success_ci[0],
+        "scored_success_ci_high": score.success_ci[1],
+        "quality": score.quality,
+        "quality_ci_low": score.quality_ci[0],
+        "quality_ci_high": score.quality_ci[1],
+        "score": score.score,
+        "score_ci_low": score.score_ci[0],
+        "score_ci_high": score.score_ci[1],
+    }
 
 
 def _winnable_successes(results: Iterable[EpisodeResult]) -> tuple[int, int]:
@@ -406,24 +374,55 @@ def failures_markdown(failures: Sequence[ControllerFailure]) -> str:
     )
 
 
+def _score_cell(value: float, interval: tuple[float, float]) -> str:
+    if math.isnan(value):
+        return "-"
+    if math.isnan(interval[0]):
+        return f"{value:.1f}"
+    return f"{value:.1f} [{interval[0]:.1f}, {interval[1]:.1f}]"
+
+
+def _p(value: float) -> str:
+    return "-" if math.isnan(value) else f"p = {value:.2g}"
+
+
+SCORE_NOTE: Final = (
+    f"Score: {SCORE_FORMULA}, of the N episodes the score counts (those that can be won), W of them won, "
+    "Q the mean quality of the won ones, q = "
+    f"{QUALITY_ACCURACY_WEIGHT:g} a + {QUALITY_EFFORT_WEIGHT:g} (1 - e^2): a the time fraction within "
+    f"{REGULATION_BAND_M:g} m of the ordered depth from {APPROACH_S:g} s after the order to the end, e the "
+    "RMS plane angle per plane over the limit (DeepMind Control's 4/5 task, 1/5 small control). So "
+    "1000 (W - 1) / N <= S <= 1000 W / N: the score is the success count, with the quality as a "
+    "tie-break worth less than one episode, and a controller that wins more never ranks below one that "
+    "wins fewer; between controllers that win alike, the quality (1000 Q) shows which holds depth more "
+    "tightly with less plane motion."
+)
+"""The leaderboard's caption of the score: the formula and why."""
+
+
 def leaderboard_markdown(
     results: Sequence[EpisodeResult],
     *,
     title: str = "Leaderboard",
     confidence: float = CONFIDENCE_LEVEL,
     failures: Sequence[ControllerFailure] = (),
+    score_table: Sequence[Score] | None = None,
 ) -> str:
-    """Markdown leaderboard: controllers as rows, success rate per scenario with its interval.
+    """Markdown leaderboard: controllers ranked by their score over the suite, with intervals.
 
-    Where the results say which episodes are winnable (:attr:`EpisodeResult.winnable`: a depth-holding
-    trim exists within the limits), the column ``winnable`` is the success over those, and the rows are
-    sorted by it: an episode no controller can win says nothing about a controller. Then by the
-    success rate over all the suite's episodes (pooled), best first, then by name. The last columns
-    break the pooled failures down by outcome (:func:`outcome_counts`, the counts :func:`summarize`
-    gives per scenario).
+    Four tables. (1) The ranking: per controller whether it was told the environment's settings
+    (:attr:`EpisodeResult.informed`), its score over every scored episode of the suite
+    (:class:`~subenv.evaluation.score.Score`, pooled), its success W/N over those with a Wilson interval,
+    its quality 1000 Q, its rank by success beside its rank by score, and its safety events (episodes
+    ended by broaching or the pitch limit). (2) Success over all episodes, over the winnable ones and
+    per scenario, and the failures by outcome (:func:`outcome_counts`, the counts :func:`summarize`
+    gives per scenario). (3) The score per scenario. (4) Paired comparisons of the controllers next to
+    each other in the ranking (:func:`~subenv.evaluation.score.paired_comparisons`: McNemar on success,
+    Wilcoxon on quality). Every interval is at level ``confidence``; ``score_table`` is
+    :func:`~subenv.evaluation.score.scores` of ``results`` if it is already computed.
 
-    A controller with ``failures`` (:class:`~subenv.evaluation.rollout.ControllerFailure`) is not
-    ranked, whatever it completed: its failures are listed below the table (:func:`failures_markdown`).
+    A controller with ``failures`` (:class:`~subenv.evaluation.failures.ControllerFailure`) is not
+    ranked, whatever it completed: its failures are listed below the tables (:func:`failures_markdown`).
     """
     failed = {f.controller for f in failures}
     results = [r for r in results if r.controller not in failed]
@@ -432,18 +431,117 @@ def leaderboard_markdown(
             none = "No controller completed the suite: none is ranked."
             return f"## {title}\n\n{none}\n{failures_markdown(failures)}"
         raise ValueError("results is empty: nothing to rank")
+    table = (
+        scores(results, confidence)
+        if score_table is None
+        else [s for s in score_table if s.controller not in failed]
+    )
+    pooled = {s.controller: s for s in table if s.scenario == POOLED}
+    order = rank_by_score(pooled.values())
+    by_success = rank_by_success(pooled.values())
+    informed = {c: any(r.informed for r in results if r.controller == c) for c in order}
+    safety = {c: sum(r.metrics.safety_event for r in results if r.controller == c) for c in order}
+    header = [
+        "rank",
+        "controller",
+        "informed",
+        "score",
+        "success",
+        "quality",
+        "rank by success",
+        "safety events",
+    ]
+    rows = []
+    for i, c in enumerate(order, start=1):
+        p = pooled[c]
+        success = f"{p.wins}/{p.scored} {_pct(p.success_rate, *p.success_ci)}" if p.scored else "-"
+        rows.append(
+            [
+                str(i),
+                c,
+                "yes" if informed[c] else "no",
+                _score_cell(p.score, p.score_ci),
+                success,
+                _score_cell(p.quality, p.quality_ci),
+                str(by_success[c]),
+                str(safety[c]),
+            ]
+        )
     scenarios = list(dict.fromkeys(r.scenario for r in results))
-    controllers = list(dict.fromkeys(r.controller for r in results))
+    per = {(s.controller, s.scenario): s for s in table}
+    scenario_rows = [
+        [
+            c,
+            *(
+                _score_cell(per[(c, s)].score, per[(c, s)].score_ci) if (c, s) in per else "-"
+                for s in scenarios
+            ),
+        ]
+        for c in order
+    ]
+    first = results[0].controller
+    n_scored = sum(r.counts for r in results if r.controller == first)
+    n_all = sum(r.controller == first for r in results)
+    note = (
+        f"Ranked by the score over the {n_scored} of {n_all} episodes that count (those that can be won; "
+        f"the same seeds for every controller), {100 * confidence:.0f}% intervals: success Wilson, score "
+        "and quality a bootstrap stratified by scenario. 'rank by success': by W / N alone (ties share a "
+        f"rank). 'informed': told the environment's settings (limits, control period). {SCORE_NOTE}"
+    )
+    parts = [
+        f"## {title}\n\n{_markdown_table(header, rows)}\n\n{note}\n",
+        _success_markdown(results, order, confidence),
+        f"### Score per scenario\n\n{_markdown_table(['controller', *scenarios], scenario_rows)}\n",
+    ]
+    if len(order) > 1:
+        adjacent = paired_comparisons(results, list(itertools.pairwise(order)), per_scenario=False)
+        parts.append(_paired_markdown(adjacent))
+    return "\n".join(parts) + failures_markdown(failures)
+
+
+def _paired_markdown(comparisons: Sequence[PairedComparison]) -> str:
+    """The paired comparisons of adjacent controllers as a Markdown section."""
+    header = [
+        "pair",
+        "episodes",
+        "won by one only",
+        "McNemar",
+        "won by both",
+        "higher quality",
+        "median difference",
+        "Wilcoxon",
+    ]
+    rows = [
+        [
+            f"{c.first} vs {c.second}",
+            str(c.episodes),
+            f"{c.first_only} / {c.second_only}",
+            _p(c.mcnemar_p),
+            str(c.both_won),
+            f"{c.first_better} / {c.second_better}",
+            "-" if math.isnan(c.quality_difference) else f"{c.quality_difference:+.1f}",
+            _p(c.wilcoxon_p),
+        ]
+        for c in comparisons
+    ]
+    note = (
+        "Each controller against the next in the ranking, on the episodes both ran that count (the same "
+        "seeds): the episodes only the first / only the second won, with the exact McNemar test of equal "
+        "success; of the episodes both won, where the first's / the second's quality is higher, the median "
+        "of 1000 (q_first - q_second), and the Wilcoxon signed-rank test of equal quality. Every pair, per "
+        "scenario too, is in run.json."
+    )
+    return f"### Paired comparisons\n\n{_markdown_table(header, rows)}\n\n{note}\n"
+
+
+def _success_markdown(results: Sequence[EpisodeResult], order: Sequence[str], confidence: float) -> str:
+    """Success per controller over all episodes, the winnable ones and per scenario, and the failures by
+    outcome, as a Markdown section (rows in ``order``)."""
+    scenarios = list(dict.fromkeys(r.scenario for r in results))
     groups = _groups(results)
-    pooled = {c: [r.metrics for r in results if r.controller == c] for c in controllers}
+    pooled = {c: [r.metrics for r in results if r.controller == c] for c in order}
     judged = all(r.winnable is not None for r in results)
-    winnable = {c: _winnable_successes(r for r in results if r.controller == c) for c in controllers}
-
-    def rank(c: str) -> tuple[float, float, str]:
-        k, n = winnable[c]
-        return (-(k / n) if judged and n else 0.0, -sum(m.success for m in pooled[c]) / len(pooled[c]), c)
-
-    order = sorted(controllers, key=rank)
+    winnable = {c: _winnable_successes(r for r in results if r.controller == c) for c in order}
     failure_outcomes = [o for o in _outcomes(results) if o != "success"]
     rows = []
     for c in order:
@@ -470,22 +568,18 @@ def leaderboard_markdown(
         *scenarios,
         *(o.replace("_", " ") for o in failure_outcomes),
     ]
-    first = controllers[0]
-    n_winnable = sum(1 for r in results if r.controller == first and r.winnable)
-    n_first = sum(1 for r in results if r.controller == first)
-    ranking = (
-        f"Ranked by the success over the winnable episodes ({n_winnable} of {n_first} here: those whose "
-        "loading has a depth-holding trim within the plane and pitch limits at their final speed, with every "
-        "plane pair the vehicle has free; subenv.analysis.winnable), then over all. "
+    winnable_note = (
+        "'winnable': over the episodes whose loading has a depth-holding trim within the plane and pitch "
+        "limits at their final speed, with every plane pair the vehicle has free (subenv.analysis.winnable). "
         if judged
         else ""
     )
     note = (
         f"Success rate with {100 * confidence:.0f}% Wilson intervals, {per} episodes per scenario "
-        f"(the same seeds for every controller). {ranking}Last columns: episodes per failure outcome, all "
-        f"scenarios. {OUTCOME_NOTE}"
+        f"(the same seeds for every controller). {winnable_note}Last columns: episodes per failure outcome, "
+        f"all scenarios. {OUTCOME_NOTE}"
     )
-    return f"## {title}\n\n{_markdown_table(header, rows)}\n\n{note}\n{failures_markdown(failures)}"
+    return f"### Success and failures\n\n{_markdown_table(header, rows)}\n\n{note}\n"
 
 
 _SUMMARY_MEANS: Final = (
@@ -495,6 +589,8 @@ _SUMMARY_MEANS: Final = (
     ("peak pitch [deg]", "peak_pitch_deg"),
     ("plane RMS [rad]", "plane_rms_rad"),
     ("saturated", "saturated_fraction"),
+    ("accuracy", "regulation_accuracy"),
+    ("effort", "plane_effort"),
 )
 
 
@@ -517,9 +613,12 @@ def summary_markdown(summary: Sequence[Mapping[str, Any]], *, title: str = "Per 
         "controller",
         "n",
         *(["winnable: success"] if judged else []),
+        "score",
+        "quality",
         *(o.replace("_", " ") for o in shown),
         *(label for label, _ in _SUMMARY_MEANS),
         "settled",
+        "safety events",
     ]
     scenarios = list(dict.fromkeys(r["scenario"] for r in summary))
     ordered = sorted(summary, key=lambda r: scenarios.index(r["scenario"]))  # stable: controllers keep order
@@ -528,17 +627,22 @@ def summary_markdown(summary: Sequence[Mapping[str, Any]], *, title: str = "Per 
         cells = [r["scenario"], r["controller"], str(r["episodes"])]
         if judged:
             cells.append(f"{r['winnable_successes']}/{r['winnable']}")
+        cells += [_score_cell(r[k], (r[f"{k}_ci_low"], r[f"{k}_ci_high"])) for k in ("score", "quality")]
         cells += [_pct(r[f"{o}_rate"], r[f"{o}_ci_low"], r[f"{o}_ci_high"]) for o in shown]
         cells += [
             _num(r[f"{name}_mean"], r[f"{name}_ci_low"], r[f"{name}_ci_high"]) for _, name in _SUMMARY_MEANS
         ]
-        cells.append(str(r["settled"]))
+        cells += [str(r["settled"]), str(r["safety_events"])]
         rows.append(cells)
     note = (
         "Rates of each outcome with 95% Wilson intervals; means with 95% Student-t intervals. Settling "
         "time averages the episodes that settled (column 'settled'). IAE charges a terminated episode "
         "its final error until the scheduled end. 'winnable: success': successes / episodes among those "
-        f"that have a depth-holding trim within the limits (subenv.analysis.winnable). {OUTCOME_NOTE}"
+        "that have a depth-holding trim within the limits (subenv.analysis.winnable). Score and quality "
+        "(of the episodes that count) with 95% intervals of a bootstrap, as in the leaderboard; accuracy: "
+        f"the time fraction within {REGULATION_BAND_M:g} m from {APPROACH_S:g} s after the order; effort: "
+        "the RMS plane angle per plane over the limit; safety events: episodes ended by broaching or the "
+        f"pitch limit. {OUTCOME_NOTE}"
     )
     return f"## {title}\n\n{_markdown_table(header, rows)}\n\n{note}\n"
 
@@ -565,3 +669,56 @@ def _cell(value: Any) -> Any:
 def write_csv(path: str | os.PathLike[str], rows: Sequence[Mapping[str, Any]]) -> Path:
     """Write a table of flat dicts as CSV, atomically."""
     return atomic_write_text(path, table_csv(rows))
+
+
+def _parse(kind: str, text: str) -> Any:
+    """A cell of the per-episode table as the field's type (``kind``: its annotation) holds it."""
+    if kind == "str":
+        return text
+    if kind == "int":
+        return int(text)
+    if kind == "float":
+        return float(text)  # (repr of a float, 'inf' and 'nan' included: exact)
+    if text == "" and kind.endswith("| None"):
+        return None
+    if text not in ("True", "False"):
+        raise ValueError(f"{text!r} is not a boolean (True or False)")
+    return text == "True"
+
+
+def read_results(path: str | os.PathLike[str]) -> list[EpisodeResult]:
+    """The :class:`~subenv.evaluation.measure.EpisodeResult` objects of a per-episode table
+    (``results.csv``, as :func:`episode_table` and :func:`write_csv` write it), without trajectories.
+
+    Every float round-trips exactly, so the tables of what it returns are those of the run.
+
+    Raises
+    ------
+    ValueError
+        A column an episode's result needs is missing, or a cell is not of its column's type (named,
+        with its line).
+    """
+    metric_fields = {f.name: str(f.type) for f in dataclasses.fields(EpisodeMetrics)}
+    result_fields = {
+        f.name: str(f.type)
+        for f in dataclasses.fields(EpisodeResult)
+        if f.name not in ("metrics", "trajectory")
+    }
+    optional = {f.name for f in dataclasses.fields(EpisodeResult) if f.default is not dataclasses.MISSING}
+    with open(path, newline="") as file:
+        reader = csv.DictReader(file)
+        columns = set(reader.fieldnames or ())
+        missing = [c for c in (*result_fields, *metric_fields) if c not in columns and c not in optional]
+        if missing:
+            raise ValueError(
+                f"{os.fspath(path)!r} lacks the columns {missing}: it is not a results.csv of subenv"
+            )
+        out = []
+        for line, row in enumerate(reader, start=2):
+            try:
+                metrics = EpisodeMetrics(**{k: _parse(kind, row[k]) for k, kind in metric_fields.items()})
+                given = {k: _parse(kind, row[k]) for k, kind in result_fields.items() if k in columns}
+            except ValueError as exc:
+                raise ValueError(f"{os.fspath(path)!r}, line {line}: {exc}") from None
+            out.append(EpisodeResult(**given, metrics=metrics))
+    return out

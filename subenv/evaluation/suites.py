@@ -1,6 +1,8 @@
-"""Named evaluation suites: which scenarios a comparison runs, how many episodes, how long.
+"""Named evaluation suites: which scenarios a comparison runs, how many episodes, how long, and which of
+its episodes the score counts.
 
-A suite is data (a frozen dataclass in a registry), like a scenario. The episodes of a suite are
+A suite is data (a frozen dataclass in a registry), like a scenario; :func:`resolve_suite` is the one
+place a suite's name (or a list of scenario names) becomes a :class:`Suite`. The episodes of a suite are
 fixed by a base seed: episode ``i`` of every scenario is ``reset(seed=base_seed + i)``, for every
 controller, so all controllers meet the same episodes. (This is also how
 ``gym.make_vec(id, num_envs=N).reset(seed=base_seed)`` seeds its sub-environments, so a batched
@@ -10,10 +12,12 @@ run draws the same episodes.)
 from __future__ import annotations
 
 import math
+import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Final
 
-from subenv.scenarios.registry import scenario_names
+from subenv.scenarios.registry import scenario_for_env_id, scenario_names
 
 __all__ = [
     "DEFAULT_SEED",
@@ -22,6 +26,8 @@ __all__ = [
     "check_scenarios",
     "get_suite",
     "register_suite",
+    "resolve_suite",
+    "scenario_of",
     "suite_names",
 ]
 
@@ -49,6 +55,10 @@ class Suite:
     max_duration_s : float or None
         Truncate every episode at this time [s] (the scenario's own duration applies too);
         None runs the scenarios' full lengths.
+    scored_by : str
+        The classifier whose True episodes the score counts (:func:`subenv.evaluation.classify.classify`):
+        ``"winnable"`` (a depth-holding trim exists within the limits), or another registered one (a
+        Hard suite's ``"achievable"``, read from stored certificates).
     """
 
     name: str
@@ -56,6 +66,7 @@ class Suite:
     scenarios: tuple[str, ...]
     episodes: int
     max_duration_s: float | None = None
+    scored_by: str = "winnable"
 
     def __post_init__(self) -> None:
         if not self.name:
@@ -74,6 +85,8 @@ class Suite:
                 f"suite {self.name!r}: max_duration_s={self.max_duration_s!r} must be None or a "
                 "finite number > 0"
             )
+        if not (isinstance(self.scored_by, str) and self.scored_by):
+            raise ValueError(f"suite {self.name!r}: scored_by={self.scored_by!r} must be a classifier's name")
 
 
 _REGISTRY: dict[str, Suite] = {}
@@ -112,6 +125,56 @@ def get_suite(name: str) -> Suite:
         raise ValueError(f"suite={name!r} is unknown: must be one of {suite_names()}") from None
     check_scenarios(suite.scenarios)
     return suite
+
+
+def scenario_of(name: str) -> str:
+    """The scenario name of ``"LowSpeed"`` or ``"subenv/LowSpeed-v0"`` (checked)."""
+    scenario = name
+    if name == "subenv/DivePlane-v0":
+        scenario = "Randomized"
+    elif "/" in name:
+        found = scenario_for_env_id(name)
+        if found is None:
+            parsed = re.fullmatch(r"subenv/(\w+)-v(\d+)", name)
+            if parsed is None:
+                raise ValueError(
+                    f"env id {name!r} is not a subenv id: must be 'subenv/<Scenario>-v<version>'"
+                )
+            base, version = parsed.groups()
+            found = base if version == "0" else f"{base}-v{version}"  # (unknown: check_scenarios says so)
+        scenario = found
+    check_scenarios([scenario])
+    return scenario
+
+
+def resolve_suite(suite: Suite | str | Sequence[str] | None) -> Suite:
+    """A :class:`Suite` from itself, a registered suite name, a scenario name or id, or a list of them
+    (None: :data:`DEFAULT_SUITE`).
+
+    A list of one name is that name (as ``subenv evaluate --suite tiny`` gives it). A name that is both a
+    suite and a scenario is the suite. A list of scenarios is the suite ``"custom"`` (10 episodes, scored
+    by ``winnable``). Raises ValueError naming an unknown name and listing the known suites and
+    scenarios.
+    """
+    if suite is None:
+        suite = DEFAULT_SUITE
+    if isinstance(suite, Suite):
+        check_scenarios(suite.scenarios)
+        return suite
+    if not isinstance(suite, str) and len(suite) == 1:
+        suite = suite[0]  # (one name: a suite's or a scenario's, as a name alone)
+    if isinstance(suite, str):
+        if suite in suite_names():
+            return get_suite(suite)
+        try:
+            suite = [scenario_of(suite)]
+        except ValueError:
+            raise ValueError(
+                f"suite={suite!r} is unknown: must be a suite name (one of {suite_names()}) or a scenario "
+                f"name (one of {scenario_names()})"
+            ) from None
+    names = tuple(scenario_of(s) for s in suite)
+    return Suite(name="custom", description="scenarios chosen by the caller", scenarios=names, episodes=10)
 
 
 register_suite(

@@ -1,4 +1,19 @@
-"""The JAX twin of a compiled scalar function of :mod:`subenv.dynamics` (:func:`traced`)."""
+"""The JAX twin of a compiled scalar function of :mod:`subenv.dynamics` (:func:`traced`), and its contract.
+
+A kernel that :func:`traced` hands to JAX is written for it (``tests/jax/test_contract.py`` checks
+every kernel :mod:`subenv.jax` traces, from the source):
+
+- the globals it names are other kernels, the helpers of :mod:`subenv.dynamics._jit` (``select``,
+  ``minimum``, ``maximum``, ``clip``: kernels themselves, with one defined result on both backends,
+  NaN included), the functions of :mod:`math` in :data:`MATH` and of NumPy in :data:`NUMPY`,
+  ``range`` and ``len``, and module constants (numbers, booleans, strings and tuples of them);
+- ``if``, conditional expressions, ``and``, ``or``, ``not``, chained comparisons, ``while`` and the
+  bounds of ``range`` (its only loops) depend on static values only: literals, module constants,
+  the kernel's parameters annotated :data:`~subenv.dynamics._jit.Static` (which its JAX callers pass as
+  Python values: the configuration record, a count of columns), array shapes, and local names given
+  only such values. Everything else is a traced array, so a condition on it is written as a
+  ``select``.
+"""
 
 from __future__ import annotations
 
@@ -10,16 +25,18 @@ from typing import Any, Final
 import jax.numpy as jnp
 import numpy as np
 
+from subenv import _validation as check
 from subenv.dynamics import free_surface as surface
 from subenv.dynamics._jit import select
 
-__all__ = ["traced"]
+__all__ = ["MATH", "NUMPY", "replacement", "traced"]
 
-_MATH: Final = types.SimpleNamespace(
+MATH: Final = types.SimpleNamespace(
     sin=jnp.sin,
     cos=jnp.cos,
     exp=jnp.exp,
     sqrt=jnp.sqrt,
+    fabs=jnp.fabs,
     isfinite=jnp.isfinite,
     isnan=jnp.isnan,
     floor=jnp.floor,
@@ -27,15 +44,10 @@ _MATH: Final = types.SimpleNamespace(
     inf=math.inf,
     pi=math.pi,
 )
-"""What the physics takes from :mod:`math`, on JAX."""
-_NAMES: Final[dict[str, Any]] = {
-    "math": _MATH,
-    "np": jnp,
-    "min": jnp.minimum,
-    "max": jnp.maximum,
-    "abs": jnp.abs,
-}
-"""Names re-bound in a twin's globals: the modules and the builtins the physics calls."""
+"""What a traced kernel may take from :mod:`math`, on JAX (IEEE functions: the same results for NaN,
+infinities and signed zeros as numba's)."""
+NUMPY: Final = types.SimpleNamespace(rint=jnp.rint, floor=jnp.floor)
+"""What a traced kernel may take from NumPy (``np``), on JAX."""
 _twins: dict[tuple[Callable[..., Any], bool], Callable[..., Any]] = {}
 
 
@@ -108,9 +120,11 @@ def _no_suction(
     suction_model: Any,
     hull: Any,
     first_row: int,
-) -> tuple[float, float]:
-    """:func:`subenv.dynamics.free_surface.suction_point` in deep water (``rho_suction`` 0)."""
-    return 0.0, 0.0
+) -> tuple[Any, Any]:
+    """:func:`subenv.dynamics.free_surface.suction_point` in deep water: 0 where ``rho_suction`` is 0,
+    NaN where it is not (a loading with a free surface traced without it: never a wrong number)."""
+    value = jnp.where(rho_suction == 0.0, 0.0, math.nan)
+    return value, value
 
 
 _SAME_AS: Final[dict[bool, dict[Any, Any]]] = {
@@ -119,30 +133,33 @@ _SAME_AS: Final[dict[bool, dict[Any, Any]]] = {
 }
 
 
+def replacement(kernel: Callable[..., Any], free_surface: bool = True) -> Callable[..., Any] | None:
+    """The JAX function :func:`traced` puts in place of ``kernel`` instead of tracing its code (``select``:
+    ``jax.numpy.where``; the free surface's suction: its sum over arrays), or None: its code is traced."""
+    return _SAME_AS[_static_bool("free_surface", free_surface)].get(kernel)
+
+
 def traced(kernel: Callable[..., Any], free_surface: bool = True) -> Callable[..., Any]:
     """The function compiled as ``kernel`` (a numba kernel of :mod:`subenv.dynamics`), for JAX.
 
     It is the kernel's own Python code (``kernel.py_func.__code__``), run with its module's globals
-    but for these names: ``math`` and ``np`` (NumPy) stand for :mod:`jax.numpy`; ``min``, ``max`` and
-    ``abs`` for their elementwise forms; every kernel it calls for that kernel's twin, and
-    :func:`~subenv.dynamics._jit.select` for ``jax.numpy.where``. So the equations exist once; what
-    runs under JAX is the same source, traced. The function takes and returns scalars (JAX arrays of
-    shape ()): batch it with ``jax.vmap`` or ``jax.numpy.vectorize``.
+    but for these names: ``math`` and ``np`` stand for :data:`MATH` and :data:`NUMPY`, every kernel it
+    calls for that kernel's twin, and :func:`~subenv.dynamics._jit.select` for ``jax.numpy.where``
+    (:func:`replacement`). So the equations exist once; what runs under JAX is the same source,
+    traced. The function takes and returns scalars (JAX arrays of shape ()), its static parameters
+    (the module's docstring) Python values: batch it with ``jax.vmap`` or ``jax.numpy.vectorize``.
 
-    Only for functions written for it: straight-line arithmetic, loops over static ranges (array
-    shapes), conditions as :func:`~subenv.dynamics._jit.select` calls.
-
-    ``free_surface=False`` gives the twin for deep water only: the free surface's suction is left
-    out, not computed (the compiled code skips it where ``rho_suction`` is 0, a branch on a number;
-    JAX would compute it for every state: in deep water that made a control period seven times
-    slower, ``benchmarks/jax_dynamics.py``).
+    ``free_surface`` (a bool, static): False gives the twin for deep water only, the free surface's
+    suction left out, not computed (the compiled code skips it where ``rho_suction`` is 0, a branch
+    on a number; JAX would compute it for every state: in deep water that made a control period seven
+    times slower, ``benchmarks/jax_dynamics.py``); a loading with a free surface then gets NaN.
     """
-    same_as = _SAME_AS[bool(free_surface)]
-    target = same_as.get(kernel, kernel)
+    free_surface = _static_bool("free_surface", free_surface)
+    target = replacement(kernel, free_surface) or kernel
     if not hasattr(target, "py_func"):  # (already a JAX function)
         return target
     function = target.py_func
-    key = (function, bool(free_surface))
+    key = (function, free_surface)
     if key not in _twins:
         namespace = dict(function.__globals__)
         twin = types.FunctionType(
@@ -150,9 +167,15 @@ def traced(kernel: Callable[..., Any], free_surface: bool = True) -> Callable[..
         )
         twin.__doc__, twin.__qualname__ = function.__doc__, function.__qualname__
         _twins[key] = twin  # (before its callees: a kernel may be reached twice)
-        namespace.update(_NAMES)
+        namespace.update(math=MATH, np=NUMPY)
         for name in function.__code__.co_names:
             value = namespace.get(name)
             if value is not None and hasattr(value, "py_func"):  # a kernel
                 namespace[name] = traced(value, free_surface)
     return _twins[key]
+
+
+def _static_bool(name: str, value: Any) -> bool:
+    """``value``, a Python or NumPy bool (a static argument: part of the traced program), as Python's."""
+    check.require(name, value, isinstance(value, bool | np.bool_), "True or False")
+    return bool(value)

@@ -4,9 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-import jax
 import jax.numpy as jnp
-import numpy as np
 
 from subenv.dynamics import integrate, model
 from subenv.dynamics.waves import wave_force_point
@@ -28,7 +26,7 @@ def derivatives(
     hull: Any,
     force: Any = 0.0,
     moment: Any = 0.0,
-    free_surface: bool | None = None,
+    free_surface: bool = True,
 ) -> Any:
     """d/dt (theta, w, q, Z), shape ``state.shape``: :func:`subenv.dynamics.derivatives` on JAX.
 
@@ -44,13 +42,15 @@ def derivatives(
         :func:`subenv.dynamics.model_params`): one, or one per state.
     hull : array
         The vehicle's hull table, :attr:`subenv.dynamics.HullTable.packed` (one for the batch).
-    free_surface : bool, optional
-        Whether any loading has a free surface (``rho_suction`` > 0): False leaves its suction out of
-        the trace (:func:`~subenv.jax.traced`). By default, found from ``prm`` where it is an array
-        of numbers; under ``jax.jit``, where ``prm`` is traced, True.
+    free_surface : bool
+        Static (part of the traced program: under ``jax.jit``, a Python bool, in
+        ``static_argnames``). True computes the free surface's suction for every state, zero where
+        a loading has none (``rho_suction`` 0); False leaves it out of the trace
+        (:func:`~subenv.jax.traced`), several times faster in deep water, and gives NaN for any
+        loading that has one.
     """
     hull = jnp.asarray(hull)
-    rhs = traced(model.rhs_point, _free_surface(prm, free_surface))
+    rhs = traced(model.rhs_point, free_surface)
 
     def one(x: Any, u: Any, s: Any, b: Any, f: Any, m: Any, p: Any) -> Any:
         return jnp.stack(rhs(x[0], x[1], x[2], x[3], u, s, b, f, m, p, hull))
@@ -72,7 +72,7 @@ def control_period(
     hull: Any,
     force: Any = 0.0,
     substeps: int = integrate.SUBSTEPS,
-    free_surface: bool | None = None,
+    free_surface: bool = True,
     waves: Any = None,
     distance0: Any = 0.0,
 ) -> Any:
@@ -86,10 +86,9 @@ def control_period(
     (:func:`~subenv.dynamics.waves.wave_force_point`, all MAX_WAVES columns: the unused ones are zero)
     acts at every stage, at the stage's time, depth and distance travelled
     (:func:`~subenv.dynamics.integrate.distance_travelled` from ``distance0`` [m] at ``t0``), as in
-    the environments. (Whether the suction is computed depends on the loadings alone, as in
-    :func:`derivatives`: a sea in deep water has none.)
+    the environments. (``free_surface`` is :func:`derivatives`'s: the suction depends on the loadings
+    alone; a sea in deep water has none.)
     """
-    free_surface = _free_surface(prm, free_surface)
     wave_force = _wave_force(waves)
 
     def rhs(t: Any, x: Any) -> Any:
@@ -100,8 +99,8 @@ def control_period(
         heave, pitch = wave_force(t, distance, x[..., 3], speed, waves)
         return derivatives(x, speed, stern, bow, prm, hull, force + heave, pitch, free_surface=free_surface)
 
-    # (the reference's own RK4, typed for NumPy arrays, run on JAX's: the same arithmetic)
-    return integrate.rk4(rhs, t0, jnp.asarray(state), dt, substeps)  # type: ignore[arg-type]
+    x0: Any = jnp.asarray(state)  # (rk4 is NumPy's and JAX's alike)
+    return integrate.rk4(rhs, t0, x0, dt, substeps)
 
 
 def _wave_force(waves: Any) -> Any:
@@ -122,19 +121,3 @@ def _wave_force(waves: Any) -> Any:
         return both[..., 0], both[..., 1]
 
     return force
-
-
-def _free_surface(prm: Any, free_surface: bool | None) -> bool:
-    """Whether the loadings ``prm`` need the free surface's suction (see :func:`derivatives`)."""
-    if isinstance(prm, jax.core.Tracer):
-        return True if free_surface is None else bool(free_surface)
-    rho_suction = np.asarray(prm)[..., model.PARAM_FIELDS.index("rho_suction")]
-    present = bool(np.any(rho_suction != 0.0))
-    if free_surface is None:
-        return present
-    if present and not free_surface:
-        raise ValueError(
-            f"free_surface={free_surface!r} is invalid for these loadings: {np.count_nonzero(rho_suction)} "
-            "of them have a free surface (rho_suction > 0); pass True or None"
-        )
-    return bool(free_surface)

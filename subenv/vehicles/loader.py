@@ -268,7 +268,7 @@ def vehicle_to_toml(vehicle: Vehicle, header: str = "") -> str:
     ----------
     vehicle : Vehicle
     header : str
-        Comment lines for the top of the file (each line gets a ``# ``): where the numbers come from.
+        Comment lines for the top of the file (each starts with ``#``): where the numbers come from.
     """
 
     def number(value: float) -> str:

@@ -6,23 +6,23 @@ Two geometrically similar boats, one ``length_ratio`` = lambda times the other, 
 density under the same gravity, move alike when their Froude numbers u / sqrt(g L) are equal; then
 every quantity of dimension L^a T^b M^c scales with a fixed power of lambda:
 
-==========================  ==========  ===============================================================
-quantity                    factor      why
-==========================  ==========  ===============================================================
-length, position, depth     lambda      geometric similarity (L, x_G, z_G, x_B, z_B, hull stations and
-                                        breadths, so z_GB and x_GB too)
-area                        lambda^2    geometric similarity (hull planform area A)
-volume, mass, force         lambda^3    W and B are rho g V with rho, g unchanged; m = W / g
-moment                      lambda^4    force x length (restoring moment z_GB W)
-moment of inertia           lambda^5    mass x length^2 (I_y)
-speed                       lambda^1/2  equal Froude number u / sqrt(g L) (so u_cr scales this way)
-time                        lambda^1/2  length / speed
-rate, eigenvalue            lambda^-1/2 1 / time (q, closed- and open-loop eigenvalues)
-water density, gravity      1           the same fluid and planet: the premise of Froude similarity
-non-dimensional derivatives 1           SNAME primes (Z'_w, M'_q, Z'_delta ...) depend on shape only
-plane angles, limit         1           angles
-cross-flow drag C_D         1           a coefficient of the shape
-==========================  ==========  ===============================================================
+===========================  ===========  ==============================================================
+quantity                     factor       why
+===========================  ===========  ==============================================================
+length, position, depth      lambda       geometric similarity (L, x_G, z_G, x_B, z_B, hull stations and
+                                          breadths, so z_GB and x_GB too)
+area                         lambda^2     geometric similarity (hull planform area A)
+volume, mass, force          lambda^3     W and B are rho g V with rho, g unchanged; m = W / g
+moment                       lambda^4     force x length (restoring moment z_GB W)
+moment of inertia            lambda^5     mass x length^2 (I_y)
+speed                        lambda^1/2   equal Froude number u / sqrt(g L) (so u_cr scales this way)
+time                         lambda^1/2   length / speed
+rate, eigenvalue             lambda^-1/2  1 / time (q, closed- and open-loop eigenvalues)
+water density, gravity       1            the same fluid and planet: the premise of Froude similarity
+non-dimensional derivatives  1            SNAME primes (Z'_w, M'_q, Z'_delta ...) depend on shape only
+plane angles, limit          1            angles
+cross-flow drag C_D          1            a coefficient of the shape
+===========================  ===========  ==============================================================
 
 The dimensional derivatives follow from the primes with rho/2 L^n (Riedel 1993 Appendix A), so they
 scale on their own: Z_w ~ lambda^2, Z_wdot ~ lambda^3, M_qdot ~ lambda^5 and so on, consistent with

@@ -4,9 +4,14 @@ and its policy is a controller of subenv.evaluation, the shipped one included.""
 from __future__ import annotations
 
 import json
+import shutil
+import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 pytest.importorskip("optax")  # the jax-rl extra (in dev)
 
@@ -19,7 +24,10 @@ from subenv_agents import jax_ppo
 from subenv_agents.jax_ppo import (
     JaxPPOController,
     PPOConfig,
+    Rollout,
     RunningStats,
+    advantages,
+    init_network,
     load,
     make_train,
     policy_mean,
@@ -58,7 +66,7 @@ def test_training_runs_as_one_program_and_reports_every_update(trained):
     first = jax_ppo.init_network(jax.random.split(jax.random.key(0), 3)[1], 8, 2, TINY.hidden)
     assert any(
         not np.array_equal(np.asarray(a), np.asarray(b))  # (the updates changed the network)
-        for a, b in zip(jax.tree_util.tree_leaves(first), leaves)
+        for a, b in zip(jax.tree_util.tree_leaves(first), leaves, strict=True)
     )
     # The observation statistics are those of everything observed: the resets, then every step.
     assert float(state.obs_stats.count) == pytest.approx(32 * (1 + 2 * 16), rel=1e-6)
@@ -70,7 +78,9 @@ def test_a_saved_model_loads_and_acts_as_the_policy_mean(trained, tmp_path):
     folder = save(tmp_path / "model", TINY, state.network, state.obs_stats, {"env_steps": 1024})
     config, network, _ = load(folder)
     assert config == TINY
-    for a, b in zip(jax.tree_util.tree_leaves(network), jax.tree_util.tree_leaves(state.network)):
+    for a, b in zip(
+        jax.tree_util.tree_leaves(network), jax.tree_util.tree_leaves(state.network), strict=True
+    ):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
     controller = JaxPPOController(folder)
     assert (controller.name, controller.control, controller.alpha) == ("model", "independent", 0.0)
@@ -109,6 +119,11 @@ def test_save_never_replaces_what_it_did_not_write(trained, tmp_path):
         ({"env_id": "CartPole-v1"}, "env_id"),
         ({"env_kwargs": {"control": "sideways"}}, "control"),
         ({"env_kwargs": {"colour": "red"}}, "env_kwargs"),
+        ({"env_kwargs": ["control"]}, "env_kwargs"),
+        ({"hidden": (16, True)}, "hidden"),
+        ({"hidden": 16}, "hidden"),
+        ({"anneal_lr": "yes"}, "anneal_lr"),
+        ({"env_id": ["subenv/Nominal-v0"]}, "env_id"),
     ],
 )
 def test_bad_settings_are_refused_by_name(change, match):
@@ -159,3 +174,195 @@ def test_a_model_trained_on_other_dynamics_is_refused_as_a_controller(trained):
     config = PPOConfig(**{**TINY.__dict__, "env_kwargs": {"control": "independent", "max_pitch_rad": 0.3}})
     with pytest.raises(ValueError, match=r"env_kwargs \['max_pitch_rad'\]"):
         JaxPPOController.of(config, state.network, state.obs_stats, "other")
+
+
+def test_a_truncated_episode_bootstraps_from_its_final_observations_value():
+    """Three steps of one environment: the first goes on, the second is truncated (the third is a new
+    episode's), the third terminated. Each bootstraps from where it led: the next step's value, the
+    final observation's value (gymnax 1.0's info["final_observation"]; before, the value of the state
+    the truncated step started from), nothing."""
+    column = lambda *values: jnp.asarray(values, dtype=jnp.float32)[:, None]  # noqa: E731 (a table's column)
+    rollout = Rollout(
+        obs=jnp.zeros((3, 1, 8)),
+        action=jnp.zeros((3, 1, 2)),
+        log_prob=column(0.0, 0.0, 0.0),
+        value=column(1.0, 2.0, 3.0),
+        reward=column(0.5, 0.25, 0.125),
+        terminated=jnp.asarray([[False], [False], [True]]),
+        done=jnp.asarray([[False], [True], [True]]),
+        final_value=column(9.0, 7.0, 5.0),
+    )
+    gamma, lam = 0.9, 0.8
+    adv, target = advantages(rollout, jnp.asarray([4.0], dtype=jnp.float32), gamma, lam)
+    third = 0.125 - 3.0
+    second = 0.25 + gamma * 7.0 - 2.0  # (the next episode's advantage does not run on into it)
+    first = 0.5 + gamma * 2.0 - 1.0 + gamma * lam * second
+    np.testing.assert_allclose(np.asarray(adv)[:, 0], [first, second, third], rtol=1e-6)
+    np.testing.assert_allclose(np.asarray(target)[:, 0], [first + 1.0, second + 2.0, third + 3.0], rtol=1e-6)
+
+
+# --- damaged model folders --------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def model_folder(tmp_path_factory):
+    """A model folder of TINY's network (not trained: what load reads is the same)."""
+    network = init_network(jax.random.key(0), 8, 2, TINY.hidden)
+    stats = RunningStats.empty((8,)).update(jnp.asarray(np.random.default_rng(0).normal(size=(64, 8))))
+    return save(tmp_path_factory.mktemp("models") / "tiny", TINY, network, stats, {"env_steps": 0})
+
+
+def _arrays(folder):
+    with np.load(folder / "network.npz") as data:
+        return {name: data[name] for name in data.files}
+
+
+def _damage(folder, kind, *args):
+    """Change one file of a model folder: ``kind`` is "truncate" (file, fraction kept), "flip" (file,
+    position as a fraction, xor mask), "array" (name, new array) or "setting" (name, new JSON value)."""
+    if kind in ("truncate", "flip"):
+        path = folder / args[0]
+        data = bytearray(path.read_bytes())
+        if not data:
+            return
+        at = min(int(args[1] * len(data)), len(data) - 1)
+        path.write_bytes(
+            bytes(data[:at])
+            if kind == "truncate"
+            else bytes(data[:at] + bytes([data[at] ^ args[2]]) + data[at + 1 :])
+        )
+    elif kind == "array":
+        arrays = _arrays(folder)
+        arrays[args[0]] = args[1]
+        np.savez(folder / "network.npz", **arrays)
+    elif kind == "setting":
+        settings_ = json.loads((folder / "config.json").read_text())
+        settings_[args[0]] = args[1]
+        (folder / "config.json").write_text(json.dumps(settings_))
+
+
+DAMAGE = {
+    "truncated network.npz": (
+        ("truncate", "network.npz", 0.5),
+        r"network\.npz does not read as np.savez's arrays",
+    ),
+    "truncated config.json": (("truncate", "config.json", 0.5), r"config\.json is not a JSON file"),
+    "truncated train.json": (("truncate", "train.json", 0.5), r"train\.json is not a JSON file"),
+    "a layer more": (
+        ("setting", "hidden", [16, 16, 16]),
+        r"network\.npz does not hold the network config\.json describes: hidden=\[16, 16, 16\], 2 action "
+        r"components: it lacks \['actor/3/b', 'actor/3/w', 'critic/3/b', 'critic/3/w'\]",
+    ),
+    "a weight's shape": (
+        ("array", "actor/1/w", np.zeros((16, 15), np.float32)),
+        r"network\.npz: actor/1/w has shape \(16, 15\): must have shape \(16, 16\)",
+    ),
+    "another control": (
+        ("setting", "env_kwargs", {}),
+        r"network\.npz: log_std has shape \(2,\): must have shape \(1,\)",
+    ),
+    "a zero variance": (
+        ("array", "obs_var", np.r_[np.ones(7), 0.0]),
+        r"network\.npz: obs_var=\[1\.0, .*, 0\.0\] is invalid: must be > 0",
+    ),
+    "an infinite mean": (
+        ("array", "obs_mean", np.r_[np.inf, np.zeros(7)]),
+        r"network\.npz: obs_mean has 1 NaN or infinite",
+    ),
+    "NaN weights": (
+        ("array", "critic/2/w", np.full((16, 1), np.nan, np.float32)),
+        r"network\.npz: critic/2/w has 16 NaN or infinite",
+    ),
+    "weights beyond float32": (
+        ("array", "actor/0/w", np.full((8, 16), 1e300)),
+        r"network\.npz: actor/0/w has 128 NaN or infinite values \(as float32\)",
+    ),
+    "weights that overflow": (
+        ("array", "actor/1/w", np.full((16, 16), 3e37, np.float32)),
+        r"network\.npz: actor/1/w and actor/1/b are invalid: .* beyond float32's range",
+    ),
+    "integer weights": (
+        ("array", "log_std", np.zeros(2, np.int64)),
+        r"network\.npz: log_std has dtype int64: must be floating point",
+    ),
+    "an unknown setting": (
+        ("setting", "colour", "red"),
+        r"config\.json is invalid: unknown settings \['colour'\]",
+    ),
+    "a setting PPOConfig refuses": (
+        ("setting", "gamma", "high"),
+        r"config\.json is invalid: gamma='high' is invalid",
+    ),
+}
+
+
+@pytest.mark.parametrize("name", list(DAMAGE))
+def test_a_damaged_model_folder_is_refused_naming_the_file_and_field(model_folder, tmp_path, name):
+    """Issue 34: a truncated network.npz gave BadZipFile without the file's name, a truncated config.json
+    a bare JSONDecodeError, hidden=[64, 64, 64] a KeyError; wrong shapes loaded and failed in dot_general,
+    obs_var=0 and obs_mean=inf loaded and ran, NaN weights failed late."""
+    folder = Path(shutil.copytree(model_folder, tmp_path / "model"))
+    damage, match = DAMAGE[name]
+    _damage(folder, *damage)
+    with pytest.raises(ValueError, match=match):
+        load(folder)
+    with pytest.raises(ValueError, match=match):
+        JaxPPOController(folder)
+
+
+def test_the_shipped_model_loads_as_it_was_saved():
+    config, network, stats = load(jax_ppo.shipped_folder())
+    arrays = _arrays(jax_ppo.shipped_folder())
+    np.testing.assert_array_equal(np.asarray(network["actor"][0]["w"]), arrays["actor/0/w"])
+    np.testing.assert_array_equal(np.asarray(stats.var), arrays["obs_var"])
+    assert network["actor"][0]["w"].dtype == jnp.float32 and stats.mean.dtype == jnp.float64
+
+
+def _filled(shape, dtype, value):
+    """An array of ``shape`` and ``dtype`` filled with ``value`` (cast as NumPy casts, overflow and all)."""
+    with np.errstate(all="ignore"):
+        return np.full(shape, value).astype(dtype)
+
+
+_ARRAY_NAMES = ["actor/0/w", "actor/2/b", "critic/1/w", "log_std", "obs_mean", "obs_var"]
+_JSON = st.recursive(
+    st.none() | st.booleans() | st.integers() | st.floats() | st.text(max_size=8),
+    lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=8), inner, max_size=3),
+    max_leaves=6,
+)
+_CORRUPTIONS = st.one_of(
+    st.tuples(st.just("truncate"), st.sampled_from(jax_ppo._FILES), st.floats(0.0, 1.0)),
+    st.tuples(st.just("flip"), st.sampled_from(jax_ppo._FILES), st.floats(0.0, 1.0), st.integers(1, 255)),
+    st.tuples(
+        st.just("array"),
+        st.sampled_from(_ARRAY_NAMES),
+        st.builds(
+            _filled,
+            st.sampled_from([(), (2,), (8,), (16,), (8, 16), (16, 2), (16, 16)]),
+            st.sampled_from([np.float16, np.float32, np.float64, np.int32, np.bool_]),
+            st.floats(allow_nan=True, allow_infinity=True),
+        ),
+    ),
+    st.tuples(st.just("setting"), st.sampled_from([*TINY.__dict__, "colour"]), _JSON),
+)
+
+
+@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(corruptions=st.lists(_CORRUPTIONS, min_size=1, max_size=2))
+def test_any_damage_is_refused_naming_the_file_or_loads_a_model_with_finite_actions(
+    model_folder, corruptions
+):
+    with tempfile.TemporaryDirectory() as scratch, np.errstate(all="ignore"):
+        folder = Path(shutil.copytree(model_folder, Path(scratch) / "model"))
+        # (arrays and settings first, while the files read; then their bytes)
+        for corruption in sorted(corruptions, key=lambda c: c[0] in ("truncate", "flip")):
+            _damage(folder, *corruption)
+        try:
+            config, network, stats = load(folder)
+        except ValueError as refused:
+            assert any(name in str(refused) for name in jax_ppo._FILES), refused
+            return
+    high = np.finfo(np.float32).max
+    obs = np.stack([np.zeros(8), np.full(8, high), np.full(8, -high), np.linspace(-50, 50, 8)]).astype(
+        np.float32
+    )
+    mean = np.asarray(policy_mean(network, jnp.asarray(obs), stats))
+    assert mean.shape == (4, config.n_actions) and np.all(np.isfinite(mean))

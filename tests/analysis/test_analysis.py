@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -27,7 +28,7 @@ from subenv.analysis.design import (
     thesis_gain,
 )
 from subenv.analysis.equilibria import equilibria, steady_state_residual, symmetric_pitchfork
-from subenv.analysis.report import critical_speed_three_ways, reproduce_numbers, write_report
+from subenv.analysis.report import REPORT_FILE, critical_speed_three_ways, reproduce_numbers, write_findings
 from subenv.analysis.reversal import level_flight_trim
 from subenv.dynamics import derivatives, model_params
 
@@ -240,16 +241,23 @@ def test_curriculum_stages_are_placed_by_the_critical_speed(suboff):
 
 
 def test_report_is_written_completely_and_not_over_an_existing_folder(analysis_report, suboff):
-    # write_report(folder, SUBOFF) into a folder that did not exist, once per session (tests/conftest.py).
+    # write_findings(folder, SUBOFF) into a folder that did not exist, once per session (tests/conftest.py).
     out = analysis_report.folder
-    assert f"report written to {out}/report.md" in analysis_report.printed  # the folder write_report returned
-    text = (out / "report.md").read_text()
-    assert "| u_cr, eq. 3.9 closed form | 1.8979 | 1.8979 |" in text
-    assert len(list(out.glob("*.png"))) == 16  # the thesis's 14, the Hopf figure and the free surface's
-    assert "## Beyond the thesis: the Hopf bifurcation at speed" in text and "supercritical" in text
-    assert "## Beyond the thesis: level flight near the free surface" in text
+    assert f"findings written to {out / REPORT_FILE}" in analysis_report.printed
+    found = json.loads((out / REPORT_FILE).read_text())
+    row = next(r for r in found["published"] if r["quantity"] == "u_cr, eq. 3.9 closed form")
+    assert (
+        row["thesis"] == 1.8979
+        and row["computed"] == pytest.approx(1.8979, abs=1e-4)
+        and row["unit"] == "fps"
+    )
+    assert row["difference"] == pytest.approx(row["computed"] - row["thesis"])
+    assert found["vehicle"] == "suboff" and found["suboff_shape"] and found["numbers"] == []
+    assert found["hopf"]["point"]["criticality"] == "supercritical"
+    assert found["hopf"]["point"]["speed_mps"] == analysis_report.hopf.point.speed_mps  # the one computed
+    assert set(found["surface"]["held"]) == {"0", "1"}  # stern planes alone; both pairs
     with pytest.raises(FileExistsError, match="exists: choose another output folder or pass overwrite=True"):
-        write_report(out, suboff)
+        write_findings(out, suboff)
     assert [p.name for p in out.parent.iterdir()] == ["report"]  # no temporary folder left behind
 
 

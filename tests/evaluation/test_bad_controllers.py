@@ -293,7 +293,7 @@ def _csv(path: Path) -> list[dict[str, str]]:
 
 def _ranked(board: str) -> list[str]:
     table = board.split("\n\n")[1]
-    return [line.split("|")[1].strip() for line in table.splitlines()[2:]]
+    return [line.split("|")[2].strip() for line in table.splitlines()[2:]]
 
 
 def test_subenv_evaluate_writes_the_others_results_and_reports_each_failure(

@@ -243,7 +243,8 @@ def test_comparison_end_to_end_on_the_tiny_suite(tmp_path: Path, capsys):
 
     board = (out / "leaderboard.md").read_text()
     assert board == comparison.leaderboard
-    ranked = [line.split("|")[1].strip() for line in board.splitlines() if line.startswith("| ")][1:]
+    table = board.split("\n\n")[1]  # the ranking
+    ranked = [line.split("|")[2].strip() for line in table.splitlines()[2:]]
     assert ranked == ["thesis_fsf", "zero"]  # 2 of 4 against fewer
     assert "| Nominal | LowSpeed |" in board
     assert len(list(csv.DictReader((out / "summary.csv").open()))) == 4

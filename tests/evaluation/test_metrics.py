@@ -8,20 +8,24 @@ import numpy as np
 import pytest
 
 from subenv.evaluation.metrics import (
+    APPROACH_S,
     DEPTH_TOLERANCE_M,
     HOLD_WINDOW_S,
     NON_LEVEL_PITCH_RAD,
     OUTCOMES,
+    REGULATION_BAND_M,
     STEADY_PITCH_RATE_RADPS,
     episode_metrics,
+    episode_quality,
     episode_success,
+    regulation_window,
 )
 
 LIMIT = 0.4  # rad
 DT = 0.5  # s, the environments' control period
 
 
-def _metrics(t, e, *, pitch=None, rate=None, stern=None, bow=None, reason="", duration=None):
+def _metrics(t, e, *, pitch=None, rate=None, stern=None, bow=None, reason="", duration=None, **kwargs):
     n = len(t)
     zeros = np.zeros(n)
     return episode_metrics(
@@ -34,6 +38,7 @@ def _metrics(t, e, *, pitch=None, rate=None, stern=None, bow=None, reason="", du
         termination_reason=reason,
         plane_limit_rad=LIMIT,
         episode_duration_s=duration,
+        **kwargs,
     )
 
 
@@ -304,3 +309,86 @@ def test_a_froude_scaled_episode_is_judged_as_the_models(case) -> None:  # type:
             plane_limit_rad=LIMIT,
         )
         assert unscaled.outcome == "steady_offset"
+
+
+def test_regulation_accuracy_is_the_time_in_the_band_after_the_approach():
+    """300 s, 1 m off until 100 s, then 5 cm off: the window is the steps starting at 60 s or later (240 s),
+    each in the band when the sample that ends it is: the steps ending at 100 s to 300 s, 200.5 s."""
+    t = _time(300.0)
+    e = np.where(t < 100.0, 1.0, 0.5 * REGULATION_BAND_M)
+    assert APPROACH_S == 60.0
+    assert _metrics(t, e).regulation_accuracy == pytest.approx(200.5 / 240.0)
+    assert _metrics(t, np.full_like(t, REGULATION_BAND_M)).regulation_accuracy == 1.0  # the band is inclusive
+    assert _metrics(t, np.where(t < 59.0, 2.0, 0.0)).regulation_accuracy == 1.0  # the approach is free
+    assert _metrics(t, np.full_like(t, 0.11)).regulation_accuracy == 0.0
+
+
+def test_a_terminated_episode_is_charged_its_missing_time_outside_the_band():
+    t = _time(150.0)
+    m = _metrics(t, np.zeros_like(t), reason="broached", duration=300.0)
+    assert m.regulation_accuracy == pytest.approx(90.0 / 240.0)  # 90 s held of a 240 s window
+    assert _metrics(t, np.zeros_like(t), reason="broached").regulation_accuracy == 1.0  # no schedule given
+    short = _time(50.0)  # ended before the window opened
+    assert _metrics(short, np.zeros_like(short), reason="broached", duration=300.0).regulation_accuracy == 0.0
+    assert _metrics(short, np.zeros_like(short)).regulation_accuracy == 0.0  # no window at all
+
+
+def test_the_regulation_window_restarts_at_each_new_depth_order():
+    t = _time(300.0)
+    start = t[:-1]
+    once = regulation_window(t)
+    assert np.array_equal(once, start >= APPROACH_S)
+    twice = regulation_window(t, order_times_s=[0.0, 100.0])
+    assert np.array_equal(twice, (start >= 60.0) & (start < 100.0) | (start >= 160.0))
+
+
+@pytest.mark.parametrize(
+    ("stern", "bow", "plane_count", "effort"),
+    [
+        (0.2, 0.0, 2, math.sqrt(0.2**2 / 2) / LIMIT),  # stern planes only, on a boat with bow planes
+        (0.2, 0.0, 1, 0.2 / LIMIT),  # a stern-only boat
+        (0.2, -0.2, 2, 0.2 / LIMIT),  # both planes at 0.2 rad
+        (LIMIT, LIMIT, 2, 1.0),  # both at their limit
+        (0.0, 0.0, 2, 0.0),
+    ],
+)
+def test_plane_effort_is_the_rms_angle_per_plane_over_the_limit(stern, bow, plane_count, effort):
+    t = _time(200.0)
+    m = _metrics(
+        t, np.zeros_like(t), stern=np.full_like(t, stern), bow=np.full_like(t, bow), plane_count=plane_count
+    )
+    assert m.plane_effort == pytest.approx(effort, rel=1e-12)
+    assert m.plane_effort == pytest.approx(m.plane_rms_rad / (LIMIT * math.sqrt(plane_count)), rel=1e-12)
+    assert m.quality == pytest.approx(0.8 * 1.0 + 0.2 * (1 - effort**2), rel=1e-12)
+
+
+def test_quality_weighs_accuracy_four_to_one_against_plane_motion():
+    assert episode_quality(1.0, 0.0) == 1.0 and episode_quality(0.0, 1.0) == 0.0
+    assert episode_quality(0.5, 0.5) == pytest.approx(0.8 * 0.5 + 0.2 * 0.75)
+    np.testing.assert_allclose(episode_quality([1.0, 0.0], [0.0, 0.0]), [1.0, 0.2])
+
+
+@pytest.mark.parametrize(
+    ("reason", "pitch_limit", "safety_event"),
+    [
+        ("", False, False),
+        ("broached", False, True),
+        ("pitch_limit", True, True),
+        ("left_depth_band", False, False),
+    ],
+)
+def test_safety_events_are_broaching_and_the_pitch_limit(reason, pitch_limit, safety_event):
+    t = _time(100.0)
+    m = _metrics(t, np.zeros_like(t), reason=reason)
+    assert (m.pitch_limit, m.safety_event) == (pitch_limit, safety_event)
+
+
+def test_the_regulation_band_and_window_are_froude_scaled():
+    """A boat 24 times larger, in scaled units: the band is 2.4 m and the approach 294 s."""
+    ratio, root = 24.0, math.sqrt(24.0)
+    t = _time(300.0)
+    e = np.where(t < 100.0, 1.0, 0.05)
+    model = _metrics(t, e)
+    full = _metrics(t * root, e * ratio, length_ratio=ratio)
+    assert full.regulation_accuracy == pytest.approx(model.regulation_accuracy, rel=1e-12)
+    assert _metrics(t * root, e * ratio).regulation_accuracy < model.regulation_accuracy  # unscaled: worse

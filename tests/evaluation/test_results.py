@@ -81,12 +81,18 @@ def test_summary_aggregates_per_controller_and_scenario(make_result):
 
 def test_leaderboard_ranks_by_pooled_success_and_lists_every_scenario(make_result):
     text = res.leaderboard_markdown(_results(make_result), title="T")
-    lines = [line for line in text.splitlines() if line.startswith("| ")]
+    ranking = _markdown_rows(text)
+    assert [(row["rank"], row["controller"]) for row in ranking] == [("1", "strong"), ("2", "weak")]
+    assert ranking[0]["success"] == "7/8 88% [53, 98]"  # 7 of 8, Wilson
+    assert [row["rank by success"] for row in ranking] == ["1", "2"]
+    lines = [line for line in _section(text, "Success and failures").splitlines() if line.startswith("| ")]
     header, rows = lines[0], lines[1:]
     assert header.startswith("| controller | all scenarios | A | B |")
     assert [row.split("|")[1].strip() for row in rows] == ["strong", "weak"]
-    assert "88% [53, 98]" in rows[0]  # 7 of 8, Wilson
+    assert "88% [53, 98]" in rows[0]
+    assert "| controller | A | B |" in _section(text, "Score per scenario")
     assert "Wilson" in text and "0.5 m" in text and "60 s" in text
+    assert "S = 1000 (W - 1 + Q) / N" in text and "tie-break" in text  # the formula and why, in the caption
     with pytest.raises(ValueError, match="empty"):
         res.leaderboard_markdown([])
 
@@ -192,20 +198,35 @@ def test_outcome_counts_count_every_episode_once(make_result):
     assert sum(m.broached for m in metrics) == 2  # though two episodes ended by broaching
 
 
+def _section(text: str, heading: str) -> str:
+    """The text of a leaderboard's ``### heading`` section (to the next heading)."""
+    after = text.split(f"### {heading}\n", 1)[1]
+    return after.split("\n#", 1)[0]
+
+
 def _markdown_rows(text: str) -> list[dict[str, str]]:
-    lines = [line for line in text.splitlines() if line.startswith("| ")]
+    """The rows of the first table of ``text``, by column."""
+    lines = []
+    for line in text.splitlines():
+        if line.startswith("|"):
+            lines += [line] if line.startswith("| ") else []  # (not the header's separator)
+        elif lines:
+            break
     header = [cell.strip() for cell in lines[0].strip("|").split("|")]
-    return [dict(zip(header, (cell.strip() for cell in line.strip("|").split("|")))) for line in lines[1:]]
+    return [
+        dict(zip(header, (cell.strip() for cell in line.strip("|").split("|")), strict=True))
+        for line in lines[1:]
+    ]
 
 
 def _assert_tables_agree(results) -> set[str]:
     """The leaderboard's failure counts equal summary.md's rates times n, summed over the scenarios;
     each summary row's rates add up to 100%. Returns the failure outcomes the tables show."""
-    board = _markdown_rows(res.leaderboard_markdown(results))
+    board = _markdown_rows(_section(res.leaderboard_markdown(results), "Success and failures"))
     summary = _markdown_rows(res.summary_markdown(res.summarize(results)))
     scenarios = {r.scenario for r in results}
     board_failures = [k for k in board[0] if k not in {"controller", "all scenarios", "winnable", *scenarios}]
-    columns = [c for c in summary[0] if c != "winnable: success"]
+    columns = [c for c in summary[0] if c not in ("winnable: success", "score", "quality")]
     rate_columns = columns[3 : columns.index("IAE [m s]")]
     assert rate_columns[0] == "success" and rate_columns[1:] == board_failures
     for row in summary:
@@ -231,7 +252,8 @@ def test_leaderboard_and_summary_count_failures_alike(make_result):
             _broached(make_result, "other", "B", i) if i == 0 else make_result("other", "B", i, True),
         ]
     assert _assert_tables_agree(results) == {"wrong branch", "steady offset", "broached"}
-    board = {row["controller"]: row for row in _markdown_rows(res.leaderboard_markdown(results))}
+    board_text = _section(res.leaderboard_markdown(results), "Success and failures")
+    board = {row["controller"]: row for row in _markdown_rows(board_text)}
     assert board["thesis"]["broached"] == "2" and board["thesis"]["wrong branch"] == "2"
     assert "first that applies" in res.leaderboard_markdown(results)
     assert "first that applies" in res.summary_markdown(res.summarize(results))
@@ -303,7 +325,11 @@ def test_the_leaderboard_ranks_by_the_winnable_episodes(make_result):
         return rows
 
     results = run("lucky", True) + run("sound", False)
-    board = _markdown_rows(res.leaderboard_markdown(results))
+    assert [line["controller"] for line in _markdown_rows(res.leaderboard_markdown(results))] == [
+        "sound",
+        "lucky",
+    ]
+    board = _markdown_rows(_section(res.leaderboard_markdown(results), "Success and failures"))
     assert [line["controller"] for line in board] == ["sound", "lucky"]
     assert board[0]["winnable"].startswith("100% ") and board[1]["winnable"].startswith("88% ")
     assert board[1]["all scenarios"].startswith("82% ") and board[0]["all scenarios"].startswith("73% ")

@@ -4,8 +4,9 @@
 import numpy as np
 import pytest
 
-jax = pytest.importorskip("jax")  # the jax extra (in dev)
+pytest.importorskip("jax")  # the jax extra (in dev)
 
+import jax
 import jax.numpy as jnp
 
 import subenv
@@ -162,18 +163,28 @@ def test_the_jax_right_hand_side_batches_and_differentiates():
     assert float(slope) == pytest.approx(np.cos(0.01), rel=1e-12)
 
 
-def test_deep_water_leaves_the_suction_out_and_refuses_a_free_surface():
+def test_deep_water_leaves_the_suction_out_and_gives_nan_for_a_free_surface():
+    """``free_surface`` is static: False leaves the suction out of the program, under jit as without, and
+    a loading that has one gets NaN, never the deep-water derivatives (before, under jit, a traced ``prm``
+    was not looked at and such loadings got them silently)."""
     rng = np.random.default_rng(13)
     state, deep, inputs = _inputs(rng, "suboff", free_surface=False)
     args = (state, inputs["speed"], inputs["stern"], inputs["bow"])
     prm, hull = pack_params(deep), deep.hull.packed
-    without = sj.derivatives(*args, prm, hull, free_surface=False)  # (found from prm by default as well)
+    without = sj.derivatives(*args, prm, hull, free_surface=False)
     np.testing.assert_allclose(np.asarray(without), derivatives(*args, deep), rtol=TOLERANCE, atol=TOLERANCE)
     near = pack_params(_loadings("suboff", rng, free_surface=True))
-    with pytest.raises(
-        ValueError, match=r"free_surface=False is invalid for these loadings: 400 of them have a free"
-    ):
-        sj.derivatives(*args, near, hull, free_surface=False)
+    mixed = np.where((np.arange(N) % 2 == 0)[:, None], near, prm)  # (every other loading near the surface)
+    nan = np.zeros((N, 4), dtype=bool)
+    nan[0::2, 1:3] = True  # (the rates of w and q, which the suction enters, where a loading has one)
+    for run in (sj.derivatives, jax.jit(sj.derivatives, static_argnames="free_surface")):
+        got = np.asarray(run(*args, mixed, hull, free_surface=False))
+        np.testing.assert_array_equal(np.isnan(got), nan)
+        np.testing.assert_allclose(got[1::2], np.asarray(without)[1::2], rtol=TOLERANCE, atol=TOLERANCE)
+    with pytest.raises(ValueError, match=r"free_surface='no' is invalid: must be True or False"):
+        sj.derivatives(*args, prm, hull, free_surface="no")
+    with pytest.raises(ValueError, match=r"free_surface=.*Tracer.* is invalid: must be True or False"):
+        jax.jit(sj.derivatives)(*args, prm, hull, free_surface=False)  # (not static: refused by name)
 
 
 # This file's kernel inlines the dynamics': its cache is dropped when they change (subenv.dynamics._jit).

@@ -6,10 +6,13 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-jax = pytest.importorskip("jax")  # the jax extra (in dev)
+pytest.importorskip("jax")  # the jax extra (in dev)
 
+import jax
 import jax.numpy as jnp
 from gymnasium.utils import seeding
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from scipy import stats
 
 import subenv
@@ -25,8 +28,8 @@ TOLERANCE = 1e-12  # relative to max(1, |value|), over the first EXACT_PERIODS c
 EXACT_PERIODS = 100
 # Later, rounding differences (XLA's multiply-adds) grow as the dynamics amplify them: at Nominal's
 # speed, with the planes' angles given, a relative difference of 1e-15 in the state grows to 3e-6 in
-# 400 periods, JAX against JAX (test_the_dynamics_amplify_..., which prints it). The episodes must still end alike, their
-# values within:
+# 400 periods, JAX against JAX (test_the_dynamics_amplify_..., which prints it). The episodes must
+# still end alike, their values within:
 LATER_TOLERANCE = 1e-6
 VALUE_KEYS = tr.REPORT_KEYS[: tr.REPORT_KEYS.index("reason")]
 
@@ -153,17 +156,29 @@ def test_step_resets_ended_episodes_by_select_under_jit_and_vmap():
     obs, state = jax.jit(jax.vmap(env.reset, in_axes=(0, None)))(keys, params)
     step = jax.jit(jax.vmap(env.step, in_axes=(0, 0, 0, None)))
     actions = jnp.zeros((n, 1)).at[: n // 2].set(jnp.nan)  # NaN counts as 0 (a compiled program cannot raise)
-    dones = []
+    truncations = []
     for t in range(1, 7):
         keys = jax.vmap(lambda k: jax.random.split(k)[0])(keys)
-        obs, state, reward, done, info = step(keys, state, actions, params)
+        before = state
+        obs, state, reward, terminated, truncated, info = step(keys, state, actions, params)
         assert np.all(np.isfinite(np.asarray(obs))) and np.all(np.isfinite(np.asarray(reward)))
-        dones.append(np.asarray(done))
+        assert not np.any(np.asarray(terminated)) and terminated.dtype == truncated.dtype == jnp.bool_
+        np.testing.assert_array_equal(np.asarray(info["truncated"]), np.asarray(truncated))
+        truncations.append(np.asarray(truncated))
+        final = np.asarray(info["final_observation"])  # (gymnax 1.0: the step's, before any reset)
         if t < 5:
             np.testing.assert_array_equal(np.asarray(state.steps), t)
+            np.testing.assert_array_equal(final, np.asarray(obs))
+        if t == 5:  # the observation of the episodes' last step, as a step of them without the reset gives it
+            stepped = jax.jit(jax.vmap(env.step_env, in_axes=(0, 0, 0, None)))(
+                jax.vmap(lambda k: jax.random.split(k)[0])(keys), before, actions, params
+            )[0]
+            np.testing.assert_array_equal(final, np.asarray(stepped))
+            assert np.all(np.any(final != np.asarray(obs), axis=1))  # (obs is the new episode's)
     # Truncated at step 5 (max_episode_steps), and then already one step into a new episode.
-    np.testing.assert_array_equal(np.asarray(dones), np.broadcast_to(np.arange(1, 7)[:, None] == 5, (6, n)))
-    assert np.all(np.asarray(info["truncated"]) == 0.0) and np.all(np.asarray(state.time_s) > 0.0)
+    expected = np.broadcast_to(np.arange(1, 7)[:, None] == 5, (6, n))
+    np.testing.assert_array_equal(np.asarray(truncations), expected)
+    assert np.all(np.asarray(state.time_s) > 0.0)
     np.testing.assert_array_equal(np.asarray(state.steps), 1)
 
 
@@ -173,7 +188,7 @@ def test_a_nan_action_plays_as_a_zero_action():
     normals = jnp.zeros(sj.N_NORMALS)
     with_nan, _ = jax.jit(env.transition)(state, jnp.array([jnp.nan]), normals)
     with_zero, _ = jax.jit(env.transition)(state, jnp.array([0.0]), normals)
-    for a, b in zip(jax.tree_util.tree_leaves(with_nan), jax.tree_util.tree_leaves(with_zero)):
+    for a, b in zip(jax.tree_util.tree_leaves(with_nan), jax.tree_util.tree_leaves(with_zero), strict=True):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
 
 
@@ -187,9 +202,18 @@ def test_the_gymnax_interface():
     assert obs.shape == (tr.N_OBS,) and obs.dtype == jnp.float32
     assert env.observation_space().contains(np.asarray(obs))
     np.testing.assert_array_equal(np.asarray(env.get_obs(state)), np.asarray(obs))
-    assert not bool(env.is_terminal(state, params))
-    _, _, _, _, info = env.step(jax.random.key(2), state, jnp.zeros(1), params)
-    assert set(tr.REPORT_KEYS) | {"discount"} == set(info) and float(info["discount"]) == 1.0
+    assert not bool(env.is_terminal(state, params)) and not bool(env.is_truncated(state, params))
+    assert float(env.discount(state, params)) == 1.0
+    _, _, reward, terminated, truncated, info = env.step(jax.random.key(2), state, jnp.zeros(1), params)
+    assert (
+        set(tr.REPORT_KEYS) | {"discount", "final_observation"} == set(info)
+        and float(info["discount"]) == 1.0
+    )
+    assert float(reward) == float(info["reward"]) and not bool(terminated) and not bool(truncated)
+    ended = dataclasses.replace(state, steps=jnp.asarray(10**6), time_s=jnp.asarray(1e9))
+    assert bool(env.is_truncated(ended, params)) and not bool(env.is_terminal(ended, params))  # (gymnax 1.0)
+    sunk = dataclasses.replace(state, depth_m=state.episode.depth_command_m + 1e3)
+    assert bool(env.is_terminated(sunk)) and float(env.discount(sunk)) == 0.0
     assert sj.make("subenv/Randomized-v0", episodes=2, control="independent")[0].num_actions == 2
 
 
@@ -203,6 +227,8 @@ def test_the_gymnax_interface():
         ({"max_episode_steps": 0}, "max_episode_steps"),
         ({"env_id": "subenv/PeriscopeDepth-v1", "free_surface": False}, "free surface"),
         ({"env_id": "subenv/PeriscopeDepthWaves-v0", "sea": False}, "sea"),
+        ({"free_surface": "no"}, r"free_surface='no' is invalid: must be True, False or None"),
+        ({"sea": 1}, r"sea=1 is invalid: must be True, False or None"),
     ],
 )
 def test_make_refuses_bad_arguments_by_name(kwargs, match):
@@ -218,6 +244,135 @@ def test_params_refuses_episodes_the_env_cannot_play():
         env.params([])
     with pytest.raises(ValueError, match=r"seeds\[1\]"):
         env.params([0, -2])
+
+
+# --- what the environment refuses: another's states and episodes, actions of another shape or type ---------
+@pytest.fixture(scope="module")
+def nominal():
+    """Nominal-v0's JAX env with its episodes, and an episode reset from them."""
+    env, params = sj.make("subenv/Nominal-v0", episodes=2)
+    return env, params, env.reset(jax.random.key(0), params)[1]
+
+
+@pytest.mark.parametrize(
+    "other_id, kwargs, named",
+    [
+        ("subenv/PeriscopeDepth-v1", {}, ["subenv/PeriscopeDepth-v1", "free_surface=True", "scenario"]),
+        ("subenv/Nominal-v0", {"vehicle": "remus100"}, ["'remus100'", "'suboff'", "vehicle"]),
+    ],
+)
+def test_another_environments_episodes_and_states_are_refused_with_jit_and_without(
+    nominal, other_id, kwargs, named
+):
+    """Issue 34: Nominal-v0's env stepped with PeriscopeDepth-v1's episodes ran without the free surface
+    under jit; with another vehicle's it ran with SUBOFF's hull and constants, with jit or without."""
+    env, params, state = nominal
+    other, theirs = sj.make(other_id, episodes=2, **kwargs)
+    _, their_state = other.reset(jax.random.key(1), theirs)
+    key, action = jax.random.key(2), jnp.zeros(1)
+    calls = {
+        "reset": lambda f: f(env.reset)(key, theirs),
+        "step with their episodes": lambda f: f(env.step)(key, state, action, theirs),
+        "step of their state": lambda f: f(env.step)(key, their_state, action, params),
+        "transition": lambda f: f(env.transition)(their_state, action, jnp.zeros(sj.N_NORMALS)),
+        "is_terminal": lambda f: f(env.is_terminal)(their_state, params),
+    }
+    for name, call in calls.items():
+        for wrap in (lambda f: f, jax.jit):
+            with pytest.raises(ValueError, match="made for") as refused:
+                call(wrap)
+            message = str(refused.value)
+            assert all(word in message for word in [*named, "subenv/Nominal-v0"]), (name, message)
+
+
+def test_the_same_configurations_episodes_are_accepted(nominal):
+    env, params, state = nominal
+    again, theirs = sj.make("subenv/Nominal-v0", episodes=3, seed=5)  # (another make of the same id)
+    assert again.made_for == env.made_for and params.made_for == theirs.made_for
+    obs, _ = jax.jit(env.reset)(jax.random.key(3), theirs)
+    assert np.all(np.isfinite(np.asarray(obs)))
+    for other in (
+        sj.make("subenv/Nominal-v0", episodes=1, free_surface=True)[
+            1
+        ],  # (computes the suction: another program)
+        sj.make("subenv/Nominal-v0", episodes=1, control="independent")[1],
+    ):
+        with pytest.raises(ValueError, match="made for"):
+            env.reset(jax.random.key(3), other)
+
+
+@pytest.mark.parametrize(
+    "kwargs, action, match",
+    [
+        ({"control": "independent"}, np.zeros(1), r"action has shape \(1,\): must have shape \(2,\)"),
+        ({"control": "independent"}, np.float64(0.3), r"action has shape \(\): must have shape \(2,\)"),
+        ({"control": "independent"}, np.zeros(3), r"action has shape \(3,\): must have shape \(2,\)"),
+        ({}, np.zeros(3), r"action has shape \(3,\): must have shape \(1,\) or \(\)"),
+        ({}, np.zeros(0), r"action has shape \(0,\)"),
+        ({}, np.zeros((1, 1)), r"action has shape \(1, 1\).*jax.vmap"),
+        ({}, np.zeros(1, dtype=np.complex64), r"action has dtype complex64: must hold real numbers"),
+        ({}, np.zeros(1, dtype=bool), r"action has dtype bool: must hold real numbers"),
+    ],
+)
+def test_actions_of_another_shape_or_type_are_refused_while_traced(kwargs, action, match):
+    """Issue 34: with independent control an action of shape (1,) or () drove both planes and (3,) used
+    a[0] and a[-1]; in dual control (3,), complex and bool actions were accepted, (0,) an IndexError."""
+    env, params = sj.make("subenv/Nominal-v0", episodes=1, **kwargs)
+    key = jax.random.key(0)
+    _, state = env.reset(key, params)
+    for wrap in (lambda f: f, jax.jit):
+        with pytest.raises(ValueError, match=match):
+            wrap(env.step)(key, state, action, params)
+    with pytest.raises(ValueError, match=r"action='up' is invalid"):
+        env.step(key, state, "up", params)
+
+
+def test_a_scalar_action_is_one_components_and_integers_are_numbers(nominal):
+    env, params, state = nominal
+    key = jax.random.key(4)
+    one = [
+        jax.jit(env.step)(key, state, a, params)[0]
+        for a in (jnp.array([1.0]), jnp.array(1.0), jnp.array([1]))
+    ]
+    np.testing.assert_array_equal(np.asarray(one[0]), np.asarray(one[1]))
+    np.testing.assert_array_equal(np.asarray(one[0]), np.asarray(one[2]))
+
+
+# Every input the property below draws: a shape, a dtype, values (huge, NaN and infinite ones included).
+_SHAPES = [(), (0,), (1,), (2,), (3,), (1, 1), (2, 1), (1, 2)]
+_DTYPES = [np.float16, np.float32, np.float64, np.int8, np.int64, np.uint8, np.bool_, np.complex64]
+
+
+@pytest.fixture(scope="module")
+def independent():
+    env, params = sj.make("subenv/Randomized-v0", episodes=4, control="independent")
+    return env, params, jax.jit(env.step), jax.jit(env.reset)(jax.random.key(0), params)[1]
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(
+    shape=st.sampled_from(_SHAPES),
+    dtype=st.sampled_from(_DTYPES),
+    values=st.lists(st.floats(allow_nan=True, allow_infinity=True), min_size=2, max_size=2),
+    seed=st.integers(0, 2**31 - 1),
+)
+def test_any_action_is_refused_by_name_while_traced_or_steps_to_finite_numbers(
+    independent, shape, dtype, values, seed
+):
+    env, params, step, state = independent
+    with np.errstate(all="ignore"):
+        action = np.resize(np.asarray(values), shape).astype(dtype)
+    real = np.dtype(dtype).kind in "iuf"
+    try:
+        obs, _, reward, _, _, info = step(jax.random.key(seed), state, action, params)
+    except ValueError as refused:
+        assert str(refused).startswith("action has "), refused
+        assert (str(shape) if real else np.dtype(dtype).name) in str(refused), refused
+        assert not (real and shape == (2,))
+        return
+    assert real and shape == (2,)
+    assert np.all(np.isfinite(np.asarray(obs))) and np.isfinite(float(reward))
+    assert np.all(np.isfinite(np.asarray(info["final_observation"])))
 
 
 def _table_of(env_id):
