@@ -24,10 +24,15 @@ quadratic cross-flow drag over the hull (:class:`~subenv.vehicles.HullOffsets`),
 cross-flow drag coefficient c_dc = 1.1. That integral plus his fins' term gives Z_ww = -132.1 kg/m against
 his -131 (:func:`crossflow_check`), an independent check of the hull. The other three disagree with his table
 (:func:`crossflow_coefficients` recomputes them; the shipped file's header prints them): the hull integral
-gives Z_qq = -1.53 kg m (-3.09 with his fins' term, by his own formula) where he tabulates -0.632; M_ww =
+gives Z_qq = -1.53 kg m (-3.09 with his fins' term, in the model's signs) where he tabulates -0.632; M_ww =
 -2.03 kg (-4.47 with the fins) where he tabulates +3.18; M_qq = -7.4 kg m^2 (-8.4) where he tabulates -188,
 which no quadratic cross-flow integral over this hull can give. The model's values are the hull integral's
-(w_loc = w - x q, M = -x Z_F); the fins' own cross-flow drag (3% of Z_ww) is not in the model.
+(w_loc = w - x q, M = -x Z_F); the fins' own cross-flow drag (3% of Z_ww) is not in the model. Issue 38's
+check quoted Z_qq = +3.07 kg m and M_ww = +0.45 kg "from the hull integral": they are what his cross-flow
+formulas give over his continuous Myring profile with the signs the check used
+(:func:`prestero_crossflow_formulas`: Z_qq of the opposite sign to the model's w - x q and M = -x Z_F, and
+the fins' M_ww term too; the thesis was not readable here to say which signs he prints), and they disagree
+with his table as much.
 
 His coefficients make the vehicle dynamically unstable in the vertical plane with the fins held: the
 stability index Z_uw M_uq - M_uw (m + Z_uq) = -549 kg^2 is negative (:func:`stability_index`), so the Munk
@@ -63,6 +68,7 @@ __all__ = [
     "crossflow_check",
     "crossflow_coefficients",
     "myring_radius",
+    "prestero_crossflow_formulas",
     "remus100",
     "remus100_toml",
     "stability_index",
@@ -291,6 +297,33 @@ def crossflow_coefficients(data: PresteroRemus100 = PRESTERO_2001) -> tuple[Cros
     )
 
 
+def prestero_crossflow_formulas(data: PresteroRemus100 = PRESTERO_2001) -> dict[str, float]:
+    """Z_ww [kg/m], Z_qq [kg m] and M_ww [kg] by the cross-flow formulas of Prestero (2001) in the signs
+    issue 38's check used, over his continuous Myring profile (:func:`myring_radius`, R the radius)::
+
+        Z_ww = -(rho/2) c_dc int 2R dx       - 2 (rho/2) S_fin c_df
+        Z_qq = -(rho/2) c_dc int 2R x|x| dx  - 2 x_fin |x_fin| (rho/2) S_fin c_df
+        M_ww = (rho/2) c_dc int 2R x dx      - 2 x_fin (rho/2) S_fin c_df
+
+    Against the model's (local cross-flow w - x q, M = -x Z_F: :func:`crossflow_coefficients`), Z_qq has the
+    opposite sign, both terms (as for a local cross-flow w + x q), and M_ww's fins' term the opposite sign;
+    Z_ww is the model's."""
+    s = np.linspace(0.0, data.length_m, 200_001)
+    x, radius = data.x_B_from_nose_m - s, myring_radius(data, s)
+    half_rho = 0.5 * data.water_density_kg_m3
+    body, fin = half_rho * data.crossflow_drag, half_rho * data.fin_area_m2 * data.fin_crossflow_drag
+    xf = data.fin_x_m
+
+    def along(f: np.ndarray) -> float:
+        return float(np.trapezoid(f, s))  # (x = x_B - s: int dx over the hull = int ds)
+
+    return {
+        "Z_ww": -body * along(2.0 * radius) - 2.0 * fin,
+        "Z_qq": -body * along(2.0 * radius * x * np.abs(x)) - 2.0 * xf * abs(xf) * fin,
+        "M_ww": body * along(2.0 * radius * x) - 2.0 * xf * fin,
+    }
+
+
 def stability_index(data: PresteroRemus100 = PRESTERO_2001) -> float:
     """The vertical plane's dynamic stability index with the fins held, Z_uw M_uq - M_uw (m + Z_uq) [kg^2]
     (the constant term of the speed-squared part of the heave-pitch characteristic polynomial; negative:
@@ -313,7 +346,8 @@ non-dimensional with rho/2 L^n, L = {length:.4f} m (l_f + c - c_offset; his 1.33
 The hull's stations sample his profile (origin at the centre of buoyancy, {x_cb:g} m behind the nose;
 x = (10 - station) L / 20, so the nose is at station {nose_station:.4f}). Cross-flow drag: his c_dc = {cdc:g}
 over the hull, which gives (hull integral / with his fins' term / his table)
-{crossflow}.
+{crossflow};
+his formulas in issue 38's signs: Z_qq {printed_Z_qq:+.3g}, M_ww {printed_M_ww:+.3g}.
 Fins-held stability index Z_uw M_uq - M_uw (m + Z_uq) = {index:.0f} kg^2 (negative: unstable at speed).
 No bow planes. Stern-plane travel +-20 deg, assumed (Fossen's MSS remus100.m; Prestero gives none).
 Neutrally buoyant: he measured B - W = {excess:g} N; the scenarios set each episode's loading. SI units."""
@@ -332,6 +366,8 @@ def remus100_toml() -> str:
             f"{c.name} {c.hull:.3g} / {c.with_fins:.3g} / {c.tabulated:.3g}"
             for c in crossflow_coefficients(data)
         ),
+        printed_Z_qq=prestero_crossflow_formulas(data)["Z_qq"],
+        printed_M_ww=prestero_crossflow_formulas(data)["M_ww"],
         index=stability_index(data),
         excess=data.buoyancy_N - data.weight_N,
     )

@@ -29,6 +29,11 @@ def _broach(env, actions) -> list[float]:  # type: ignore[no-untyped-def]
 def test_the_model_holds_deeper_than_two_radii_and_up_to_a_depth_froude_number_of_one_half():
     radius = 0.5 * max(SUBOFF.hull.breadth_m)
     assert validity_depth_m(SUBOFF) == pytest.approx(2 * radius, rel=1e-15)
+    # Issue 38, item 4: at 0.3 m SUBOFF's h / r is 1.18, where a line image's relative error (r / 2h)^2 is
+    # ~18%; at the limit, two radii, it is 6% (1/16).
+    assert 0.3 / radius == pytest.approx(1.18, abs=0.005)
+    assert (radius / 0.6) ** 2 == pytest.approx(0.18, abs=0.005)
+    assert not within_validity(SUBOFF, 0.3, 0.5)
     # u^2 / (g h): 0.037, 0.072, 0.261, 0.245, 0.287
     np.testing.assert_array_equal(
         within_validity(SUBOFF, [1.0, 2 * radius - 1e-9, 1.0, 0.6, 0.6], [0.6, 0.6, 1.6, 1.2, 1.3]),
