@@ -14,6 +14,7 @@ classical controllers at the same speed. ``tests/agents`` checks it against ``mo
 from __future__ import annotations
 
 import io
+import math
 import pickle
 import re
 import uuid
@@ -341,7 +342,26 @@ def _read_statistics(path: Path) -> Any:
         ) from exc
     if not isinstance(stats, VecNormalize):
         raise ValueError(f"{str(path)!r} holds a {type(stats).__name__}: must be VecNormalize statistics")
+    _check_statistics(path, stats)
     return stats
+
+
+def _check_statistics(path: Path, stats: Any) -> None:
+    """Refuse statistics that would normalise to NaN or inf (a variance below 0, a NaN mean), naming the
+    file and the field: they would load and fail only as a controller's non-finite action."""
+    rms = vars(stats).get("obs_rms")
+    fields = rms.items() if isinstance(rms, dict) else [("", rms)] if rms is not None else []
+    for key, stat in fields:
+        name = f"obs_rms[{key!r}]" if key else "obs_rms"
+        mean, var = np.asarray(stat.mean, dtype=float), np.asarray(stat.var, dtype=float)
+        if not np.all(np.isfinite(mean)):
+            raise ValueError(f"{str(path)!r}: {name}.mean={mean.tolist()} is invalid: must be finite")
+        if not (np.all(np.isfinite(var)) and np.all(var >= 0.0)):
+            raise ValueError(f"{str(path)!r}: {name}.var={var.tolist()} is invalid: must be finite and >= 0")
+    for field in ("clip_obs", "epsilon"):
+        value = vars(stats).get(field)
+        if value is not None and not (math.isfinite(value) and value > 0.0):
+            raise ValueError(f"{str(path)!r}: {field}={value!r} is invalid: must be finite and > 0")
 
 
 def mark_run(model: Any, venv: Any) -> str:

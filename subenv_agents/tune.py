@@ -20,7 +20,9 @@ import argparse
 import json
 import math
 import os
+import signal
 import sys
+import threading
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, Final
@@ -199,9 +201,14 @@ def fit(make_tuner: Callable[[], Any], address: str | None) -> Any:
     started_here = not ray.is_initialized()
     if started_here:
         ray.init(address=address, include_dashboard=False, log_to_driver=False, configure_logging=False)
+    # Ray Tune installs a SIGINT handler of its own for the run and leaves it installed: without putting
+    # the caller's back, every later Ctrl-C in this process (a sweep, a notebook cell) would be swallowed.
+    previous = signal.getsignal(signal.SIGINT)
     try:
         grid = make_tuner().fit()
     finally:
+        if previous is not None and threading.current_thread() is threading.main_thread():
+            signal.signal(signal.SIGINT, previous)
         if started_here:
             ray.shutdown()
     failed = [r.error for r in grid if r.error is not None]

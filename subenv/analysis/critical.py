@@ -3,11 +3,21 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
+import numpy as np
+
+from subenv._typing import ArrayLike, FloatArray
 from subenv.analysis.linear import Allocation, plane_derivatives
 from subenv.vehicles.vehicle import Vehicle
 
-__all__ = ["critical_froude", "critical_speed", "critical_speed_for_planes", "froude_number"]
+__all__ = [
+    "critical_froude",
+    "critical_speed",
+    "critical_speed_for_planes",
+    "critical_speeds",
+    "froude_number",
+]
 
 
 def critical_speed(vehicle: Vehicle, alpha: Allocation = 0.0) -> float:
@@ -43,21 +53,62 @@ def critical_speed_for_planes(
     :func:`critical_speed` calls this with the derivatives of an allocation alpha; Fig. 5-4's
     sweep of alpha beyond [-1, 1] calls it directly.
     """
-    restoring = vehicle.z_G_m * vehicle.weight_N - vehicle.z_B_m * vehicle.buoyancy_N
+    restoring, u2 = _speed_squared(vehicle, Z_delta, M_delta, vehicle.z_G_m, vehicle.buoyancy_N)
     if not restoring > 0:
         raise ValueError(
             f"z_GB={vehicle.z_GB_m!r} m gives restoring moment z_G W - z_B B = {restoring!r} N m; "
             "a critical speed exists only for a positive restoring moment (z_GB > 0)"
         )
-    c = vehicle.coefficients
-    coupling = c.M_w * Z_delta - c.Z_w * M_delta
-    u2 = restoring * Z_delta / coupling if coupling != 0 else math.inf
     if not (math.isfinite(u2) and u2 > 0):
         raise ValueError(
             f"{label}: this plane allocation has no critical speed "
             f"(z_GB Z_delta B / (M_w Z_delta - Z_w M_delta) = {u2!r} m^2/s^2 is not positive)"
         )
     return math.sqrt(u2)  # Riedel (1993) eq. 3.9
+
+
+def critical_speeds(vehicle: Vehicle, alpha: Allocation, loading: Mapping[str, ArrayLike]) -> FloatArray:
+    """:func:`critical_speed` of many loadings of ``vehicle`` at once, nan for those without one.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        The vehicle loaded.
+    alpha : float or "bow"
+        As for :func:`critical_speed`.
+    loading : mapping
+        Its loadings' ``z_G_m`` and ``buoyancy_N`` (:meth:`Vehicle.loading_fields
+        <subenv.vehicles.Vehicle.loading_fields>`; a field not given is the vehicle's), floats or
+        arrays of one loading per element.
+
+    Returns
+    -------
+    ndarray
+        Element for element, what :func:`critical_speed` gives for the variant with that loading, bit for
+        bit, or nan where it raises for a loading without a critical speed.
+    """
+    Z_delta, M_delta = plane_derivatives(vehicle, alpha)
+    restoring, u2 = _speed_squared(
+        vehicle,
+        Z_delta,
+        M_delta,
+        loading.get("z_G_m", vehicle.z_G_m),
+        loading.get("buoyancy_N", vehicle.buoyancy_N),
+    )
+    u2 = np.where((np.asarray(restoring) > 0) & np.isfinite(u2) & (u2 > 0), u2, math.nan)
+    return np.sqrt(u2)  # Riedel (1993) eq. 3.9 (correctly rounded, as math.sqrt)
+
+
+def _speed_squared(
+    vehicle: Vehicle, Z_delta: float, M_delta: float, z_G_m: ArrayLike, buoyancy_N: ArrayLike
+) -> tuple[ArrayLike, ArrayLike]:
+    """The restoring moment z_G W - z_B B [N m] and u_cr^2 of eq. 3.9 [m^2/s^2] for G at depth
+    ``z_G_m`` and buoyancy ``buoyancy_N`` (floats or arrays)."""
+    restoring = z_G_m * vehicle.weight_N - vehicle.z_B_m * buoyancy_N
+    c = vehicle.coefficients
+    coupling = c.M_w * Z_delta - c.Z_w * M_delta
+    u2 = restoring * Z_delta / coupling if coupling != 0 else math.inf
+    return restoring, u2
 
 
 def froude_number(vehicle: Vehicle, speed_mps: float) -> float:

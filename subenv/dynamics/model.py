@@ -14,6 +14,7 @@ axes, states ``(..., 4)``, inputs and :class:`ModelParams` fields broadcast agai
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import NamedTuple
 
 import numpy as np
@@ -72,41 +73,59 @@ PARAM_FIELDS = ModelParams._fields[:-1]
 """The numeric fields of :class:`ModelParams`, in the order of :func:`pack_params` (all but ``hull``)."""
 _RHO_SUCTION = PARAM_FIELDS.index("rho_suction")
 _SUCTION_MODEL = PARAM_FIELDS.index("suction_model")
+_LOADING_FIELDS = (
+    "x_G_m",
+    "z_G_m",
+    "buoyancy_N",
+    "crossflow_drag",
+)  # a loading's fields (Vehicle.loading_fields)
 
 
-def model_params(vehicle: Vehicle, free_surface: FreeSurface = NO_FREE_SURFACE) -> ModelParams:
+def model_params(
+    vehicle: Vehicle,
+    free_surface: FreeSurface = NO_FREE_SURFACE,
+    loading: Mapping[str, ArrayLike] | None = None,
+) -> ModelParams:
     """Reduce a :class:`~subenv.vehicles.Vehicle` to the parameters of :func:`derivatives`.
 
     ``free_surface`` adds the free surface's suction (:mod:`subenv.dynamics.free_surface`); the
-    default is deep water, Riedel (1993)'s model.
+    default is deep water, Riedel (1993)'s model. ``loading`` replaces the vehicle's loading with
+    :meth:`Vehicle.loading_fields <subenv.vehicles.Vehicle.loading_fields>` (``z_G_m``, ``x_G_m``,
+    ``buoyancy_N``, ``crossflow_drag``), floats or arrays of many loadings: the parameters of the
+    variant with that loading, element for element (the fields that depend on it are then arrays).
     """
+    changed = loading or {}
+    unknown = set(changed) - set(_LOADING_FIELDS)
+    if unknown:
+        raise ValueError(f"loading has unknown fields {sorted(unknown)}: allowed are {list(_LOADING_FIELDS)}")
+    x_G, z_G, B, C_D = (changed.get(name, getattr(vehicle, name)) for name in _LOADING_FIELDS)
     c = vehicle.coefficients
     m = vehicle.mass_kg
     # Added-mass matrix of eqs 2.38-2.39 (Riedel 1993), left-hand side for (wdot, qdot).
     m11 = m - c.Z_wdot
-    m12 = -(c.Z_qdot + m * vehicle.x_G_m)
-    m21 = -(c.M_wdot + m * vehicle.x_G_m)
+    m12 = -(c.Z_qdot + m * x_G)
+    m21 = -(c.M_wdot + m * x_G)
     m22 = vehicle.inertia_y_kg_m2 - c.M_qdot
     det = m11 * m22 - m12 * m21
-    W, B = vehicle.weight_N, vehicle.buoyancy_N
+    W = vehicle.weight_N
     return ModelParams(
         inv_m11=m22 / det,
         inv_m12=-m12 / det,
         inv_m21=-m21 / det,
         inv_m22=m11 / det,
         Z_uq=m + c.Z_q,
-        m_zG=m * vehicle.z_G_m,
+        m_zG=m * z_G,
         Z_w=c.Z_w,
-        M_uq=c.M_q - m * vehicle.x_G_m,
+        M_uq=c.M_q - m * x_G,
         M_w=c.M_w,
         Z_delta_s=c.Z_delta_s,
         Z_delta_b=c.Z_delta_b,
         M_delta_s=c.M_delta_s,
         M_delta_b=c.M_delta_b,
         W_minus_B=W - B,
-        xGW_minus_xBB=vehicle.x_G_m * W - vehicle.x_B_m * B,
-        zGW_minus_zBB=vehicle.z_G_m * W - vehicle.z_B_m * B,
-        half_rho_CD=0.5 * vehicle.water_density_kg_m3 * vehicle.crossflow_drag,
+        xGW_minus_xBB=x_G * W - vehicle.x_B_m * B,
+        zGW_minus_zBB=z_G * W - vehicle.z_B_m * B,
+        half_rho_CD=0.5 * vehicle.water_density_kg_m3 * C_D,
         rho_suction=vehicle.water_density_kg_m3 * free_surface.suction_factor,
         suction_model=free_surface.suction_model,
         hull=_hull_table(vehicle),
@@ -343,16 +362,14 @@ def derivatives(
     )
     states = rows(state, (*shape, 4)).reshape(-1, 4)
     out = np.empty((states.shape[0], 4))
-    u, stern_rows, bow_rows, force_rows, moment_rows = (
-        rows(a, shape) for a in (speed, stern, bow, force, moment)
-    )
+    u, delta_s, delta_b, Z_ext, M_ext = (rows(a, shape) for a in (speed, stern, bow, force, moment))
     _derivatives_rows(
         states,
         u,
-        stern_rows,
-        bow_rows,
-        force_rows,
-        moment_rows,
+        delta_s,
+        delta_b,
+        Z_ext,
+        M_ext,
         rows(prm, (*shape, prm.shape[-1])).reshape(-1, prm.shape[-1]),
         params.hull.packed,
         out,

@@ -304,6 +304,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
                 rng.bit_generator.state = saved
             self._np_random, self._np_random_seed = previous
             raise
+        assert loading.vehicle is not None  # (one episode's loading has its vehicle)
         self.vehicle, self.episode = loading.vehicle, draw
         write_episode(self._episode, 0, episode)
         write_episode(self._state, 0, state)

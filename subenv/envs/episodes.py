@@ -4,10 +4,9 @@ A reset draws an :class:`~subenv.scenarios.EpisodeConfig` from the scenario with
 sub-environment's generator (:func:`draw_episode`), then the heave force's first value, and writes
 the episode's records (:data:`~subenv.envs.transition.EPISODE_DTYPE`,
 :data:`~subenv.envs.transition.STATE_DTYPE`): :func:`write_episode`, and its sea, if it has one
-(:func:`write_sea`). A vector environment whose
-scenario draws every episode with one loading draws a batch of resets as arrays
-(:func:`draw_episode_batch`): the same numbers from the same generators, turned into records by the
-same :func:`write_episode`.
+(:func:`write_sea`). A vector environment draws a batch of resets as arrays
+(:func:`draw_episode_batch`): the same numbers from the same generators, turned into episodes and
+loadings by the same functions over arrays, and into records by the same :func:`write_episode`.
 
 The environments' ``reset(options=...)`` are checked here (:func:`check_options`).
 """
@@ -22,8 +21,8 @@ import numpy as np
 from gymnasium.utils import seeding
 
 from subenv import _validation as check
-from subenv.analysis.critical import critical_speed
-from subenv.dynamics.free_surface import NO_FREE_SURFACE
+from subenv.analysis.critical import critical_speeds
+from subenv.dynamics.free_surface import NO_FREE_SURFACE, FreeSurface
 from subenv.dynamics.model import model_params, pack_params
 from subenv.dynamics.waves import MAX_WAVES, WAVE_FIELDS
 from subenv.envs import transition as tr
@@ -39,7 +38,10 @@ from subenv.vehicles.vehicle import Vehicle
 
 __all__ = [
     "OPTIONS",
+    "EpisodeBatch",
+    "EpisodeGroup",
     "Loading",
+    "LoadingKey",
     "Loadings",
     "check_options",
     "draw_episode",
@@ -58,53 +60,108 @@ STATE_KEYS: Final = ("pitch", "heave", "pitch_rate", "depth")
 _LOADING_CACHE_SIZE: Final = 1024  # loadings kept per environment
 
 
-class Loading(NamedTuple):
-    """An episode's vehicle and what the transition needs of it."""
+class LoadingKey(NamedTuple):
+    """What an episode's draw loads the vehicle with: :meth:`Vehicle.variant
+    <subenv.vehicles.Vehicle.variant>`'s arguments and the free surface's suction; floats, or arrays of
+    one value per episode of a batch (where the draw's are)."""
 
-    vehicle: Vehicle
-    params: np.ndarray  # ModelParams, packed (PARAM_FIELDS order), read-only
-    critical_speed_mps: float  # nan: none (z_GB <= 0)
-    froude_scale_mps: float  # sqrt(g z_GB); nan for z_GB <= 0
+    z_GB_m: Any
+    x_GB_m: Any
+    excess_buoyancy_N: Any
+    crossflow_drag: Any  # None: the vehicle's
+    suction_factor: float
+
+    def loading(self) -> dict[str, Any]:
+        """The arguments of :meth:`Vehicle.variant <subenv.vehicles.Vehicle.variant>` (and of
+        :meth:`~subenv.vehicles.Vehicle.loading_fields`)."""
+        return {
+            "z_GB_m": self.z_GB_m,
+            "x_GB_m": self.x_GB_m,
+            "excess_buoyancy_N": self.excess_buoyancy_N,
+            "crossflow_drag": self.crossflow_drag,
+        }
+
+
+class Loading(NamedTuple):
+    """An episode's loading and what the transition needs of it; a batch's holds arrays, one value (or
+    row) per episode."""
+
+    key: LoadingKey
+    vehicle: Vehicle | None  # the episode's (a variant of the configured one); None for a batch's
+    params: np.ndarray  # ModelParams, packed (PARAM_FIELDS order), read-only; (n, P) for a batch
+    critical_speed_mps: Any  # nan: none (z_GB <= 0)
+    froude_scale_mps: Any  # sqrt(g z_GB); nan for z_GB <= 0
 
 
 class Loadings:
-    """The loadings of an environment's episodes, memoised (a new draw of the same loading costs nothing)."""
+    """The loadings of an environment's episodes: one episode's memoised (a new draw of the same loading
+    costs nothing), a batch's computed as arrays."""
 
     def __init__(self, config: DivePlaneConfig) -> None:
         self.base = config.vehicle
         self.alpha = config.alpha
-        self._found: dict[tuple[float, float, float, float | None, float], Loading] = {}
+        self._found: dict[LoadingKey, Loading] = {}
+        self._checked: dict[str, tuple[float, float]] | None = None  # a box of loadings checked (_check)
 
     def of(self, draw: EpisodeConfig) -> Loading:
-        """The loading of an episode's draw."""
+        """The loading of an episode's draw, or of a batch's (:meth:`Scenario.sample_batch
+        <subenv.scenarios.Scenario.sample_batch>`): then arrays, each element what one episode's draw
+        with that element's numbers gives, bit for bit; its vehicles are made on demand
+        (:meth:`vehicle`)."""
         base = self.base
         z_GB = draw.z_GB_m if draw.z_GB_m is not None else base.z_GB_m
         free_surface = draw.free_surface or NO_FREE_SURFACE
-        key = (
+        key = LoadingKey(
             z_GB * draw.z_GB_scale,
             base.x_GB_m + draw.x_GB_m,
             base.excess_buoyancy_N + draw.excess_buoyancy_N,
             draw.crossflow_drag,
             free_surface.suction_factor,
         )
+        if any(isinstance(value, np.ndarray) for value in key):
+            self._check(key)
+            return self._loading(key, None, free_surface)
         found = self._found.get(key)
         if found is None:
-            vehicle = base.variant(
-                z_GB_m=key[0], x_GB_m=key[1], excess_buoyancy_N=key[2], crossflow_drag=key[3]
-            )
             if len(self._found) >= _LOADING_CACHE_SIZE:
                 self._found.clear()
-            try:
-                ucr = critical_speed(vehicle, self.alpha)
-            except ValueError:
-                ucr = math.nan  # z_GB <= 0: no critical speed exists for this loading
-            z = vehicle.z_GB_m
-            params = pack_params(model_params(vehicle, free_surface))
-            params.flags.writeable = False
-            found = self._found[key] = Loading(
-                vehicle, params, ucr, math.sqrt(vehicle.gravity_m_s2 * z) if z > 0 else math.nan
-            )
+            found = self._found[key] = self._loading(key, self.vehicle(key), free_surface)
         return found
+
+    def vehicle(self, key: LoadingKey) -> Vehicle:
+        """The vehicle of one episode's loading (checked: ``ValueError`` for an invalid one)."""
+        return self.base.variant(**key.loading())
+
+    def _loading(self, key: LoadingKey, vehicle: Vehicle | None, free_surface: FreeSurface) -> Loading:
+        """The numbers of ``key``'s loading (floats where ``vehicle`` is given, else arrays): each
+        computed once, by the functions that compute one vehicle's, from the loading's fields."""
+        base = self.base
+        fields = base.loading_fields(**key.loading())
+        params = pack_params(model_params(base, free_surface, fields))
+        params.flags.writeable = False
+        ucr = critical_speeds(base, self.alpha, fields)
+        z_GB = fields["z_G_m"] - base.z_B_m  # (Vehicle.z_GB_m of each loading)
+        froude = np.sqrt(np.where(z_GB > 0, base.gravity_m_s2 * z_GB, math.nan))
+        if vehicle is not None:
+            return Loading(key, vehicle, params, float(ucr), float(froude))
+        return Loading(key, None, params, ucr, froude)
+
+    def _check(self, key: LoadingKey) -> None:
+        """Check a batch's loadings as :meth:`vehicle` checks one: the box of the loadings checked so far
+        grows to hold them, and is checked again where it grows (:meth:`Vehicle.check_loadings
+        <subenv.vehicles.Vehicle.check_loadings>`); within it, nothing is left to check."""
+        given = {name: value for name, value in key.loading().items() if value is not None}
+        box = {name: (float(np.min(value)), float(np.max(value))) for name, value in given.items()}
+        checked = self._checked
+        if checked is not None and checked.keys() == box.keys():
+            box = {
+                name: (min(low, checked[name][0]), max(high, checked[name][1]))
+                for name, (low, high) in box.items()
+            }
+            if box == checked:
+                return
+        self.base.check_loadings(**{name: np.array(ends) for name, ends in box.items()})
+        self._checked = box
 
 
 def for_vehicle(config: DivePlaneConfig, draw: EpisodeConfig) -> EpisodeConfig:
@@ -159,19 +216,60 @@ def episode_table(config: DivePlaneConfig, seeds: Sequence[int]) -> tuple[np.nda
     return episodes, states, seas
 
 
-def draw_episode_batch(
-    config: DivePlaneConfig, uniforms: np.ndarray, disturbances: np.ndarray, loadings: Loadings
-) -> tuple[EpisodeConfig, Loading, dict[str, Any], dict[str, Any]]:
-    """A batch of resets of a scenario that draws every episode with one loading
-    (:attr:`Scenario.samples_in_batches <subenv.scenarios.Scenario.samples_in_batches>`), from their
-    numbers: row ``j`` of ``uniforms`` and ``disturbances[j]`` are what :func:`draw_episode` takes from
-    episode ``j``'s generator (:func:`subenv.envs.transition.draw_reset_numbers`).
+class EpisodeGroup(NamedTuple):
+    """The episodes of a batch of resets that picked one component of a mixture (all of a plain
+    scenario's): their draw and loading, arrays over them, and their records' fields."""
 
-    Returns as :func:`draw_episode`, with arrays (one value per episode) where the draw has them.
+    rows: np.ndarray  # their positions in the batch
+    draw: EpisodeConfig
+    loading: Loading
+    episode: dict[str, Any]
+    state: dict[str, Any]
+
+
+class EpisodeBatch(NamedTuple):
+    """A batch of resets (:func:`draw_episode_batch`): each one's pick and uniform numbers (row ``j``'s
+    first ``uniforms_per_pick[picks[j]]``), from which :meth:`Scenario.episode_from_uniforms
+    <subenv.scenarios.Scenario.episode_from_uniforms>` makes its draw again, and its episodes by pick."""
+
+    picks: np.ndarray
+    uniforms: np.ndarray
+    groups: list[EpisodeGroup]
+
+
+def draw_episode_batch(
+    config: DivePlaneConfig, rngs: Any, indices: np.ndarray, loadings: Loadings
+) -> EpisodeBatch:
+    """The resets of the sub-environments ``indices``, each from its own generator ``rngs[i]`` (a numba
+    typed list), drawn as arrays: for a scenario that :attr:`~subenv.scenarios.Scenario.samples_in_batches`.
+
+    Each generator gives what :func:`draw_episode` takes from it (without options), in its order: a
+    mixture's pick and the uniform numbers of the draw
+    (:func:`~subenv.envs.transition.draw_reset_numbers`), then the initial heave force
+    (:func:`~subenv.envs.transition.draw_initial_disturbances`) with the standard deviation of the
+    episode drawn. The episodes of one pick are made together (:meth:`Scenario.sample_batch
+    <subenv.scenarios.Scenario.sample_batch>`, :meth:`Loadings.of`, :func:`episode_fields`): the same
+    functions as one reset's, over arrays, and so the same numbers.
     """
-    draw = for_vehicle(config, config.scenario.sample_batch(uniforms, config.vehicle.weight_N))
-    loading = loadings.of(draw)
-    return (draw, loading, *episode_fields(config, draw, loading, disturbances, None))
+    scenario, weight_N = config.scenario, config.vehicle.weight_N
+    counts = np.array(scenario.uniforms_per_pick, dtype=np.int64)
+    n = len(indices)
+    picks, uniforms = np.empty(n, dtype=np.int64), np.empty((n, int(counts.max())))
+    tr.draw_reset_numbers(rngs, indices, counts, picks, uniforms)
+    draws, stds = [], np.empty(n)
+    for pick in np.unique(picks).tolist():
+        rows = np.flatnonzero(picks == pick)
+        draw = for_vehicle(config, scenario.sample_batch(uniforms[rows, : counts[pick]], weight_N, pick))
+        stds[rows] = draw.disturbance_std_N
+        draws.append((rows, draw))
+    disturbances = np.empty(n)
+    tr.draw_initial_disturbances(rngs, indices, stds, disturbances)
+    groups = []
+    for rows, draw in draws:
+        loading = loadings.of(draw)
+        episode, state = episode_fields(config, draw, loading, disturbances[rows], None)
+        groups.append(EpisodeGroup(rows, draw, loading, episode, state))
+    return EpisodeBatch(picks, uniforms, groups)
 
 
 def episode_fields(
@@ -188,10 +286,11 @@ def episode_fields(
     episode's ``"waves"`` are its sea (None: calm), for :func:`write_sea`, not a field of its record.
     """
     ucr = loading.critical_speed_mps
-    if draw.speed_relative and not math.isfinite(ucr):
+    if draw.speed_relative and not np.all(np.isfinite(ucr)):
+        z_GB = np.asarray(loading.key.z_GB_m).flat[np.argmin(np.isfinite(ucr))]  # (the first without one)
         raise ValueError(
             f"scenario {config.scenario.name!r} gives speeds relative to the critical speed, but "
-            f"vehicle {loading.vehicle.name!r} (z_GB={loading.vehicle.z_GB_m!r} m) has none"
+            f"vehicle {config.vehicle.name!r} with z_GB={float(z_GB)!r} m has none"
         )
     scale = ucr if draw.speed_relative else 1.0
     knots = [(t, u * scale) for t, u in draw.speed_knots]
@@ -216,15 +315,11 @@ def episode_fields(
             f"the speed profile has {len(knots)} knots; the environment takes at most {tr.MAX_KNOTS}"
         )
     # One row of knots, or one per episode of a batch.
-    shape = (
-        (len(draw.depth_command_m), tr.MAX_KNOTS)
-        if isinstance(draw.depth_command_m, np.ndarray)
-        else tr.MAX_KNOTS
-    )
+    shape = (len(disturbance), tr.MAX_KNOTS) if isinstance(disturbance, np.ndarray) else tr.MAX_KNOTS
     knot_time, knot_speed = np.zeros(shape), np.zeros(shape)
     for k, (t, u) in enumerate(knots):
         knot_time[..., k], knot_speed[..., k] = t, u
-    n_waves, waves = _sea(draw, loading.vehicle, shape)
+    n_waves, waves = _sea(draw, config.vehicle, shape)
     episode = {
         "params": loading.params,
         "n_knots": len(knots),
@@ -258,7 +353,7 @@ def episode_fields(
 def _sea(draw: EpisodeConfig, vehicle: Vehicle, knot_shape: Any) -> tuple[int, np.ndarray | None]:
     """The episode's sea as the transition reads it (:meth:`subenv.dynamics.waves.SeaState.components`,
     shape (WAVE_FIELDS, MAX_WAVES)), one per episode of a batch: its number of waves and their numbers
-    (0 and None: calm)."""
+    (0 and None: calm). ``vehicle``'s hull, water and gravity: those of every loading of it."""
     sea = draw.sea_state
     batch = knot_shape[0] if isinstance(knot_shape, tuple) else None
     if sea is None:

@@ -86,6 +86,7 @@ __all__ = [
     "STATE_DTYPE",
     "Record",
     "StateRecord",
+    "draw_initial_disturbances",
     "draw_reset_numbers",
     "episode_end",
     "episode_outcome",
@@ -803,22 +804,38 @@ numba's threads (``numba.set_num_threads``); the same results for any number of 
 def draw_reset_numbers(
     rngs: numba.typed.List,
     indices: np.ndarray,
+    counts: np.ndarray,
+    picks: np.ndarray,
     uniforms: FloatArray,
-    disturbance_std_N: float,
-    disturbances: FloatArray,
 ) -> None:
-    """The random numbers of a reset, from each sub-environment's generator, for those in ``indices``.
+    """The random numbers of a reset's draw, from each sub-environment's generator, for those in ``indices``.
 
-    As :meth:`subenv.scenarios.Scenario.sample` and :func:`subenv.envs.episodes.draw_episode` take
-    them from one generator: ``uniforms.shape[1]`` numbers uniform in [0, 1) (``rng.random(k)``)
-    into row ``j`` of ``uniforms``, then, with ``disturbance_std_N`` > 0, the initial heave force
-    (``rng.normal(0, disturbance_std_N)``) into ``disturbances[j]`` (else 0).
+    As :meth:`subenv.scenarios.Scenario.sample` takes them from one generator: a mixture of
+    ``len(counts)`` > 1 components picks one, ``rng.integers(len(counts))``, into ``picks[j]`` (with one
+    count, a plain scenario, nothing is drawn and the pick is 0, as ``rng.integers(1)`` draws nothing),
+    then ``counts[pick]`` numbers uniform in [0, 1) (``rng.random(k)``) into row ``j`` of ``uniforms``.
+    (numba's ``Generator.integers`` gives NumPy's numbers for a range below 2**32, not beyond:
+    tests/envs/test_vector_env.py.)
     """
+    choices = counts.shape[0]
     for j in range(indices.shape[0]):
         rng = rngs[indices[j]]
-        for k in range(uniforms.shape[1]):
+        pick = rng.integers(0, choices) if choices > 1 else 0
+        picks[j] = pick
+        for k in range(counts[pick]):
             uniforms[j, k] = rng.random()
-        disturbances[j] = rng.normal(0.0, disturbance_std_N) if disturbance_std_N > 0.0 else 0.0
+
+
+@kernel
+def draw_initial_disturbances(
+    rngs: numba.typed.List, indices: np.ndarray, disturbance_std_N: FloatArray, disturbances: FloatArray
+) -> None:
+    """After :func:`draw_reset_numbers`, each episode's initial heave force, as
+    :func:`subenv.envs.episodes.draw_episode` draws it: ``rng.normal(0, disturbance_std_N[j])`` into
+    ``disturbances[j]`` where the standard deviation is > 0 (else 0, and nothing is drawn)."""
+    for j in range(indices.shape[0]):
+        std = disturbance_std_N[j]
+        disturbances[j] = rngs[indices[j]].normal(0.0, std) if std > 0.0 else 0.0
 
 
 @kernel

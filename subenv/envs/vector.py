@@ -31,7 +31,6 @@ from subenv.envs.episodes import (
 from subenv.envs.info import step_infos
 from subenv.envs.validity import SurfaceValidityWatch
 from subenv.scenarios.scenario import EpisodeConfig, Scenario
-from subenv.vehicles.scaling import froude_factor
 from subenv.vehicles.vehicle import Vehicle
 
 __all__ = ["ENVS_PER_THREAD", "DivePlaneVectorEnv"]
@@ -198,13 +197,13 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         self._ready = False  # every sub-environment has been reset once
         self._everyone = np.ones(n, dtype=bool)
         self._no_reasons = np.full(n, "", dtype=object)  # every termination_reason "" (for step_infos)
-        self.vehicles: list[Vehicle] = [config.base_vehicle] * n
-        """Each sub-environment's vehicle (its episode's loading)."""
         self._episodes: list[EpisodeConfig | None] = [None] * n
-        # Episodes drawn in a batch are kept as their scenario and uniform numbers until someone asks
-        # for them (as arrays: a batch stores them without a Python loop over its resets).
+        self._vehicles = np.full(n, config.base_vehicle, dtype=object)  # None: not built yet
+        # Episodes drawn in a batch are kept as their configuration, pick and uniform numbers until
+        # someone asks for them (as arrays: a batch stores them without a Python loop over its resets).
         self._unbuilt = np.zeros(n, dtype=bool)
-        self._unbuilt_scenario = np.full(n, None, dtype=object)
+        self._unbuilt_config = np.full(n, None, dtype=object)
+        self._unbuilt_pick = np.zeros(n, dtype=np.int64)
         self._unbuilt_uniforms = np.empty((n, 0))
         # (time, depth, ordered depth) of each sub-environment's episode so far, for render()
         self._histories: list[list[tuple[float, float, float]]] = (
@@ -292,7 +291,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
             "states": [g.bit_generator.state if g is not None else None for g in self._generators],
             "records": (self._state.copy(), self._episode.copy(), self._seas.copy(), self._obs.copy()),
             "flags": (self._done.copy(), self._any_done, self._started.copy(), self._unbuilt.copy()),
-            "lists": (list(self.vehicles), list(self._episodes)),
+            "lists": (self._vehicles.copy(), list(self._episodes)),
             "interrupted": self._interrupted,
         }
 
@@ -304,7 +303,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         self._state[:], self._episode[:], self._seas[:], self._obs[:] = saved["records"]
         done, self._any_done, started, unbuilt = saved["flags"]
         self._done[:], self._started[:], self._unbuilt[:] = done, started, unbuilt
-        self.vehicles, self._episodes = saved["lists"]
+        self._vehicles, self._episodes = saved["lists"]
         self._interrupted = saved["interrupted"]
 
     def step(
@@ -439,15 +438,27 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
     def episodes(self) -> list[EpisodeConfig | None]:
         """Each sub-environment's episode draw (None before its first reset)."""
         if self._unbuilt.any():  # built on demand: a batch of resets draws numbers, not EpisodeConfigs
-            weight_N = self.config.base_vehicle.weight_N
             for i in np.flatnonzero(self._unbuilt).tolist():
-                scenario = self._unbuilt_scenario[i]
-                uniforms = self._unbuilt_uniforms[i, : scenario.uniforms_per_episode]
+                config, pick = self._unbuilt_config[i], int(self._unbuilt_pick[i])
+                scenario = config.base_scenario
+                uniforms = self._unbuilt_uniforms[i, : scenario.uniforms_per_pick[pick]]
                 self._episodes[i] = for_vehicle(
-                    self.config, scenario.episode_from_uniforms(uniforms, weight_N)
+                    config, scenario.episode_from_uniforms(uniforms, config.base_vehicle.weight_N, pick)
                 )
             self._unbuilt[:] = False
         return list(self._episodes)
+
+    @property
+    def vehicles(self) -> list[Vehicle]:
+        """Each sub-environment's vehicle: the configured one with its episode's loading."""
+        missing = [i for i, vehicle in enumerate(self._vehicles.tolist()) if vehicle is None]
+        if missing:  # built on demand: a batch of resets computes its loadings' numbers as arrays
+            episodes = self.episodes
+            for i in missing:
+                draw = episodes[i]
+                assert draw is not None  # (a vehicle is missing only after a reset)
+                self._vehicles[i] = self._loadings.of(draw).vehicle
+        return self._vehicles.tolist()
 
     @property
     def state(self) -> np.ndarray:
@@ -525,7 +536,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
                 write_episode(self._episode, i, episode)
                 write_episode(self._state, i, state)
                 write_sea(self._seas, i, episode)
-                self.vehicles[i], self._episodes[i] = loading.vehicle, draw
+                self._vehicles[i], self._episodes[i] = loading.vehicle, draw
             self._unbuilt[index] = False
         tr.observe(self._state, self._episode, index, self._obs, self._rngs, self._constants, report)
         if not self._ready:
@@ -535,30 +546,25 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
                 self._histories[i] = [(0.0, self._state[i]["depth_m"], self._episode[i]["depth_command_m"])]
 
     def _draw_batch(self, index: np.ndarray) -> None:
-        """Draw the episodes of ``index`` as arrays (a scenario with one loading, no options): each
-        sub-environment's generator gives the numbers of its own reset
-        (:func:`~subenv.envs.transition.draw_reset_numbers`), turned into records as one reset's are
-        (:func:`~subenv.envs.episodes.draw_episode_batch`)."""
-        scenario = self.config.base_scenario
-        uniforms = np.empty((len(index), scenario.uniforms_per_episode))
-        disturbances = np.empty(len(index))
-        # (the initial disturbance drawn with the episode's standard deviation, Froude-scaled as it is)
-        std = scenario.disturbance_std_N * froude_factor("force", self.config.length_ratio)
-        tr.draw_reset_numbers(self._rngs, index, uniforms, std, disturbances)
-        _, loading, episode, state = draw_episode_batch(self.config, uniforms, disturbances, self._loadings)
-        write_episode(self._episode, index, episode)
-        write_episode(self._state, index, state)
-        write_sea(self._seas, index, episode)
-        vehicles = self.vehicles
-        for i in index.tolist():
-            vehicles[i] = loading.vehicle
-        k = uniforms.shape[1]
+        """Draw the episodes of ``index`` as arrays (no options): each sub-environment's generator gives
+        the numbers of its own reset, turned into records as one reset's are
+        (:func:`~subenv.envs.episodes.draw_episode_batch`); its episode and vehicle are made when asked
+        for (:attr:`episodes`, :attr:`vehicles`)."""
+        batch = draw_episode_batch(self.config, self._rngs, index, self._loadings)
+        for group in batch.groups:
+            at = index[group.rows]
+            write_episode(self._episode, at, group.episode)
+            write_episode(self._state, at, group.state)
+            write_sea(self._seas, at, group.episode)
+            self._vehicles[at] = group.loading.vehicle  # (None: a loading per episode, built on demand)
+        k = batch.uniforms.shape[1]
         if self._unbuilt_uniforms.shape[1] < k:  # (a scenario that draws more numbers than any before)
             wider = np.empty((self.num_envs, k))
             wider[:, : self._unbuilt_uniforms.shape[1]] = self._unbuilt_uniforms
             self._unbuilt_uniforms = wider
-        self._unbuilt_uniforms[index, :k] = uniforms
-        self._unbuilt_scenario[index] = scenario
+        self._unbuilt_uniforms[index, :k] = batch.uniforms
+        self._unbuilt_pick[index] = batch.picks
+        self._unbuilt_config[index] = self.config
         self._unbuilt[index] = True
 
 

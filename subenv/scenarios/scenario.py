@@ -353,70 +353,103 @@ class Scenario:
             names: Sequence[str] = self.components
             pick = names[int(rng.integers(len(names)))]
             base = registry[pick] if registry is not None else get_scenario(pick)
-            config = base.sample(rng, weight_N, registry)
-            drawn = iter(self._draws.draw(rng))
-            return dataclasses.replace(
-                config,
-                z_GB_scale=config.z_GB_scale * next(drawn),
-                crossflow_drag=next(drawn) if self.crossflow_drag is not None else config.crossflow_drag,
-                sensor_noise=self.sensor_noise or config.sensor_noise,
-                disturbance_std_N=max(self.disturbance_std_N, config.disturbance_std_N),
-            )
+            return self._mixed(base.sample(rng, weight_N, registry), self._draws.draw(rng))
         return self._episode(self._draws.draw(rng), weight_N)
 
-    def sample_batch(self, uniforms: np.ndarray, weight_N: float) -> EpisodeConfig:
+    def sample_batch(self, uniforms: np.ndarray, weight_N: float, pick: int = 0) -> EpisodeConfig:
         """Many episodes at once, from their uniform numbers (a vector environment's resets).
 
-        Only for a scenario that draws every episode with one loading (:attr:`samples_in_batches`).
+        Only for a scenario whose draws are uniform numbers after a pick (:attr:`samples_in_batches`).
 
         Parameters
         ----------
         uniforms : ndarray, shape (n, k)
-            Row ``i`` holds the ``k`` = :attr:`uniforms_per_episode` numbers that :meth:`sample`
-            takes from episode ``i``'s generator (``rng.random(k)``).
+            Row ``i`` holds the ``k`` = ``uniforms_per_pick[pick]`` (:attr:`uniforms_per_pick`)
+            numbers that :meth:`sample` takes from episode ``i``'s generator (``rng.random(k)``,
+            after a mixture's pick).
         weight_N : float
             As for :meth:`sample`.
+        pick : int
+            The component of a mixture every one of these episodes picked (``rng.integers`` in
+            :meth:`sample`: an index into :attr:`components`); 0 for a plain scenario.
 
         Returns
         -------
         EpisodeConfig
             Its drawn fields are arrays of ``n``: row ``i`` is what :meth:`sample` draws with row
-            ``i``'s numbers; the others, the loading among them, are the scenario's values.
+            ``i``'s numbers; the others are the scenario's (or the component's) values.
         """
-        if not self.samples_in_batches:
-            raise ValueError(
-                f"scenario {self.name!r} cannot draw in batches: its loading changes from "
-                "episode to episode (or it is a mixture)"
-            )
+        counts = self._counts(pick)
         uniforms = np.asarray(uniforms, dtype=float)
-        if uniforms.ndim != 2 or uniforms.shape[1] != self.uniforms_per_episode:
-            raise ValueError(f"uniforms has shape {uniforms.shape}: must be (n, {self.uniforms_per_episode})")
-        return self._episode(self._draws.values(list(uniforms.T)), weight_N)
+        if uniforms.ndim != 2 or uniforms.shape[1] != counts[pick]:
+            raise ValueError(f"uniforms has shape {uniforms.shape}: must be (n, {counts[pick]})")
+        return self._from_uniforms(pick, list(uniforms.T), weight_N)
 
-    def episode_from_uniforms(self, uniforms: Sequence[float], weight_N: float) -> EpisodeConfig:
-        """The episode :meth:`sample` draws with these numbers (a row of :meth:`sample_batch`'s)."""
-        if self.components:
-            raise ValueError(f"scenario {self.name!r} is a mixture: its draw is not one row of numbers")
-        if len(uniforms) != self.uniforms_per_episode:
-            raise ValueError(f"uniforms has {len(uniforms)} numbers: must have {self.uniforms_per_episode}")
-        return self._episode(self._draws.values([float(u) for u in uniforms]), weight_N)
+    def episode_from_uniforms(
+        self, uniforms: Sequence[float], weight_N: float, pick: int = 0
+    ) -> EpisodeConfig:
+        """The episode :meth:`sample` draws with these numbers after ``pick`` (a row of
+        :meth:`sample_batch`'s)."""
+        counts = self._counts(pick)
+        if len(uniforms) != counts[pick]:
+            raise ValueError(f"uniforms has {len(uniforms)} numbers: must have {counts[pick]}")
+        return self._from_uniforms(pick, [float(u) for u in uniforms], weight_N)
 
     @property
     def uniforms_per_episode(self) -> int:
-        """How many uniform numbers a plain scenario's :meth:`sample` takes from the generator."""
+        """How many uniform numbers a plain scenario's :meth:`sample` takes from the generator (a
+        mixture's: those of its own randomisation, after its component's)."""
         return len(self._draws.drawn)
 
-    @cached_property
+    @property
+    def uniforms_per_pick(self) -> tuple[int, ...]:
+        """How many uniform numbers :meth:`sample` takes from the generator after its pick, one count per
+        component of a mixture (the component's, then the mixture's own), or one for a plain scenario.
+
+        Raises ``ValueError`` for a scenario that does not draw in batches (:attr:`samples_in_batches`).
+        """
+        if not self.samples_in_batches:
+            raise ValueError(
+                f"scenario {self.name!r} cannot draw in batches: a component of the mixture is a mixture "
+                f"({list(self.components)})"
+            )
+        if not self.components:
+            return (self.uniforms_per_episode,)
+        own = self.uniforms_per_episode
+        return tuple(get_scenario(name).uniforms_per_episode + own for name in self.components)
+
+    @property
     def samples_in_batches(self) -> bool:
-        """Every episode has the same loading and no mixture is drawn: :meth:`sample_batch` applies."""
-        loading = (
-            self.z_GB_m or (0.0, 0.0),
-            self.z_GB_scale,
-            self.x_GB_m,
-            self.excess_buoyancy_fraction,
-            self.crossflow_drag or (0.0, 0.0),
+        """Each of its draws is a pick and then uniform numbers (:meth:`sample_batch` applies): a plain
+        scenario, or a mixture of plain scenarios (as registered now)."""
+        return not any(get_scenario(name).components for name in self.components)
+
+    def _counts(self, pick: int) -> tuple[int, ...]:
+        """:attr:`uniforms_per_pick`, with ``pick`` checked against it."""
+        counts = self.uniforms_per_pick
+        check.integer("pick", pick, 0, len(counts) - 1)
+        return counts
+
+    def _from_uniforms(self, pick: int, units: Sequence[Any], weight_N: float) -> EpisodeConfig:
+        """The episode :meth:`sample` draws with ``pick``, then these uniform numbers (floats or arrays)."""
+        if not self.components:
+            return self._episode(self._draws.values(units), weight_N)
+        component = get_scenario(self.components[pick])
+        k = component.uniforms_per_episode
+        config = component._episode(component._draws.values(units[:k]), weight_N)
+        return self._mixed(config, self._draws.values(units[k:]))
+
+    def _mixed(self, config: EpisodeConfig, values: Sequence[Any]) -> EpisodeConfig:
+        """A mixture's episode: its component's draw ``config`` with the mixture's own randomisation on top,
+        from its drawn numbers (:attr:`_draws`), floats or arrays."""
+        drawn = iter(values)
+        return dataclasses.replace(
+            config,
+            z_GB_scale=config.z_GB_scale * next(drawn),
+            crossflow_drag=next(drawn) if self.crossflow_drag is not None else config.crossflow_drag,
+            sensor_noise=self.sensor_noise or config.sensor_noise,
+            disturbance_std_N=max(self.disturbance_std_N, config.disturbance_std_N),
         )
-        return not self.components and not self.x_GB_sign_random and all(low == high for low, high in loading)
 
     def _episode(self, values: Sequence[Any], weight_N: float) -> EpisodeConfig:
         """The episode of a plain scenario from its drawn numbers (:attr:`_draws`), floats or arrays."""
@@ -431,8 +464,9 @@ class Scenario:
         state = (next(drawn), next(drawn), next(drawn), depth)
         z_GB = next(drawn) if self.z_GB_m is not None else None
         x_GB = next(drawn)
-        if self.x_GB_sign_random and next(drawn) < 0.5:
-            x_GB = -x_GB
+        if self.x_GB_sign_random:  # a coin flip: -x_GB for a number below 1/2 (element for element)
+            flip = next(drawn) < 0.5
+            x_GB = np.where(flip, -x_GB, x_GB) if isinstance(flip, np.ndarray) else -x_GB if flip else x_GB
         return EpisodeConfig(
             speed_knots=knots,
             speed_relative=self.speed_relative,

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import itertools
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -18,6 +19,7 @@ from typing import Any, Final
 import numpy as np
 
 from subenv import _validation as check
+from subenv._typing import ArrayLike
 
 __all__ = [
     "BUOYANCY_RATIO_RANGE",
@@ -422,6 +424,76 @@ class Vehicle:
         return self.hull.centroid_x_m
 
     # --- variants -----------------------------------------------------------------------
+    def loading_fields(
+        self,
+        *,
+        z_GB_m: ArrayLike | None = None,
+        x_GB_m: ArrayLike | None = None,
+        excess_buoyancy_N: ArrayLike | None = None,
+        crossflow_drag: ArrayLike | None = None,
+    ) -> dict[str, Any]:
+        """The fields a loading sets (:meth:`variant`'s parameters; None leaves a field as it is), unchecked.
+
+        Each value may be an array, one loading per element (a vector environment's resets): its
+        fields are then arrays too, each element computed as for a variant with that loading.
+
+        Returns
+        -------
+        dict
+            ``z_G_m`` (G moved, B kept), ``x_G_m``, ``buoyancy_N`` (B changed, W kept) and
+            ``crossflow_drag``, those of them that the loading sets.
+        """
+        fields: dict[str, Any] = {}
+        if z_GB_m is not None:
+            fields["z_G_m"] = self.z_B_m + z_GB_m
+        if x_GB_m is not None:
+            fields["x_G_m"] = self.x_B_m + x_GB_m
+        if excess_buoyancy_N is not None:
+            fields["buoyancy_N"] = self.weight_N + excess_buoyancy_N
+        if crossflow_drag is not None:
+            fields["crossflow_drag"] = crossflow_drag
+        return fields
+
+    def check_loadings(
+        self,
+        *,
+        z_GB_m: ArrayLike | None = None,
+        x_GB_m: ArrayLike | None = None,
+        excess_buoyancy_N: ArrayLike | None = None,
+        crossflow_drag: ArrayLike | None = None,
+    ) -> None:
+        """Check loadings of this vehicle as :meth:`variant` checks one: the same ``ValueError`` for any
+        that is invalid.
+
+        Parameters
+        ----------
+        z_GB_m, x_GB_m, excess_buoyancy_N, crossflow_drag : float or ndarray, optional
+            As :meth:`variant`'s, an array of one loading per element (None: the field is not set).
+            Every loading within the box their ranges span is checked.
+
+        Notes
+        -----
+        Each quantity :meth:`variant` checks is monotone in each field of the loading (G's position and
+        B in their ranges, B / W, the hydrostatic moments) or, the mass matrix's, a parabola in x_G
+        whose least (the definiteness) or largest (the determinant) value on an interval lies at an
+        end. So the box passes when its corners do: :meth:`variant` is made at each (at most 16).
+        """
+        names: list[str] = []
+        ends: list[list[float]] = []
+        loading = {
+            "z_GB_m": z_GB_m,
+            "x_GB_m": x_GB_m,
+            "excess_buoyancy_N": excess_buoyancy_N,
+            "crossflow_drag": crossflow_drag,
+        }
+        for name, value in loading.items():
+            if value is not None:
+                names.append(name)
+                ends.append(sorted({float(np.min(value)), float(np.max(value))}))  # (nan: variant refuses it)
+        for corner in itertools.product(*ends):
+            fields: dict[str, Any] = dict(zip(names, corner, strict=True))
+            self.variant(**fields)
+
     def variant(
         self,
         *,
@@ -446,23 +518,22 @@ class Vehicle:
         name : str, optional
             Name of the variant; by default the base name with the changes appended.
         """
-        changes: dict[str, Any] = {}
         labels = []
         if z_GB_m is not None:
             z_GB_m = check.number("z_GB_m", z_GB_m)
-            changes["z_G_m"] = self.z_B_m + z_GB_m
             labels.append(f"z_GB={z_GB_m:g}m")
         if x_GB_m is not None:
             x_GB_m = check.number("x_GB_m", x_GB_m)
-            changes["x_G_m"] = self.x_B_m + x_GB_m
             labels.append(f"x_GB={x_GB_m:g}m")
         if excess_buoyancy_N is not None:
             excess_buoyancy_N = check.number("excess_buoyancy_N", excess_buoyancy_N)
-            changes["buoyancy_N"] = self.weight_N + excess_buoyancy_N
             labels.append(f"B-W={excess_buoyancy_N:g}N")
         if crossflow_drag is not None:
-            crossflow_drag = changes["crossflow_drag"] = check.non_negative("crossflow_drag", crossflow_drag)
+            crossflow_drag = check.non_negative("crossflow_drag", crossflow_drag)
             labels.append(f"C_D={crossflow_drag:g}")
+        changes = self.loading_fields(
+            z_GB_m=z_GB_m, x_GB_m=x_GB_m, excess_buoyancy_N=excess_buoyancy_N, crossflow_drag=crossflow_drag
+        )
         if not changes and name is None:
             return self
         changes["name"] = name if name is not None else f"{self.name}[{','.join(labels)}]"

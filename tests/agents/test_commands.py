@@ -7,7 +7,9 @@ import pickle
 import re
 import shutil
 import warnings
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -95,6 +97,16 @@ def _truncate(path: Path, fraction: float) -> None:
     path.write_bytes(data[: int(fraction * len(data))])
 
 
+def _change_statistics(folder: Path, change: Callable[[Any], object]) -> None:
+    """Load the folder's pickled statistics, change them, and pickle them back (the run id kept)."""
+    path = folder / "vecnormalize.pkl"
+    stats = pickle.loads(path.read_bytes())
+    change(stats)
+    for key, value in (("venv", None), ("class_attributes", {}), ("returns", None)):
+        vars(stats).setdefault(key, value)  # what VecNormalize.__getstate__ removes again
+    path.write_bytes(pickle.dumps(stats))
+
+
 _BREAKAGES = {
     "sac model in a ppo folder": (
         lambda f: shutil.copy(shipped_models()["sac"] / "model.zip", f / "model.zip"),
@@ -116,6 +128,18 @@ _BREAKAGES = {
     "statistics cut": (
         lambda f: _truncate(f / "vecnormalize.pkl", 0.5),
         r"vecnormalize\.pkl' cannot be read \(UnpicklingError",
+    ),
+    "statistics with a variance below 0": (
+        lambda f: _change_statistics(f, lambda stats: stats.obs_rms.var.__setitem__(0, -1.0)),
+        r"vecnormalize\.pkl': obs_rms\.var=\[-1\.0, .*\] is invalid: must be finite and >= 0",
+    ),
+    "statistics with a NaN mean": (
+        lambda f: _change_statistics(f, lambda stats: stats.obs_rms.mean.__setitem__(1, np.nan)),
+        r"vecnormalize\.pkl': obs_rms\.mean=\[.*, nan, .*\] is invalid: must be finite",
+    ),
+    "statistics clipping at 0": (
+        lambda f: _change_statistics(f, lambda stats: setattr(stats, "clip_obs", 0.0)),
+        r"vecnormalize\.pkl': clip_obs=0\.0 is invalid: must be finite and > 0",
     ),
     "statistics of another model": (
         lambda f: shutil.copy(shipped_models()["sac"] / "vecnormalize.pkl", f / "vecnormalize.pkl"),

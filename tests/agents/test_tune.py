@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import signal
 
 import pytest
 
@@ -27,6 +28,7 @@ SPACE = {"learning_rate": ("log", 1e-4, 1e-3), "gamma": ("choice", [0.99, 0.999]
 
 def test_a_tiny_search_trains_scores_and_keeps_every_trial(local_ray, tmp_path) -> None:  # type: ignore[no-untyped-def]
     out = tmp_path / "search"
+    handler = signal.getsignal(signal.SIGINT)
     best = search(
         "ppo", "subenv/LowSpeed-v0", out, space=SPACE, samples=2, timesteps=512, episodes=2, overrides=_SMALL
     )
@@ -38,6 +40,7 @@ def test_a_tiny_search_trains_scores_and_keeps_every_trial(local_ray, tmp_path) 
         assert 0.0 <= trial["success_rate"] <= 1.0 and math.isfinite(trial["plane_rms_rad"])
         assert (tmp_path / trial["run_dir"]).joinpath("model.zip").is_file() and trial["timesteps"] == 512
     assert best["success_rate"] == max(t["success_rate"] for t in trials)
+    assert signal.getsignal(signal.SIGINT) is handler  # (Ray Tune's own handler does not outlive the search)
     with pytest.raises(FileExistsError, match="holds a finished search"):
         search("ppo", "subenv/LowSpeed-v0", out, space=SPACE, samples=1, timesteps=512, overrides=_SMALL)
 

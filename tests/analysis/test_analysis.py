@@ -19,6 +19,7 @@ from subenv.analysis.bifurcation import (
     zeta,
 )
 from subenv.analysis.continuation import continue_equilibria
+from subenv.analysis.critical import critical_speeds
 from subenv.analysis.curriculum import speed_curriculum
 from subenv.analysis.design import (
     closed_loop_eigenvalues,
@@ -50,6 +51,23 @@ def test_critical_speed_three_ways(suboff, alpha, loading):
     three = critical_speed_three_ways(vehicle, alpha)
     assert three["eigenvalue"] == pytest.approx(three["closed_form"], rel=1e-9)
     assert three["controllability"] == pytest.approx(three["closed_form"], rel=1e-9)
+
+
+@pytest.mark.parametrize("alpha", [-1.0, 0.0, 0.5, "bow"])
+def test_critical_speeds_of_many_loadings_are_each_critical_speed_bit_for_bit(suboff, alpha):
+    # Negative metacentric heights among them: nan where critical_speed raises (no critical speed).
+    rng = np.random.default_rng(3)
+    z_GB, excess = rng.uniform(-0.01, 0.03, 300), rng.normal(0, 3, 300)
+    fields = suboff.loading_fields(z_GB_m=z_GB, excess_buoyancy_N=excess)
+    speeds = critical_speeds(suboff, alpha, fields)
+    for i in range(300):
+        try:
+            expected = critical_speed(suboff.variant(z_GB_m=z_GB[i], excess_buoyancy_N=excess[i]), alpha)
+        except ValueError:
+            expected = math.nan
+        assert np.float64(expected).tobytes() == speeds[i].tobytes(), i
+    assert 0 < np.isnan(speeds).sum() < 300
+    assert critical_speeds(suboff, alpha, {}) == critical_speed(suboff, alpha)  # no loading: the vehicle's
 
 
 def test_any_stabilising_gain_loses_stability_at_the_same_speed(suboff):

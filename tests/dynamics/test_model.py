@@ -7,6 +7,8 @@ import pytest
 
 from subenv.analysis import linear_model, numerical_jacobian
 from subenv.dynamics import derivatives, dual_plane_angles, model_params, stack_params
+from subenv.dynamics.free_surface import FreeSurface
+from subenv.dynamics.model import PARAM_FIELDS, pack_params
 
 
 def test_level_flight_is_an_equilibrium_of_the_neutral_boat(suboff):
@@ -24,12 +26,31 @@ def test_batched_equals_one_at_a_time(suboff):
     stern, bow = rng.uniform(-0.4, 0.4, n), rng.uniform(-0.4, 0.4, n)
     vehicles = [
         suboff.variant(x_GB_m=float(x), excess_buoyancy_N=float(e), crossflow_drag=float(c))
-        for x, e, c in zip(rng.normal(0, 2e-3, n), rng.normal(0, 3, n), rng.uniform(0, 0.6, n))
+        for x, e, c in zip(rng.normal(0, 2e-3, n), rng.normal(0, 3, n), rng.uniform(0, 0.6, n), strict=True)
     ]
     batch = derivatives(states, speeds, stern, bow, stack_params([model_params(v) for v in vehicles]))
     for i, v in enumerate(vehicles):
         one = derivatives(states[i], speeds[i], stern[i], bow[i], model_params(v))
         np.testing.assert_allclose(batch[i], one, rtol=1e-14, atol=1e-16)
+
+
+def test_params_of_many_loadings_are_each_variants_bit_for_bit(suboff):
+    # A vector environment's batch of resets computes its loadings' parameters as arrays: the same
+    # arithmetic as one variant's (NumPy's +, -, *, / are correctly rounded, as Python's), so the same bits.
+    rng = np.random.default_rng(2)
+    n = 200
+    z_GB, x_GB = rng.uniform(-0.01, 0.03, n), rng.normal(0, 2e-3, n)
+    excess, C_D = rng.normal(0, 3, n), rng.uniform(0, 0.6, n)
+    fields = suboff.loading_fields(z_GB_m=z_GB, x_GB_m=x_GB, excess_buoyancy_N=excess, crossflow_drag=C_D)
+    batch = pack_params(model_params(suboff, FreeSurface(), fields))
+    assert batch.shape == (n, len(PARAM_FIELDS))
+    for i in range(n):
+        vehicle = suboff.variant(
+            z_GB_m=z_GB[i], x_GB_m=x_GB[i], excess_buoyancy_N=excess[i], crossflow_drag=C_D[i]
+        )
+        assert batch[i].tobytes() == pack_params(model_params(vehicle, FreeSurface())).tobytes(), i
+    with pytest.raises(ValueError, match=r"loading has unknown fields \['z_GB_m'\]: allowed are \['x_G_m'"):
+        model_params(suboff, loading={"z_GB_m": 0.01})
 
 
 def test_physical_signs(suboff):

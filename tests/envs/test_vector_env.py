@@ -163,36 +163,78 @@ _DRAWS_ALL_BUT_THE_LOADING = Scenario(
     disturbance_std_N=0.7,
     duration_s=100.0,
 )
-_BATCH_READY = (
-    "Nominal",
-    "LowSpeed",
-    "NearCritical",
-    "SpeedTransient",
-    "PeriscopeDepth-v1",
-    "PeriscopeDepthWaves",
-    "PeriscopeDepth-v2",
-    "PeriscopeDepthWaves-v1",
+# Every number of an episode drawn, the loading among them (and the sign of x_GB).
+_DRAWS_EVERYTHING = _DRAWS_ALL_BUT_THE_LOADING.replace(
+    name="DrawsEverything",
+    z_GB_m=(0.006, 0.009),
+    z_GB_scale=(0.9, 1.1),
+    x_GB_m=(0.001, 0.003),
+    x_GB_sign_random=True,
+    excess_buoyancy_fraction=(-1e-3, 1e-3),
+    crossflow_drag=(0.2, 0.5),
 )
+# A mixture of one component picks without drawing a number (rng.integers(1) draws none).
+_ONE_COMPONENT = Scenario(
+    name="OneComponent",
+    description="BallastOffset, mixed",
+    components=("BallastOffset",),
+    z_GB_scale=(0.9, 1.1),
+)
+_BATCHES = (*scenario_names(), _DRAWS_ALL_BUT_THE_LOADING, _DRAWS_EVERYTHING, _ONE_COMPONENT)
+
+
+@numba.njit
+def _draws_of_numba_s_generators(rngs, highs, out):
+    for j in range(len(rngs)):
+        for k in range(highs.shape[0]):
+            out[j, 3 * k] = rngs[j].integers(0, highs[k])
+            out[j, 3 * k + 1] = rngs[j].random()
+            out[j, 3 * k + 2] = rngs[j].normal(0.0, 2.0)
+
+
+def test_numba_s_generator_integers_draws_numpy_s_numbers_for_ranges_below_2_to_the_32():
+    # A batch of resets picks a mixture's component with numba's Generator.integers (transition's
+    # draw_reset_numbers): the same numbers as NumPy's Generator.integers, each generator left in the same
+    # state (its buffered half of a 64-bit draw included), for any seed and range size below 2**32 (beyond,
+    # numba's differs: 2**62 + 3 gives other numbers).
+    highs = np.array([1, 2, 3, 5, 6, 7, 9, 100, 1000, 2**16 + 1, 2**31 - 1, 2**32 - 1, 2**32], dtype=np.int64)
+    seeds = range(1000)
+    rngs = numba.typed.List([np.random.default_rng(seed) for seed in seeds])
+    out = np.empty((len(seeds), 3 * len(highs)))
+    _draws_of_numba_s_generators(rngs, highs, out)
+    for j, seed in enumerate(seeds):
+        g = np.random.default_rng(seed)
+        expected = [x for high in highs.tolist() for x in (g.integers(high), g.random(), g.normal(0.0, 2.0))]
+        assert out[j].tolist() == expected, seed
+        assert rngs[j].bit_generator.state == g.bit_generator.state, seed
 
 
 def test_which_scenarios_draw_their_resets_in_batches():
-    ready = {name for name in scenario_names() if get_scenario(name).samples_in_batches}
-    assert ready == set(_BATCH_READY)  # the others draw a loading per episode, or a mixture
-    assert _DRAWS_ALL_BUT_THE_LOADING.samples_in_batches
+    assert all(get_scenario(name).samples_in_batches for name in scenario_names())
+    nested = Scenario(
+        name="Nested", description="a mixture of a mixture", components=("Randomized", "Nominal")
+    )
+    assert not nested.samples_in_batches
+    with pytest.raises(
+        ValueError, match=r"scenario 'Nested' cannot draw in batches: a component of the mixture"
+    ):
+        nested.sample_batch(np.zeros((3, 5)), 1.0)
+    randomized = get_scenario("Randomized")
+    counts = [get_scenario(name).uniforms_per_episode + 2 for name in randomized.components]
+    assert randomized.uniforms_per_pick == tuple(counts)
     uniforms = np.zeros((3, get_scenario("Nominal").uniforms_per_episode))
-    with pytest.raises(ValueError, match="scenario 'PeriscopeDepth' cannot draw in batches"):
-        get_scenario("PeriscopeDepth").sample_batch(uniforms, 1.0)
     with pytest.raises(ValueError, match=r"uniforms has shape \(3, 2\): must be \(n, 3\)"):
         get_scenario("Nominal").sample_batch(uniforms[:, :2], 1.0)
+    with pytest.raises(ValueError, match=r"pick=6 is invalid: must be an integer in \[0, 5\]"):
+        randomized.sample_batch(uniforms, 1.0, pick=6)
 
 
-@pytest.mark.parametrize(
-    "scenario", [*_BATCH_READY, _DRAWS_ALL_BUT_THE_LOADING], ids=lambda s: s if isinstance(s, str) else s.name
-)
+@pytest.mark.parametrize("scenario", _BATCHES, ids=lambda s: s if isinstance(s, str) else s.name)
 def test_batch_resets_draw_exactly_what_one_reset_at_a_time_draws(scenario):
-    # A batch of resets (a vector env's, for a scenario with one loading) takes each sub-environment's
-    # numbers in a compiled loop and turns them into records over arrays: the same records, bit for
-    # bit, the same episodes and vehicles, and every generator left where one reset at a time leaves it.
+    # A batch of resets (a vector env's) takes each sub-environment's numbers in a compiled loop (a
+    # mixture's pick among them) and turns them into records over arrays, a loading per episode where
+    # the scenario draws one: the same records, bit for bit, the same episodes and vehicles (made when
+    # asked for), and every generator left where one reset at a time leaves it.
     n = 64
     batch = DivePlaneVectorEnv(num_envs=n, scenario=scenario)
     batch.reset(seed=5)
@@ -202,8 +244,11 @@ def test_batch_resets_draw_exactly_what_one_reset_at_a_time_draws(scenario):
     for i in range(n):
         batch._generators[i] = batch._rngs[i] = np.random.default_rng(100 + i)
     batch._draw_batch(np.arange(n))
+    drawn, vehicles = [], []
     for i, g in enumerate(generators):
         draw, loading, episode, state = draw_episode(config, g, loadings)
+        drawn.append(draw)
+        vehicles.append(loading.vehicle)
         episodes, states = np.zeros(1, tr.EPISODE_DTYPE), np.zeros(1, tr.STATE_DTYPE)
         write_episode(episodes, 0, episode)
         write_episode(states, 0, state)
@@ -211,13 +256,36 @@ def test_batch_resets_draw_exactly_what_one_reset_at_a_time_draws(scenario):
         assert batch._state[i].tobytes() == states[0].tobytes(), i
         if episode["n_waves"] > 0:  # and the sea, where the episode has one
             assert batch._seas[i].tobytes() == episode["waves"].tobytes(), i
-        assert batch.episodes[i] == draw and batch.vehicles[i] == loading.vehicle
-        assert all(type(v) is float for v in (*draw.initial_state, draw.depth_command_m))
-        assert batch._generators[i].random() == g.random()
-    drawn = np.stack(
+        assert batch._generators[i].bit_generator.state == g.bit_generator.state
+    assert batch.episodes == drawn and batch.vehicles == vehicles
+    assert all(type(v) is float for draw in drawn for v in (*draw.initial_state, draw.depth_command_m))
+    values = np.stack(
         [batch._state["depth_m"], batch._episode["depth_command_m"], batch._state["disturbance_N"]]
     )
-    assert np.unique(drawn, axis=1).shape[1] == n  # drawn, not shared
+    assert np.unique(values, axis=1).shape[1] == n  # drawn, not shared
+    components = config.scenario.components
+    if len(components) > 1:  # (64 resets pick every one of a few components)
+        assert len(np.unique(batch._unbuilt_pick)) == len(components)
+
+
+def test_a_batch_of_resets_refuses_the_loadings_one_reset_at_a_time_refuses():
+    # Some loadings of this scenario are beyond what a submerged vehicle may have (B < W / 2): a batch,
+    # which checks its loadings as a box, refuses them as one reset at a time does, naming B / W.
+    sinking = Scenario(name="Sinking", description="too heavy", excess_buoyancy_fraction=(-0.7, -0.3))
+    for n in (2, 64):  # one at a time, and a batch
+        env = DivePlaneVectorEnv(num_envs=n, scenario=sinking)
+        with pytest.raises(
+            ValueError, match=r"buoyancy_N=.* are invalid: B / W = 0\.[34].* must be in \[0\.5, 2"
+        ):
+            env.reset(seed=0)
+    # A loading without a critical speed, for speeds relative to it: named, in a batch as one at a time.
+    unstable = subenv.load_vehicle("suboff").variant(z_GB_m=-0.01)
+    for n in (2, 64):
+        env = DivePlaneVectorEnv(num_envs=n, scenario="LowSpeed", vehicle=unstable)
+        with pytest.raises(
+            ValueError, match=r"'LowSpeed' gives speeds relative .* with z_GB=-0\.01 m has none"
+        ):
+            env.reset(seed=0)
 
 
 @pytest.mark.parametrize("mode", MODES, ids=lambda m: m.value)
@@ -261,6 +329,19 @@ def test_episodes_of_batches_from_different_scenarios_are_each_their_own():
     assert (
         widths[0] == get_scenario("Nominal").uniforms_per_episode < widths[-1]
     )  # SpeedTransient drew in a batch
+
+
+def test_episodes_of_a_batch_keep_the_length_scaling_of_the_scenario_they_were_drawn_from():
+    # A batch's episodes are made when asked for: Froude-scaled to the vehicle by the reference length of
+    # their own scenario, also after a switch to a scenario with another (here none: episodes as drawn).
+    as_drawn = get_scenario("Nominal").replace(name="NominalAsDrawn", reference_length_m=None)
+    sync = gym.make_vec("subenv/Nominal-v0", num_envs=8, vectorization_mode="sync", vehicle="remus100")
+    native = gym.make_vec("subenv/Nominal-v0", num_envs=8, vehicle="remus100")
+    native.reset(seed=4)
+    sync.reset(seed=4)
+    native.unwrapped.set_scenario(as_drawn)
+    sync.call("set_scenario", as_drawn)
+    assert native.unwrapped.episodes == [env.unwrapped.episode for env in sync.envs]
 
 
 _TWO_RUNS = 2 * tr.BLOCKS_PER_RUN * LANES  # sub-environments that two threads share

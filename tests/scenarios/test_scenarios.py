@@ -207,6 +207,32 @@ def test_a_draw_is_its_uniform_numbers_mapped_onto_the_intervals() -> None:
         scenario.episode_from_uniforms([0.5, 0.5], 1000.0)
 
 
+@pytest.mark.parametrize("name", ["Randomized", "Mixed"])
+def test_a_mixture_s_draw_is_its_pick_and_then_uniform_numbers(name) -> None:
+    # A mixture's draw: rng.integers(len(components)), then its component's numbers and its own, all
+    # uniform (rng.random(k)), which episode_from_uniforms and sample_batch (a vector env's resets) map
+    # as sample() does: the episode of a pick and numbers, element for element in a batch.
+    scenario = get_scenario(name)
+    counts = scenario.uniforms_per_pick
+    rows = collections.defaultdict(list)
+    for seed in range(60):
+        rng, twin = np.random.default_rng(seed), np.random.default_rng(seed)
+        pick = int(twin.integers(len(counts)))
+        uniforms = twin.random(counts[pick])
+        one = scenario.sample(rng, 1000.0)
+        assert one == scenario.episode_from_uniforms(uniforms, 1000.0, pick)
+        assert rng.bit_generator.state == twin.bit_generator.state
+        rows[pick].append((uniforms, one))
+    assert len(rows) == len(counts)  # every component picked
+    for pick, drawn in rows.items():
+        batch = scenario.sample_batch(np.array([u for u, _ in drawn]), 1000.0, pick)
+        for i, (_, one) in enumerate(drawn):
+            assert batch.z_GB_scale[i] == one.z_GB_scale and batch.crossflow_drag[i] == one.crossflow_drag
+            assert np.broadcast_to(batch.x_GB_m, len(drawn))[i] == one.x_GB_m
+            assert batch.depth_command_m[i] == one.depth_command_m
+        assert (batch.sensor_noise, batch.disturbance_std_N) == (one.sensor_noise, one.disturbance_std_N)
+
+
 _ALL_RANDOM = Scenario(
     # Every quantity drawn, from pairwise disjoint intervals: a value landing in another's field shows.
     name="AllRandom",

@@ -205,6 +205,59 @@ def test_variant_checks_what_it_changes(suboff):
         suboff.variant(crossflow_drag=-0.1)
 
 
+def test_loading_fields_are_the_variants_fields_element_for_element(suboff):
+    rng = np.random.default_rng(4)
+    z_GB, x_GB, excess, C_D = (
+        rng.uniform(-0.01, 0.02, 50),
+        rng.normal(0, 2e-3, 50),
+        rng.normal(0, 3, 50),
+        rng.uniform(0, 0.6, 50),
+    )
+    fields = suboff.loading_fields(z_GB_m=z_GB, x_GB_m=x_GB, excess_buoyancy_N=excess, crossflow_drag=C_D)
+    for i in range(50):
+        v = suboff.variant(z_GB_m=z_GB[i], x_GB_m=x_GB[i], excess_buoyancy_N=excess[i], crossflow_drag=C_D[i])
+        assert {name: value[i] for name, value in fields.items()} == {
+            name: getattr(v, name) for name in fields
+        }
+    assert suboff.loading_fields(x_GB_m=0.001).keys() == {"x_G_m"}
+
+
+def test_check_loadings_refuses_a_box_of_loadings_exactly_when_variant_refuses_one_of_them(suboff):
+    # A batch of resets checks its loadings by the corners of their box (every check of variant() is
+    # monotone in each field, or worst at an end of x_G's range): the box must be refused when, and only
+    # when, one of the loadings in it is. Near the bounds: G beyond the hull, B / W beyond [0.5, 2], the
+    # mass matrix indefinite (|x_G| about a radius of gyration), C_D < 0.
+    rng = np.random.default_rng(0)
+    W, L = suboff.weight_N, suboff.length_m
+    outcomes = set()
+    for _ in range(60):
+        scale = rng.choice([0.05, 0.5, 1.0])
+        loading = {
+            "z_GB_m": rng.uniform(-1.2, 1.2, 4) * L * scale,
+            "x_GB_m": rng.uniform(-0.6, 0.6, 4) * L * scale,
+            "excess_buoyancy_N": rng.uniform(-0.7, 1.2, 4) * W * scale,
+            "crossflow_drag": rng.uniform(-0.1, 1.0, 4) if scale < 1.0 else None,
+        }
+        refused = []
+        for i in range(4):
+            one = {name: None if value is None else float(value[i]) for name, value in loading.items()}
+            try:
+                suboff.variant(**one)
+            except ValueError as exc:
+                refused.append(str(exc))
+        try:
+            suboff.check_loadings(**loading)
+        except ValueError as exc:
+            assert refused, exc
+            outcomes.add("refused")
+        else:
+            assert not refused, refused
+            outcomes.add("passed")
+    assert outcomes == {"refused", "passed"}
+    with pytest.raises(ValueError, match=r"x_GB_m=nan is invalid: must be a finite number"):
+        suboff.check_loadings(x_GB_m=np.array([0.001, math.nan]))
+
+
 # --- physical admissibility and hostile files (issue 18, finding 6) ---------------------------------
 
 
