@@ -63,12 +63,17 @@ def _suction_point(
     first_row: int,
 ) -> tuple[Any, Any]:
     """:func:`subenv.dynamics.free_surface.suction_point` for JAX: both theories' twins, the loading's
-    picked (a branch on a number in the compiled code); no deep-water shortcut (the terms sum to zero
-    there)."""
+    picked (a branch on a number in the compiled code), and exactly 0 in deep water (``rho_suction`` 0)
+    as the compiled code's shortcut gives: the sums times 0 would be NaN where a sum is not finite (the
+    slender-body sums of a tumbling boat)."""
     sources = _sources_suction(theta, depth, u, rho_suction, hull, first_row)
     slender = _slender_suction(theta, w, q, depth, u, rho_suction, hull, first_row + surface.SLENDER_ROW)
     pick = suction_model == surface.SOURCES_ONLY
-    return jnp.where(pick, sources[0], slender[0]), jnp.where(pick, sources[1], slender[1])
+    deep = rho_suction == 0.0
+    return (
+        jnp.where(deep, 0.0, jnp.where(pick, sources[0], slender[0])),
+        jnp.where(deep, 0.0, jnp.where(pick, sources[1], slender[1])),
+    )
 
 
 def _sources_suction(
