@@ -58,6 +58,7 @@ from subenv.analysis.report import (  # noqa: E402
     surface_depths,
 )
 from subenv.analysis.reversal import level_flight_trim  # noqa: E402
+from subenv.dynamics.free_surface import validity_depth_m  # noqa: E402
 from subenv.scenarios import get_scenario  # noqa: E402
 from subenv.thesis import reference_length_ratio  # noqa: E402
 from subenv.units import mps_to_fps  # noqa: E402
@@ -148,8 +149,9 @@ def _surface_markdown(vehicle: Vehicle, found: SurfaceFindings) -> list[str]:
     )
     lines = [header, "|---:|---:|---:|---:|---:|---:|"]
     for c, z, g in zip(found.critical, found.suction_N, found.growth_per_s, strict=True):
+        mark = "" if c.within_validity else " *"
         lines.append(
-            f"| {c.depth_m:.2f} | {z:.3f} | {c.speed_mps:.4f} | {c.speed_numerical_mps:.4f} | "
+            f"| {c.depth_m:.2f}{mark} | {z:.3f} | {c.speed_mps:.4f} | {c.speed_numerical_mps:.4f} | "
             f"{100 * c.shift:+.2f} % | {g:+.4f} |"
         )
     alphas = tuple(found.held)
@@ -164,13 +166,17 @@ def _surface_markdown(vehicle: Vehicle, found: SurfaceFindings) -> list[str]:
         "## Beyond the thesis: level flight near the free surface",
         "",
         "Riedel (1993) Ch. VI's first recommendation: a more complete expression for the free surface's",
-        "effect, taken into the bifurcation analysis. The model (`subenv.dynamics.free_surface`) is the",
-        "rigid-lid suction of the hull's slender-body sources (Lagally's force in the flow of their images",
-        "above the surface; the zero-Froude limit of Havelock's free-surface source, as in McCreight 1970):",
-        "up, proportional to u^2, falling as h^-4 far away, with a nose-up moment that grows as the bow",
-        "rises. It enters the one right-hand side, so the critical speed (eq. 3.9 with the suction's pitch",
-        "derivatives, checked by the root of the linearised steady depth-rate gain), the trims and their",
-        "stability follow from it.",
+        "effect, taken into the bifurcation analysis. The model (`subenv.dynamics.free_surface`, the",
+        "[free surface's page](../free_surface.md)) is the consistent first-order slender-body theory",
+        "under a rigid lid (the zero-Froude limit of Havelock's free-surface source): the Lagally force of",
+        "the hull's sources in their images' flow, the couple u int (rho S + a_33) w dx of the dipoles the",
+        "images raise, and the images of the hull's own cross-flow (its share of Z_w, M_w, Z_q, M_q). The",
+        "force is up, proportional to u^2 and falls as h^-4 far away; in level flight the moment grows as",
+        "the bow rises. It enters the one right-hand side, so the critical speed (eq. 3.9 with the suction's",
+        "pitch and heave derivatives, checked by the root of the linearised steady depth-rate gain), the",
+        "trims and their stability follow from it. The model holds deeper than two hull radii "
+        f"({validity_depth_m(vehicle):.3g} m) and for u^2 / (g h) up to 0.25; depths marked * lie",
+        "shallower, where it is extrapolated (its line images' error grows as (r / 2h)^2).",
         f"Deep-water u_cr = {ucr:.4f} m/s.",
         "",
         *lines,
@@ -196,7 +202,7 @@ def _surface_figure(fig: Any, vehicle: Vehicle, found: SurfaceFindings) -> str:
     )
     depths = np.geomspace(shallowest, top, 120)
     closed = [surface_critical_speed(vehicle, h).speed_mps / ucr for h in depths]
-    left.plot(closed, depths, lw=1.2, label="eq. 3.9 with the suction's\npitch derivatives")
+    left.plot(closed, depths, lw=1.2, label="eq. 3.9 with the suction's\npitch and heave derivatives")
     left.plot(
         [c.speed_numerical_mps / ucr for c in found.critical],
         [c.depth_m for c in found.critical],

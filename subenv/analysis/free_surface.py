@@ -21,7 +21,7 @@ from subenv import _validation as check
 from subenv._typing import FloatArray
 from subenv.analysis.critical import critical_speed
 from subenv.analysis.linear import check_alpha, plane_derivatives
-from subenv.dynamics.free_surface import FreeSurface, suction
+from subenv.dynamics.free_surface import FreeSurface, suction, validity_depth_m
 from subenv.dynamics.model import ModelParams, derivatives, model_params
 from subenv.dynamics.waves import SeaState
 from subenv.thesis import reference_length_ratio
@@ -119,9 +119,11 @@ class SurfaceCriticalSpeed:
     At the critical speed a held plane angle no longer changes the steady depth rate (Riedel 1993
     Ch. III; eq. 3.9 in deep water). Near the surface the suction adds a pitch stiffness
     dM_fs/dtheta and a heave force dZ_fs/dtheta, both proportional to u^2 (per u^2:
-    ``suction_M_theta``, ``suction_Z_theta``), and eq. 3.9 becomes
+    ``suction_M_theta``, ``suction_Z_theta``), and, in the slender-body theory, changes the heave
+    derivatives Z_w and M_w by dZ_fs/dw and dM_fs/dw, proportional to u (per u: ``suction_Z_w``,
+    ``suction_M_w``). In level flight w = u theta to first order, and eq. 3.9 becomes
 
-        u_cr^2 = Z_d (z_G W - z_B B) / (M_w Z_d - Z_w M_d + Z_d m_theta - z_theta M_d).
+        u_cr^2 = Z_d (z_G W - z_B B) / ((M_w + m_w) Z_d - (Z_w + z_w) M_d + Z_d m_theta - z_theta M_d).
 
     Attributes
     ----------
@@ -135,6 +137,10 @@ class SurfaceCriticalSpeed:
         Eq. 3.9, deep water [m/s].
     suction_Z_theta, suction_M_theta : float
         dZ_fs/dtheta / u^2 [kg/m per rad] and dM_fs/dtheta / u^2 [kg per rad] at level flight.
+    suction_Z_w, suction_M_w : float
+        dZ_fs/dw / u [kg/m] and dM_fs/dw / u [kg] at level flight (0 in the sources-only theory).
+    within_validity : bool
+        ``depth_m`` at least :func:`~subenv.dynamics.free_surface.validity_depth_m` (the model's range).
     """
 
     depth_m: float
@@ -143,6 +149,9 @@ class SurfaceCriticalSpeed:
     deep_speed_mps: float
     suction_Z_theta: float
     suction_M_theta: float
+    suction_Z_w: float = 0.0
+    suction_M_w: float = 0.0
+    within_validity: bool = True
 
     @property
     def shift(self) -> float:
@@ -274,7 +283,10 @@ def surface_trim(
         axis=1,
     )
     eig = np.linalg.eigvals(jac)
-    Zfs, Mfs = (float(a) for a in suction(params.hull, theta, h, u, params.rho_suction))
+    Zfs, Mfs = (
+        float(a)
+        for a in suction(params.hull, theta, h, u, params.rho_suction, x0[1], 0.0, params.suction_model)
+    )
     Zw, Mw = sea_mean_suction(vehicle, sea_state, h)
     return SurfaceTrim(
         depth_m=h,
@@ -356,12 +368,18 @@ def surface_critical_speed(
     Z_d, M_d = plane_derivatives(vehicle, alpha)
     c = vehicle.coefficients
     restoring = vehicle.z_G_m * vehicle.weight_N - vehicle.z_B_m * vehicle.buoyancy_N
-    # The suction's pitch derivatives per u^2, by central differences at u = 1 m/s.
-    Zp, Mp = suction(params.hull, _EPS, h, 1.0, params.rho_suction)
-    Zm, Mm = suction(params.hull, -_EPS, h, 1.0, params.rho_suction)
-    z_theta, m_theta = float(Zp - Zm) / (2 * _EPS), float(Mp - Mm) / (2 * _EPS)
-    denominator = c.M_w * Z_d - c.Z_w * M_d + Z_d * m_theta - z_theta * M_d
-    closed = math.sqrt(Z_d * restoring / denominator)  # Riedel (1993) eq. 3.9 with the suction's stiffness
+
+    # The suction's pitch derivatives per u^2 and heave derivatives per u: central differences at u = 1 m/s.
+    def at(pitch: float, heave: float) -> tuple[float, float]:
+        Z, M = suction(params.hull, pitch, h, 1.0, params.rho_suction, heave, 0.0, params.suction_model)
+        return float(Z), float(M)
+
+    (Zp, Mp), (Zm, Mm) = at(_EPS, 0.0), at(-_EPS, 0.0)
+    z_theta, m_theta = (Zp - Zm) / (2 * _EPS), (Mp - Mm) / (2 * _EPS)
+    (Zp, Mp), (Zm, Mm) = at(0.0, _EPS), at(0.0, -_EPS)
+    z_w, m_w = (Zp - Zm) / (2 * _EPS), (Mp - Mm) / (2 * _EPS)
+    denominator = (c.M_w + m_w) * Z_d - (c.Z_w + z_w) * M_d + Z_d * m_theta - z_theta * M_d
+    closed = math.sqrt(Z_d * restoring / denominator)  # Riedel (1993) eq. 3.9 with the suction's derivatives
 
     def depth_rate_gain(u: float) -> float:
         # Held planes delta: the steady (theta, w) of the (w, q) balances with q = 0, and its depth rate.
@@ -380,4 +398,6 @@ def surface_critical_speed(
 
     deep = critical_speed(vehicle, alpha)
     numerical = brentq(depth_rate_gain, 0.5 * deep, 1.5 * deep, xtol=1e-10)
-    return SurfaceCriticalSpeed(h, closed, float(numerical), deep, z_theta, m_theta)
+    return SurfaceCriticalSpeed(
+        h, closed, float(numerical), deep, z_theta, m_theta, z_w, m_w, h >= validity_depth_m(vehicle)
+    )

@@ -17,8 +17,8 @@ the moments there (:func:`moments_on_segment`) and the integrals from them
 (:func:`subenv.dynamics.integrate.control_period_lanes`) runs the same steps over a block of
 states, each as one loop. :func:`crossflow_integrals` is the batched form for NumPy callers.
 
-The hull's table (:attr:`HullTable.packed`) also holds its sources for the free surface's suction
-(:func:`source_rows`; :mod:`subenv.dynamics.free_surface` reads them there).
+The hull's table (:attr:`HullTable.packed`) also holds its sources and axis points for the free surface's
+suction (:func:`source_rows`, :func:`slender_points`; :mod:`subenv.dynamics.free_surface` reads them there).
 """
 
 from __future__ import annotations
@@ -34,6 +34,7 @@ from subenv._typing import FloatArray
 from subenv.dynamics._jit import clip, inline_kernel, kernel, rows, select
 
 __all__ = [
+    "SLENDER_ROW",
     "SOURCE_ROW",
     "SOURCE_ROWS",
     "HullTable",
@@ -44,16 +45,21 @@ __all__ = [
     "cumulative_moments_point",
     "hull_segment",
     "moments_on_segment",
+    "slender_points",
     "source_rows",
 ]
 
 
 SOURCE_ROW: Final = 7
 """First row of the hull's sources in :attr:`HullTable.packed` (:func:`source_rows`)."""
-SOURCE_ROWS: Final = 3
-"""Rows the hull table (:attr:`HullTable.packed`) gives the hull's sources: one column per hull segment,
-where its sources are lumped, x [m], its change of cross-section S(x_aft) - S(x_fore) [m^2] (the
-segment's source strength per unit speed) and its mean radius [m]."""
+SOURCE_ROWS: Final = 7
+"""Rows the hull table (:attr:`HullTable.packed`) gives the free surface, one column per hull segment:
+rows 0-2 the sources of the sources-only theory (:func:`subenv.dynamics.free_surface.sources_suction`),
+where each segment's sources are lumped, x [m], its change of cross-section S(x_aft) - S(x_fore) [m^2]
+(the segment's source strength per unit speed) and its mean radius [m]; rows 3-6 (:data:`SLENDER_ROW` on)
+the slender-body theory's axis points (:func:`slender_points`)."""
+SLENDER_ROW: Final = 3
+"""The slender-body points' first row (:func:`slender_points`), relative to the sources' first row."""
 
 
 def source_rows(x_m: FloatArray, breadth_m: FloatArray) -> FloatArray:
@@ -77,7 +83,55 @@ def source_rows(x_m: FloatArray, breadth_m: FloatArray) -> FloatArray:
     sources[0, :-1] = x[:-1] + dx * share
     sources[1, :-1] = area[:-1] - area[1:]  # x ascending: segment i runs aft (x[i]) to fore (x[i+1])
     sources[2, :-1] = 0.25 * (b[:-1] + b[1:])
+    sources[SLENDER_ROW:, :-1] = slender_points(x, b)
     return sources
+
+
+_GAUSS_NODE: Final = 1.0 / math.sqrt(3.0)  # two-point Gauss-Legendre nodes, +-1/sqrt(3) of the half-width
+
+
+def slender_points(x_m: FloatArray, breadth_m: FloatArray) -> FloatArray:
+    """The axis points of the slender-body theory (:func:`subenv.dynamics.free_surface.slender_suction`),
+    shape (4, n_segments): x [m], source strength per unit speed [m^2], cross-flow dipole weight [m^3] and
+    radius [m], from ascending stations ``x_m`` and breadths ``breadth_m`` (b linear between stations;
+    circular sections).
+
+    The hull is cut into n_segments // 2 panels of equal length (a last column of zeros when n_segments is
+    odd), each carried by two points at its Gauss-Legendre nodes whose strengths have the panel's exact
+    zeroth and first moments: of the source density m(x) = -dS/dx (per unit speed; Newman 1977 ch. 7) and
+    of the dipole weight (S + a_33 / rho) = 2 S (a circle's added mass a_33 = rho S, Newman 1977 ch. 4).
+    The panels' points have the hull's exact total source (zero), dipole moment (-u V) and volume, and
+    resolve the long parallel midbody that one point per segment lumps (docs/free_surface.md measures
+    the convergence); as many points as segments, so the table keeps its shape.
+    """
+    x = np.asarray(x_m, dtype=float)
+    b = np.asarray(breadth_m, dtype=float)
+    n_seg = x.size - 1
+    panels = n_seg // 2
+    out = np.zeros((4, n_seg))
+    edges = np.linspace(x[0], x[-1], panels + 1)
+    nodes, weights = np.polynomial.legendre.leggauss(3)  # exact for S x (cubic) on each linear piece
+
+    def area(at: FloatArray) -> FloatArray:
+        return 0.25 * math.pi * np.interp(at, x, b) ** 2
+
+    for i, (lo, hi) in enumerate(zip(edges[:-1], edges[1:], strict=True)):
+        mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+        cuts = np.concatenate([[lo], x[(x > lo) & (x < hi)], [hi]])
+        a0, a1 = cuts[:-1, None], cuts[1:, None]
+        at = 0.5 * (a0 + a1) + 0.5 * (a1 - a0) * nodes
+        volume = float(np.sum(0.5 * (a1 - a0) * weights * area(at)))  # int S dx
+        volume_moment = float(np.sum(0.5 * (a1 - a0) * weights * area(at) * (at - mid)))  # int S (x - mid) dx
+        s_lo, s_hi = area(np.array([lo, hi]))
+        source = s_lo - s_hi  # int -S' dx
+        source_moment = s_lo * (lo - mid) - s_hi * (hi - mid) + volume  # int -S' (x - mid) dx, by parts
+        gap = _GAUSS_NODE * half
+        for total, first, row in ((source, source_moment, 1), (2.0 * volume, 2.0 * volume_moment, 2)):
+            out[row, 2 * i] = 0.5 * (total - first / gap)
+            out[row, 2 * i + 1] = 0.5 * (total + first / gap)
+        out[0, 2 * i : 2 * i + 2] = (mid - gap, mid + gap)
+        out[3, 2 * i : 2 * i + 2] = 0.5 * np.interp([mid - gap, mid + gap], x, b)
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -112,11 +166,11 @@ class HullTable:
 
     @cached_property
     def packed(self) -> FloatArray:
-        """The table as one C-contiguous (10, n_stations) array, the form the kernels take.
+        """The table as one C-contiguous (14, n_stations) array, the form the kernels take.
 
         Row 0 is ``x``; rows 1 and 2 are ``c0`` and ``c1``; rows 3-6 are ``offset[k]`` with
-        ``total[k]`` in the last column; rows 7-9 (:data:`SOURCE_ROW` on) the hull's sources for the
-        free-surface suction (:func:`source_rows`).
+        ``total[k]`` in the last column; rows 7-13 (:data:`SOURCE_ROW` on) the hull's sources and axis
+        points for the free-surface suction (:func:`source_rows`).
         """
         n = self.x.size
         packed = np.zeros((SOURCE_ROW + SOURCE_ROWS, n))

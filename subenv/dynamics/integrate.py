@@ -104,6 +104,7 @@ NO_WAVES: Final = np.zeros((1, WAVE_FIELDS, MAX_WAVES))
 ``LANE_WAVES`` 0)."""
 NO_WAVES.flags.writeable = False
 _RHO_SUCTION: Final = PARAM_FIELDS.index("rho_suction")
+_SUCTION_MODEL: Final = PARAM_FIELDS.index("suction_model")
 
 
 @inline_kernel
@@ -163,14 +164,18 @@ def _free_surface_lanes(block: FloatArray, n: int, hull: FloatArray, waves: Floa
     the machine code of a step, and every step in deep water, which never runs them, was about a fifth
     slower for it."""
     L = LANES
-    theta, depth = _STAGE * L, (_STAGE + 3) * L
+    theta, w, q, depth = _STAGE * L, (_STAGE + 1) * L, (_STAGE + 2) * L, (_STAGE + 3) * L
     rho_suction = (LANE_PARAMS + _RHO_SUCTION) * L
+    suction_model = (LANE_PARAMS + _SUCTION_MODEL) * L
     for j in range(n):  # exactly 0.0 for a lane in deep water without a sea
         Z_fs, M_fs = suction_point(
             block[theta + j],
+            block[w + j],
+            block[q + j],
             block[depth + j],
             block[_SPEED * L + j],
             block[rho_suction + j],
+            block[suction_model + j],
             hull,
             SOURCE_ROW,
         )
@@ -178,6 +183,7 @@ def _free_surface_lanes(block: FloatArray, n: int, hull: FloatArray, waves: Floa
             block[_TIME * L + j],
             block[_DISTANCE * L + j],
             block[depth + j],
+            block[_SPEED * L + j],
             waves[minimum(j, waves.shape[0] - 1)],
             int(block[LANE_WAVES * L + j]),
         )

@@ -65,12 +65,14 @@ class ModelParams(NamedTuple):
     zGW_minus_zBB: ArrayLike  # z_G W - z_B B [N m]
     half_rho_CD: ArrayLike  # (rho/2) C_D [kg/m^3]
     rho_suction: ArrayLike  # rho times FreeSurface.suction_factor [kg/m^3]; 0: deep water
+    suction_model: ArrayLike  # FreeSurface.suction_model: free_surface.SLENDER_BODY or SOURCES_ONLY
     hull: HullTable
 
 
 PARAM_FIELDS = ModelParams._fields[:-1]
 """The numeric fields of :class:`ModelParams`, in the order of :func:`pack_params` (all but ``hull``)."""
 _RHO_SUCTION = PARAM_FIELDS.index("rho_suction")
+_SUCTION_MODEL = PARAM_FIELDS.index("suction_model")
 _LOADING_FIELDS = (
     "x_G_m",
     "z_G_m",
@@ -125,6 +127,7 @@ def model_params(
         zGW_minus_zBB=z_G * W - vehicle.z_B_m * B,
         half_rho_CD=0.5 * vehicle.water_density_kg_m3 * C_D,
         rho_suction=vehicle.water_density_kg_m3 * free_surface.suction_factor,
+        suction_model=free_surface.suction_model,
         hull=_hull_table(vehicle),
     )
 
@@ -200,7 +203,9 @@ def rhs_point(
     surface's suction (:func:`~subenv.dynamics.free_surface.suction_point`; none in deep water).
     """
     I0, I1 = crossflow_point(w, q, hull)
-    Z_fs, M_fs = suction_point(theta, depth, u, prm[_RHO_SUCTION], hull, SOURCE_ROW)
+    Z_fs, M_fs = suction_point(
+        theta, w, q, depth, u, prm[_RHO_SUCTION], prm[_SUCTION_MODEL], hull, SOURCE_ROW
+    )
     return rhs_given_drag(theta, w, q, u, stern, bow, force, moment, I0, I1, Z_fs, M_fs, prm, 0, 1)
 
 
@@ -345,8 +350,9 @@ def derivatives(
     with the hull cross-flow drag Z_drag = -(rho/2) C_D int b w_loc|w_loc| dx and
     M_drag = +(rho/2) C_D int x b w_loc|w_loc| dx, w_loc = w - x q (see
     :func:`subenv.dynamics.hull.crossflow_integrals` for the sign of the moment), and the free
-    surface's suction Z_fs(Z, theta, u), M_fs(Z, theta, u) (:mod:`subenv.dynamics.free_surface`; zero
-    in deep water, ``params.rho_suction`` 0), the one place where the depth Z enters.
+    surface's suction Z_fs(Z, theta, w, q, u), M_fs(Z, theta, w, q, u)
+    (:mod:`subenv.dynamics.free_surface`; zero in deep water, ``params.rho_suction`` 0), the one place
+    where the depth Z enters.
 
     This is :func:`rhs_point` broadcast over the batch (a compiled loop over its rows); the environments
     call :func:`rhs_point` itself.

@@ -30,8 +30,21 @@ h > b, and waves longer than the hull's diameter, K b << 1):
       F_up,i = -A_i omega_i^2 e^(-K_i Z) Re[e^(i psi_i) int 2 rho S(x) e^(i K_i x) dx],
       psi_i = K_i X + omega_i t + phi_i,
 
-  and the moment with one more factor x. At the boat's speed u the force meets the boat at the
-  encounter frequency omega_i + K_i u. Zero mean.
+  and the moment with one more factor x. Zero mean.
+- *Forward speed.* At the boat's speed u the waves meet it at the encounter frequency
+  omega_e = omega + K u, and the diffraction part, in the boat's frame the rate of change of the
+  sections' added-mass momentum following the stream, (d/dt - u d/dx)(a_33 w) (forward-speed strip
+  theory, Salvesen, Tuck and Faltinsen 1970, "Ship motions and sea loads", Trans. SNAME 78; the
+  steady form of the same term is the free surface's U int a_33 w dx, :mod:`subenv.dynamics.free_surface`),
+  integrates over the hull to
+
+      F_a33 = i omega_e int a_33 w dx,   M_a33 = i omega_e int x a_33 w dx + u int a_33 w dx,
+
+  w the incident wave's vertical velocity at the axis: the added-mass half of the force above grows by
+  omega_e / omega = 1 + omega u / g, and the moment gains u int a_33 w dx. The Froude-Krylov half is the
+  water's own acceleration and does not change. Each wave's record holds the zero-speed coefficients and
+  these per unit speed; :func:`wave_force_point` adds them at the boat's speed (zero for a sea with
+  :attr:`SeaState.encounter_frequency` False, the zero-speed form of ``PeriscopeDepthWaves-v0``).
 - *Second order, the mean suction.* A body in the orbital flow of a wave is pulled to where the
   flow is faster, upwards: per unit length (rho S + a_33) d/dz (|v|^2 / 2), with |v|^2 =
   A^2 omega^2 e^(-2 K h) for a deep-water wave (Taylor 1928), so
@@ -42,7 +55,10 @@ h > b, and waves longer than the hull's diameter, K b << 1):
   bodies under waves", J. Ship Res. 15) show that for a deeply submerged slender body the mean force
   depends on the distribution of sectional area and added mass, as here; their result for a body free
   to respond differs from this restrained-body value by a factor that depends on the body's motion,
-  which is not given in closed form: :attr:`SeaState.mean_suction_factor` (1: restrained body).
+  which is not given in closed form: :attr:`SeaState.mean_suction_factor` (1: restrained body). The
+  mean force is the zero-speed one at every speed: its forward-speed correction is of the relative
+  order of the first-order one, omega u / g (19% at PeriscopeDepthWaves' peak frequency and 0.6 m/s;
+  :func:`encounter_factor`), and was not found in closed form for a slender body.
 
 :func:`wave_force_point` evaluates both for one state; the block integrator
 (:func:`subenv.dynamics.integrate.control_period_lanes`) calls it at every stage, so the force varies
@@ -62,14 +78,36 @@ from subenv import _validation as check
 from subenv._typing import ArrayLike, FloatArray
 from subenv.dynamics._jit import Static, inline_kernel
 
-__all__ = ["MAX_WAVES", "WAVE_FIELDS", "SeaState", "hull_wave_integrals", "wave_force_point"]
+__all__ = [
+    "MAX_WAVES",
+    "WAVE_FIELDS",
+    "SeaState",
+    "encounter_factor",
+    "hull_wave_integrals",
+    "wave_force_point",
+]
 
 MAX_WAVES: Final = 24
 """Regular waves a sea is made of, at most (an episode's record holds this many)."""
-WAVE_FIELDS: Final = 9
+WAVE_FIELDS: Final = 13
 """Numbers per wave in an episode's record: K [1/m], omega [rad/s], phase [rad], the first-order force's
-cos and sin coefficients [N], the moment's [N m], the mean force [N] and moment [N m]."""
-(_K, _OMEGA, _PHASE, _F_COS, _F_SIN, _M_COS, _M_SIN, _F_MEAN, _M_MEAN) = range(WAVE_FIELDS)
+cos and sin coefficients at zero speed [N], the moment's [N m], the mean force [N] and moment [N m], and the
+first-order force's and moment's cos and sin coefficients per unit forward speed [N s/m, N s]."""
+(
+    _K,
+    _OMEGA,
+    _PHASE,
+    _F_COS,
+    _F_SIN,
+    _M_COS,
+    _M_SIN,
+    _F_MEAN,
+    _M_MEAN,
+    _F_SPEED_COS,
+    _F_SPEED_SIN,
+    _M_SPEED_COS,
+    _M_SPEED_SIN,
+) = range(WAVE_FIELDS)
 
 _SIGMA_LOW, _SIGMA_HIGH = 0.07, 0.09  # JONSWAP peak widths below and above omega_p (Hasselmann et al. 1973)
 _PM_NORMALISATION = 0.287  # A_gamma = 1 - 0.287 ln(gamma), DNV-RP-C205 eq. 3.5.5.3
@@ -93,6 +131,9 @@ class SeaState:
         The frequency band they cover, as multiples of omega_p.
     mean_suction_factor : float
         Multiplies the second-order mean suction (1: a restrained body; see the module docstring).
+    encounter_frequency : bool
+        The first-order force at the boat's speed (forward-speed strip theory, module docstring); False:
+        at zero speed, the form of ``PeriscopeDepthWaves-v0``.
     """
 
     significant_height_m: float
@@ -101,6 +142,7 @@ class SeaState:
     waves: int = 24
     band: tuple[float, float] = (0.6, 3.0)
     mean_suction_factor: float = 1.0
+    encounter_frequency: bool = True
 
     def __post_init__(self) -> None:
         check.positive("significant_height_m", self.significant_height_m, upper=100.0)
@@ -114,6 +156,12 @@ class SeaState:
                 "(multiples of the peak frequency)"
             )
         check.number("mean_suction_factor", self.mean_suction_factor, 0.0, 10.0)
+        check.require(
+            "encounter_frequency",
+            self.encounter_frequency,
+            isinstance(self.encounter_frequency, bool),
+            "True or False",
+        )
 
     @property
     def peak_frequency_radps(self) -> float:
@@ -185,6 +233,16 @@ class SeaState:
         out[_F_COS, :n], out[_F_SIN, :n] = scale * heave.real, scale * heave.imag
         out[_M_COS, :n], out[_M_SIN, :n] = scale * pitch.real, scale * pitch.imag
         out[_F_MEAN, :n], out[_M_MEAN, :n] = mean * mean_heave, mean * mean_pitch
+        if self.encounter_frequency:
+            # Per unit speed (module docstring): the added-mass half (a_33 = rho S, half of the 2 rho S
+            # integrals) times K / omega, and the moment's u int a_33 w dx, with the wave's vertical
+            # velocity w = Re(i A omega e^(i(psi + K x))).
+            added_heave, added_pitch = 0.5 * heave, 0.5 * pitch
+            per_speed = k / omega
+            force = per_speed * scale * added_heave
+            moment = per_speed * scale * added_pitch + 1j * amplitude * omega * added_heave
+            out[_F_SPEED_COS, :n], out[_F_SPEED_SIN, :n] = force.real, force.imag
+            out[_M_SPEED_COS, :n], out[_M_SPEED_SIN, :n] = moment.real, moment.imag
         return out
 
     def mean_suction(
@@ -231,14 +289,21 @@ def hull_wave_integrals(
     return heave, pitch, float(np.trapezoid(section, fine)), float(np.trapezoid(section * fine, fine))
 
 
+def encounter_factor(omega_radps: ArrayLike, speed_mps: ArrayLike, gravity_m_s2: float) -> FloatArray:
+    """omega_e / omega = 1 + omega u / g [-]: how much faster a head sea's deep-water wave of frequency
+    ``omega_radps`` meets a boat at ``speed_mps``, the factor on its diffraction force (module docstring)."""
+    return 1.0 + np.asarray(omega_radps, dtype=float) * np.asarray(speed_mps, dtype=float) / gravity_m_s2
+
+
 @inline_kernel
 def wave_force_point(
-    t: float, distance: float, depth: float, waves: FloatArray, n: Static[int]
+    t: float, distance: float, depth: float, u: float, waves: FloatArray, n: Static[int]
 ) -> tuple[float, float]:
     """The sea's heave force [N, down positive] and pitch moment [N m, nose-up positive] on the hull at
-    time ``t`` [s], distance travelled ``distance`` [m] and depth ``depth`` [m]: the first ``n`` waves
-    of ``waves`` (:meth:`SeaState.components`), first order plus the second-order mean; (0.0, 0.0)
-    with ``n`` = 0. (``n`` is static for :mod:`subenv.jax`, which passes the columns of ``waves``.)"""
+    time ``t`` [s], distance travelled ``distance`` [m], depth ``depth`` [m] and speed ``u`` [m/s]: the
+    first ``n`` waves of ``waves`` (:meth:`SeaState.components`), first order plus the second-order mean;
+    (0.0, 0.0) with ``n`` = 0. (``n`` is static for :mod:`subenv.jax`, which passes the columns of
+    ``waves``.)"""
     if n == 0:
         return 0.0, 0.0
     up = 0.0
@@ -248,6 +313,11 @@ def wave_force_point(
         psi = k * distance + waves[_OMEGA, i] * t + waves[_PHASE, i]
         c, s = math.cos(psi), math.sin(psi)
         decay = math.exp(-k * depth)
-        up += decay * (waves[_F_COS, i] * c - waves[_F_SIN, i] * s + decay * waves[_F_MEAN, i])
-        nose_up += decay * (waves[_M_COS, i] * c - waves[_M_SIN, i] * s + decay * waves[_M_MEAN, i])
+        # (the forward-speed terms after the zero-speed ones: a sea without them, all 0.0, adds exactly 0.0)
+        up += decay * (
+            waves[_F_COS, i] * c - waves[_F_SIN, i] * s + decay * waves[_F_MEAN, i]
+        ) + u * decay * (waves[_F_SPEED_COS, i] * c - waves[_F_SPEED_SIN, i] * s)
+        nose_up += decay * (
+            waves[_M_COS, i] * c - waves[_M_SIN, i] * s + decay * waves[_M_MEAN, i]
+        ) + u * decay * (waves[_M_SPEED_COS, i] * c - waves[_M_SPEED_SIN, i] * s)
     return -up, nose_up

@@ -17,6 +17,7 @@ from subenv.envs._interrupts import interrupts_deferred
 from subenv.envs.config import DEFAULT_ARGUMENTS, OBSERVATION_NAMES, ControlMode, DivePlaneConfig
 from subenv.envs.episodes import Loadings, check_options, draw_episode, new_seas, write_episode, write_sea
 from subenv.envs.info import step_info
+from subenv.envs.validity import SurfaceValidityWatch
 from subenv.scenarios.scenario import EpisodeConfig, Scenario
 from subenv.vehicles.vehicle import Vehicle
 
@@ -47,13 +48,15 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
     oscillating. So at the Nominal design speed (1.524 m/s) zero action ends on ``"pitch_limit"``
     within a minute: the planes must act.
 
-    Near the surface (``PeriscopeDepth-v1``, ``PeriscopeDepthWaves``) the free surface pulls the hull
-    up and pitches it (the rigid-lid suction of the hull's slender-body sources, proportional to u^2,
-    falling as h^-4 far from the surface: :mod:`subenv.dynamics.free_surface`), and in
-    ``PeriscopeDepthWaves`` a seeded JONSWAP head sea adds an oscillating heave force and pitch
-    moment and a mean suction (:mod:`subenv.dynamics.waves`). With the planes held, level flight
-    there is unstable in depth (the suction weakens with depth); just below u_cr the trim of level
-    flight is lost near the surface (:func:`subenv.analysis.free_surface.min_level_flight_depth`).
+    Near the surface (``PeriscopeDepth-v2``, ``PeriscopeDepthWaves-v1``) the free surface pulls the
+    hull up and pitches it (the rigid-lid suction of a slender hull, proportional to u^2, falling as
+    h^-4 far from the surface, and its share of the heave and pitch derivatives:
+    :mod:`subenv.dynamics.free_surface`; outside the model's range, shallower than two hull radii, the
+    environment warns once), and in ``PeriscopeDepthWaves`` a seeded JONSWAP head sea adds an
+    oscillating heave force and pitch moment and a mean suction (:mod:`subenv.dynamics.waves`). With
+    the planes held, level flight there is unstable in depth (the suction weakens with depth); just
+    below u_cr the trim of level flight is lost near the surface
+    (:func:`subenv.analysis.free_surface.min_level_flight_depth`).
 
     ## Action Space
 
@@ -182,6 +185,19 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
       (``NearCritical`` with sensor noise and a 6 N heave-force disturbance); the suite ``hard`` of
       ``subenv evaluate`` scores them over the episodes a stored full-information plan won
       (:mod:`subenv.evaluation.achievable`). Every other id's seeded rollouts are unchanged.
+    - ``PeriscopeDepth-v2`` (2026-12): the free surface's consistent first-order slender-body theory
+      (``FreeSurface()``, issue 38): besides v1's Lagally force of the hull's sources it has the
+      moment of the cross-flow dipoles that the images raise (u int (rho S + a_33) w dx) and the
+      images of the hull's own cross-flow (a heave force and moment linear in w and q), on axis
+      points converged where v1 lumped one source per segment. At 1 m the level-flight pitch
+      stiffness of the suction is about 1.6 times v1's, within 5% of an exact potential-flow
+      computation (docs/free_surface.md). Same draws otherwise. ``PeriscopeDepth-v1`` stays registered
+      with its seeded episodes (``FreeSurface(theory="sources-only")``).
+    - ``PeriscopeDepthWaves-v1`` (2026-12): ``PeriscopeDepth-v2`` in the same seeded head sea, its
+      first-order force at the boat's speed (encounter frequency and the u int a_33 w dx moment,
+      :mod:`subenv.dynamics.waves`; v0's zero-speed form is ``SeaState(encounter_frequency=False)``).
+      ``PeriscopeDepthWaves-v0`` stays registered with its seeded episodes. Every other id's seeded
+      rollouts are unchanged, bit for bit.
     """
 
     metadata: dict[str, Any] = {"render_modes": ["human", "rgb_array"], "render_fps": 30}
@@ -253,6 +269,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         self._obs = np.zeros((1, tr.N_OBS), dtype=np.float32)
         self._obs_row = self._obs[0]
         self._report = np.zeros((len(tr.REPORT_KEYS), 1))
+        self._validity = SurfaceValidityWatch(config)
         self._active = np.ones(1, dtype=bool)
         self._rngs: Any = None  # a numba typed list holding self.np_random, for the transition
         self._rngs_source: np.random.Generator | None = None
@@ -304,6 +321,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
             self._state, self._episode, _FIRST, self._obs, self._bound_rngs(), self._constants, self._report
         )
         self._history = [(0.0, state["depth_m"], episode["depth_command_m"])]
+        self._validity.check(float(self._report[_DEPTH, 0]), float(self._report[_SPEED, 0]))
         if self.render_mode == "human":
             self.render()
         return self._obs_row.copy(), step_info(self._report.ravel().tolist())
@@ -343,6 +361,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
                 f"action={np.asarray(action).tolist()!r} is invalid: must be finite (no NaN or inf)"
             )
         r = self._report.ravel().tolist()  # (its one column)
+        self._validity.check(r[_DEPTH], r[_SPEED])
         if self.render_mode is not None:
             self._history.append((r[_TIME], r[_DEPTH], r[_COMMAND]))
             if self.render_mode == "human":
@@ -451,6 +470,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
         stays as it was made.
         """
         self.config = self.config.replace(scenario=scenario)
+        self._validity = SurfaceValidityWatch(self.config, self._validity.warned)
 
     def speed_at(self, t: float) -> float:
         """Forward speed [m/s] of the current episode at time ``t`` [s]."""
@@ -468,7 +488,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
 
 
 _FIRST: Final = np.zeros(1, dtype=np.intp)  # the index of a single environment
-_TIME, _DEPTH, _COMMAND, _REWARD, _TERMINATED, _TRUNCATED = (
+_TIME, _DEPTH, _COMMAND, _SPEED, _REWARD, _TERMINATED, _TRUNCATED = (
     tr.REPORT_KEYS.index(key)
-    for key in ("time_s", "depth_m", "depth_command_m", "reward", "terminated", "truncated")
+    for key in ("time_s", "depth_m", "depth_command_m", "speed_mps", "reward", "terminated", "truncated")
 )

@@ -29,6 +29,7 @@ from subenv.envs.episodes import (
     write_sea,
 )
 from subenv.envs.info import step_infos
+from subenv.envs.validity import SurfaceValidityWatch
 from subenv.scenarios.scenario import EpisodeConfig, Scenario
 from subenv.vehicles.vehicle import Vehicle
 
@@ -43,7 +44,9 @@ ENVS_PER_THREAD: Final = 512
 _REWARD, _TERMINATED, _TRUNCATED = (
     tr.REPORT_KEYS.index(key) for key in ("reward", "terminated", "truncated")
 )
-_TIME, _DEPTH, _COMMAND = (tr.REPORT_KEYS.index(key) for key in ("time_s", "depth_m", "depth_command_m"))
+_TIME, _DEPTH, _COMMAND, _SPEED = (
+    tr.REPORT_KEYS.index(key) for key in ("time_s", "depth_m", "depth_command_m", "speed_mps")
+)
 
 
 class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
@@ -165,6 +168,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
 
         self.config = config
         """The sub-environments' configuration; :meth:`set_scenario` replaces its scenario."""
+        self._validity = SurfaceValidityWatch(config)
         self.num_envs = n
         self.max_episode_steps = max_episode_steps
         self.autoreset_mode = mode
@@ -354,6 +358,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         if self.render_mode is not None:
             for i in np.flatnonzero(active).tolist():
                 self._histories[i].append((report[_TIME, i], report[_DEPTH, i], report[_COMMAND, i]))
+        self._validity.check_all(report[_DEPTH], report[_SPEED])
         rewards = report[_REWARD].copy()
         terminated, truncated = report[_TERMINATED : _TRUNCATED + 1] > 0.0
         done = terminated | truncated
@@ -412,6 +417,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
         (:meth:`DivePlaneEnv.set_scenario <subenv.envs.DivePlaneEnv.set_scenario>`); episodes under
         way are not changed."""
         self.config = self.config.replace(scenario=scenario)
+        self._validity = SurfaceValidityWatch(self.config, self._validity.warned)
 
     @property
     def scenario(self) -> Scenario:

@@ -52,12 +52,36 @@ _twins: dict[tuple[Callable[..., Any], bool], Callable[..., Any]] = {}
 
 
 def _suction_point(
+    theta: Any,
+    w: Any,
+    q: Any,
+    depth: Any,
+    u: Any,
+    rho_suction: Any,
+    suction_model: Any,
+    hull: Any,
+    first_row: int,
+) -> tuple[Any, Any]:
+    """:func:`subenv.dynamics.free_surface.suction_point` for JAX: both theories' twins, the loading's
+    picked (a branch on a number in the compiled code), and exactly 0 in deep water (``rho_suction`` 0)
+    as the compiled code's shortcut gives: the sums times 0 would be NaN where a sum is not finite (the
+    slender-body sums of a tumbling boat)."""
+    sources = _sources_suction(theta, depth, u, rho_suction, hull, first_row)
+    slender = _slender_suction(theta, w, q, depth, u, rho_suction, hull, first_row + surface.SLENDER_ROW)
+    pick = suction_model == surface.SOURCES_ONLY
+    deep = rho_suction == 0.0
+    return (
+        jnp.where(deep, 0.0, jnp.where(pick, sources[0], slender[0])),
+        jnp.where(deep, 0.0, jnp.where(pick, sources[1], slender[1])),
+    )
+
+
+def _sources_suction(
     theta: Any, depth: Any, u: Any, rho_suction: Any, hull: Any, first_row: int
 ) -> tuple[Any, Any]:
-    """:func:`subenv.dynamics.free_surface.suction_point` for JAX: the same terms (its twins), summed
+    """:func:`subenv.dynamics.free_surface.sources_suction` for JAX: the same terms (its twins), summed
     over arrays of segments and pairs, not in loops (unrolled by the trace, the loops over the 276
-    pairs of SUBOFF's segments took 7 s to compile per right-hand side); and no deep-water
-    shortcut, a branch on a number (the terms sum to zero there)."""
+    pairs of SUBOFF's segments took 7 s to compile per right-hand side)."""
     n_seg = hull.shape[1] - 1
     xs, strength, radius = hull[first_row, :n_seg], hull[first_row + 1, :n_seg], hull[first_row + 2, :n_seg]
     s, c = jnp.sin(theta), jnp.cos(theta)
@@ -70,8 +94,37 @@ def _suction_point(
     return traced(surface.suction_from_sums)(force, moment, u, rho_suction, c)
 
 
+def _slender_suction(
+    theta: Any, w: Any, q: Any, depth: Any, u: Any, rho_suction: Any, hull: Any, first_row: int
+) -> tuple[Any, Any]:
+    """:func:`subenv.dynamics.free_surface.slender_suction` for JAX: the images' flow at every point from
+    every point (the twin of :func:`~subenv.dynamics.free_surface.image_flow` over the square of points),
+    then the sections' loads (:func:`~subenv.dynamics.free_surface.section_load`), summed."""
+    n = hull.shape[1] - 1
+    xs, strength = hull[first_row, :n], hull[first_row + 1, :n]
+    weight, radius = hull[first_row + 2, :n], hull[first_row + 3, :n]
+    s, c = jnp.sin(theta), jnp.cos(theta)
+    h = traced(surface.station_depth)(depth, xs, s, radius)
+    cross = w - xs * q
+    D, H = xs[:, None] - xs[None, :], h[:, None] + h[None, :]
+    A, B = traced(surface.image_distance)(D, H, c)
+    normal, axial, slope = traced(surface.image_flow)(D, H, A, B, strength, weight, cross, u, s, c)
+    force, moment = traced(surface.section_load)(
+        xs, strength, weight, cross, u, normal.sum(1), axial.sum(1), slope.sum(1)
+    )
+    return -rho_suction * jnp.sum(force), rho_suction * jnp.sum(moment)
+
+
 def _no_suction(
-    theta: Any, depth: Any, u: Any, rho_suction: Any, hull: Any, first_row: int
+    theta: Any,
+    w: Any,
+    q: Any,
+    depth: Any,
+    u: Any,
+    rho_suction: Any,
+    suction_model: Any,
+    hull: Any,
+    first_row: int,
 ) -> tuple[Any, Any]:
     """:func:`subenv.dynamics.free_surface.suction_point` in deep water: 0 where ``rho_suction`` is 0,
     NaN where it is not (a loading with a free surface traced without it: never a wrong number)."""

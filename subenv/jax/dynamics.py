@@ -96,7 +96,7 @@ def control_period(
         if wave_force is None:
             return derivatives(x, speed, stern, bow, prm, hull, force, free_surface=free_surface)
         distance = traced(integrate.distance_travelled)(distance0, t - t0, speed0, speed_slope)
-        heave, pitch = wave_force(t, distance, x[..., 3], waves)
+        heave, pitch = wave_force(t, distance, x[..., 3], speed, waves)
         return derivatives(x, speed, stern, bow, prm, hull, force + heave, pitch, free_surface=free_surface)
 
     x0: Any = jnp.asarray(state)  # (rk4 is NumPy's and JAX's alike)
@@ -104,19 +104,20 @@ def control_period(
 
 
 def _wave_force(waves: Any) -> Any:
-    """The sea's (heave force, pitch moment) at (t, distance, depth) for seas ``waves`` (None: calm)."""
+    """The sea's (heave force, pitch moment) at (t, distance, depth, speed) for seas ``waves`` (None:
+    calm)."""
     if waves is None:
         return None
     force_point = traced(wave_force_point)
     columns = jnp.shape(waves)[-1]
 
-    def one(t: Any, distance: Any, depth: Any, sea: Any) -> Any:
-        return jnp.stack(force_point(t, distance, depth, sea, columns))
+    def one(t: Any, distance: Any, depth: Any, speed: Any, sea: Any) -> Any:
+        return jnp.stack(force_point(t, distance, depth, speed, sea, columns))
 
-    vectorized = jnp.vectorize(one, signature="(),(),(),(f,w)->(2)")
+    vectorized = jnp.vectorize(one, signature="(),(),(),(),(f,w)->(2)")
 
-    def force(t: Any, distance: Any, depth: Any, seas: Any) -> tuple[Any, Any]:
-        both = vectorized(t, distance, depth, jnp.asarray(seas))
+    def force(t: Any, distance: Any, depth: Any, speed: Any, seas: Any) -> tuple[Any, Any]:
+        both = vectorized(t, distance, depth, speed, jnp.asarray(seas))
         return both[..., 0], both[..., 1]
 
     return force

@@ -138,12 +138,22 @@ MIXED = Scenario(
 PERISCOPE_DEPTH_V1 = PERISCOPE_DEPTH.replace(
     description=(
         "Ordered depth 1.0-1.2 m, near the surface, neutrally buoyant; the free surface pulls the hull up "
-        "and pitches it with a force that grows as u^2 and falls with depth (the rigid-lid slender-body "
-        "suction, subenv.dynamics.free_surface); broaching ends the episode."
+        "and pitches it (the Lagally force of the hull's sources alone, subenv.dynamics.free_surface's "
+        "sources-only theory); broaching ends the episode. Superseded by PeriscopeDepth-v2."
     ),
     excess_buoyancy_fraction=(0.0, 0.0),
-    free_surface=FreeSurface(),
+    free_surface=FreeSurface(theory="sources-only"),
     version=1,
+)
+PERISCOPE_DEPTH_V2 = PERISCOPE_DEPTH_V1.replace(
+    description=(
+        "Ordered depth 1.0-1.2 m, near the surface, neutrally buoyant; the free surface pulls the hull up "
+        "and pitches it with a force that grows as u^2 and falls with depth, and changes the hull's "
+        "heave and pitch derivatives (the consistent first-order slender-body theory under a rigid lid, "
+        "subenv.dynamics.free_surface); broaching ends the episode."
+    ),
+    free_surface=FreeSurface(),
+    version=2,
 )
 PERISCOPE_SEA: Final = SeaState(significant_height_m=0.06, peak_period_s=2.0)
 """PeriscopeDepthWaves's sea at SUBOFF's scale: H_s 6 cm, T_p 2 s; at 1:24 (SUBOFF as the model of a
@@ -154,14 +164,32 @@ PERISCOPE_DEPTH_WAVES = PERISCOPE_DEPTH_V1.replace(
     name="PeriscopeDepthWaves",
     description=(
         "PeriscopeDepth-v1 in a head sea (JONSWAP, H_s 6 cm, T_p 2 s at SUBOFF's scale): the waves' "
-        "oscillating heave force and pitch moment and their mean suction (subenv.dynamics.waves), "
-        "phases drawn per episode."
+        "oscillating heave force and pitch moment (at zero speed) and their mean suction "
+        "(subenv.dynamics.waves), phases drawn per episode. Superseded by PeriscopeDepthWaves-v1."
     ),
-    sea_state=PERISCOPE_SEA,
+    sea_state=dataclasses.replace(PERISCOPE_SEA, encounter_frequency=False),
     version=0,
 )
+PERISCOPE_DEPTH_WAVES_V1 = PERISCOPE_DEPTH_V2.replace(
+    name="PeriscopeDepthWaves",
+    description=(
+        "PeriscopeDepth-v2 in a head sea (JONSWAP, H_s 6 cm, T_p 2 s at SUBOFF's scale): the waves' "
+        "oscillating heave force and pitch moment at the boat's speed (forward-speed strip theory) and "
+        "their mean suction (subenv.dynamics.waves), phases drawn per episode."
+    ),
+    sea_state=PERISCOPE_SEA,
+    version=1,
+)
 
-for _scenario in (*BASE_SCENARIOS, RANDOMIZED, MIXED, PERISCOPE_DEPTH_V1, PERISCOPE_DEPTH_WAVES):
+for _scenario in (
+    *BASE_SCENARIOS,
+    RANDOMIZED,
+    MIXED,
+    PERISCOPE_DEPTH_V1,
+    PERISCOPE_DEPTH_WAVES,
+    PERISCOPE_DEPTH_V2,
+    PERISCOPE_DEPTH_WAVES_V1,
+):
     register_scenario(_scenario)
 
 # --- the Hard track ------------------------------------------------------------------------------------
@@ -189,10 +217,13 @@ HARD_BALLAST_LIMITS = BALLAST_OFFSET.replace(
 HARD_WAVES18 = PERISCOPE_DEPTH_WAVES.replace(
     name="HardWaves18",
     description=(
-        "PeriscopeDepthWaves in a sea three times as high (JONSWAP, H_s 18 cm, T_p 2 s at SUBOFF's scale; "
-        "at 1:24, H_s 4.3 m): the waves' forcing near the broaching depth."
+        "PeriscopeDepthWaves-v0 in a sea three times as high (JONSWAP, H_s 18 cm, T_p 2 s at SUBOFF's "
+        "scale; at 1:24, H_s 4.3 m): the waves' forcing near the broaching depth. (v0's physics, the "
+        "sources-only suction and the zero-speed wave force, as its episodes were certified.)"
     ),
-    sea_state=dataclasses.replace(PERISCOPE_SEA, significant_height_m=0.18),
+    # The physics its stored certificates were computed in (PeriscopeDepthWaves-v0's): a version on the
+    # slender-body theory and the encounter frequency is a new id, with new certificates.
+    sea_state=dataclasses.replace(PERISCOPE_DEPTH_WAVES.sea_state, significant_height_m=0.18),
     version=0,
 )
 HARD_GUSTS = NEAR_CRITICAL.replace(

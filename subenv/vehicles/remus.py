@@ -22,9 +22,27 @@ added masses likewise.
 His cross-flow drag terms (Z_ww, Z_qq, M_ww, M_qq) are not coefficients in this model: it integrates the
 quadratic cross-flow drag over the hull (:class:`~subenv.vehicles.HullOffsets`), here his Myring hull with his
 cross-flow drag coefficient c_dc = 1.1. That integral plus his fins' term gives Z_ww = -132.1 kg/m against
-his -131 (:func:`crossflow_check`), an independent check of the hull. It gives M_qq = -7.4 kg m^2 where he
-tabulates -188, which no quadratic cross-flow integral over this hull can give; the model's value is the
-integral's. The fins' own cross-flow drag (3% of Z_ww) is not in the model.
+his -131 (:func:`crossflow_check`), an independent check of the hull. The other three disagree with his table
+(:func:`crossflow_coefficients` recomputes them; the shipped file's header prints them): the hull integral
+gives Z_qq = -1.53 kg m (-3.09 with his fins' term, in the model's signs) where he tabulates -0.632; M_ww =
+-2.03 kg (-4.47 with the fins) where he tabulates +3.18; M_qq = -7.4 kg m^2 (-8.4) where he tabulates -188,
+which no quadratic cross-flow integral over this hull can give. The model's values are the hull integral's
+(w_loc = w - x q, M = -x Z_F); the fins' own cross-flow drag (3% of Z_ww) is not in the model. Issue 38's
+check quoted Z_qq = +3.07 kg m and M_ww = +0.45 kg "from the hull integral": they are what his cross-flow
+formulas give over his continuous Myring profile with the signs the check used
+(:func:`prestero_crossflow_formulas`: Z_qq of the opposite sign to the model's w - x q and M = -x Z_F, and
+the fins' M_ww term too; the thesis was not readable here to say which signs he prints), and they disagree
+with his table as much.
+
+His coefficients make the vehicle dynamically unstable in the vertical plane with the fins held: the
+stability index Z_uw M_uq - M_uw (m + Z_uq) = -549 kg^2 is negative (:func:`stability_index`), so the Munk
+moment outgrows the pitch damping as u^2, and only the metacentric restoring z_G W, which does not grow with
+speed, holds level flight at low speed: the held-plane level flight loses stability in a Hopf bifurcation
+at 0.59 m/s (:func:`subenv.analysis.hopf.hopf_points`, the report in docs/remus100/).
+
+The stern planes' travel, +-20 deg, is assumed: Prestero gives none. It is the saturation of Fossen's MSS
+``VESSELS/remus100.m`` (revision 2024-02-13); the Python port's ``remus100.py`` (PythonVehicleSimulator) has
+used 30, 20 and 15 deg in different versions, so it is no vehicle specification either.
 
 The REMUS 100 has no bow planes: it pitches with its stern planes alone (``Z_delta_b = M_delta_b = 0``).
 It is shipped neutrally buoyant, like ``suboff``: the scenarios set each episode's excess buoyancy; Prestero
@@ -36,7 +54,7 @@ from __future__ import annotations
 import math
 import sys
 from dataclasses import dataclass
-from typing import Final
+from typing import Final, NamedTuple
 
 import numpy as np
 
@@ -48,9 +66,12 @@ __all__ = [
     "REMUS100_NAME",
     "PresteroRemus100",
     "crossflow_check",
+    "crossflow_coefficients",
     "myring_radius",
+    "prestero_crossflow_formulas",
     "remus100",
     "remus100_toml",
+    "stability_index",
 ]
 
 REMUS100_NAME: Final = "remus100"
@@ -58,10 +79,8 @@ REMUS100_NAME: Final = "remus100"
 
 @dataclass(frozen=True)
 class PresteroRemus100:
-    """The REMUS 100's published data, as Prestero (2001) tabulates them.
-
-    SI units, about the centre of buoyancy.
-    """
+    """The REMUS 100's published data, as Prestero (2001) tabulates them (SI; about the centre of
+    buoyancy)."""
 
     # Hull profile: Myring's equations and their parameters [m, -, rad].
     nose_length_m: float  # a
@@ -97,6 +116,9 @@ class PresteroRemus100:
     fin_area_m2: float  # S_fin, one fin's planform
     fin_x_m: float  # x_fin, the fins' position (behind the centre of buoyancy: negative)
     Z_ww: float  # [kg/m]
+    Z_qq: float  # [kg m]
+    M_ww: float  # [kg]
+    M_qq: float  # [kg m^2]
 
     @property
     def forward_length_m(self) -> float:
@@ -140,15 +162,16 @@ PRESTERO_2001: Final = PresteroRemus100(
     fin_area_m2=6.65e-3,
     fin_x_m=-0.638,
     Z_ww=-131.0,
+    Z_qq=-0.632,
+    M_ww=3.18,
+    M_qq=-188.0,
 )
 """Prestero (2001)'s REMUS 100, as he tabulates it."""
 
 PLANE_LIMIT_RAD: Final = math.radians(20.0)
-"""The stern planes' travel, +-20 deg.
-
-Prestero gives none; this is the limit of the REMUS 100 model in Fossen's Marine Systems Simulator
-(``VESSELS/remus100.m``).
-"""
+"""The stern planes' travel, +-20 deg, assumed: Prestero gives none; this is the saturation of the REMUS 100
+model in Fossen's Marine Systems Simulator (``VESSELS/remus100.m``, revision 2024-02-13), whose Python port
+(PythonVehicleSimulator's ``remus100.py``) has used 30, 20 and 15 deg in different versions."""
 
 _NOSE_POINTS: Final = 9
 _TAIL_POINTS: Final = 15
@@ -157,11 +180,9 @@ piecewise-linear hull whose planform area is within 0.3% of the curve's."""
 
 
 def myring_radius(data: PresteroRemus100, s_m: np.ndarray) -> np.ndarray:
-    """The hull radius [m] at ``s_m`` behind the nose.
-
-    Myring's nose, midbody and tail, as Prestero (2001) writes them, with the nose and tail truncated by
-    their offsets (a blunt nose; a tail cone ending at the propeller).
-    """
+    """The hull radius [m] at ``s_m`` behind the nose: Myring's nose, midbody and tail, as Prestero (2001)
+    writes them, with the nose and tail truncated by their offsets (a blunt nose; a tail cone ending at the
+    propeller)."""
     s = np.asarray(s_m, dtype=float)
     a, a0, c, d, n = (
         data.nose_length_m,
@@ -238,6 +259,79 @@ def crossflow_check(data: PresteroRemus100 = PRESTERO_2001) -> tuple[float, floa
     )
 
 
+class CrossflowCoefficient(NamedTuple):
+    """One of Prestero's cross-flow drag coefficients, three ways (:func:`crossflow_coefficients`)."""
+
+    name: str
+    hull: float  # the hull's cross-flow integral with his c_dc: the model's value
+    with_fins: float  # plus his fins' term, by his formula
+    tabulated: float  # his table
+
+
+def crossflow_coefficients(data: PresteroRemus100 = PRESTERO_2001) -> tuple[CrossflowCoefficient, ...]:
+    """Z_ww [kg/m], Z_qq [kg m], M_ww [kg], M_qq [kg m^2] of the quadratic cross-flow drag, as the model has
+    them (the integral over the shipped hull, :func:`subenv.dynamics.hull.crossflow_integrals`: local
+    cross-flow w - x q, M = -x Z_F), with his two fins' term added (each -(rho/2) S_fin c_df w_loc |w_loc| at
+    x_fin), and as he tabulates them."""
+    from subenv.dynamics.hull import HullTable, crossflow_integrals
+
+    hull = remus100(data).hull
+    table = HullTable.from_offsets(hull.x_m, hull.breadth_m)
+    half_rho = 0.5 * data.water_density_kg_m3
+    body = half_rho * data.crossflow_drag
+    fins = 2.0 * half_rho * data.fin_area_m2 * data.fin_crossflow_drag
+    xf = data.fin_x_m
+    (heave_w, pitch_w), (heave_q, pitch_q) = (
+        (float(a) for a in crossflow_integrals(table, np.float64(w), np.float64(q)))
+        for w, q in ((1.0, 0.0), (0.0, 1.0))
+    )
+    rows = (
+        ("Z_ww", -body * heave_w, -fins, data.Z_ww),
+        ("Z_qq", -body * heave_q, fins * xf * abs(xf), data.Z_qq),
+        ("M_ww", body * pitch_w, fins * xf, data.M_ww),
+        ("M_qq", body * pitch_q, -fins * xf * xf * abs(xf), data.M_qq),
+    )
+    return tuple(
+        CrossflowCoefficient(name, hull_term, hull_term + fin_term, tab)
+        for name, hull_term, fin_term, tab in rows
+    )
+
+
+def prestero_crossflow_formulas(data: PresteroRemus100 = PRESTERO_2001) -> dict[str, float]:
+    """Z_ww [kg/m], Z_qq [kg m] and M_ww [kg] by the cross-flow formulas of Prestero (2001) in the signs
+    issue 38's check used, over his continuous Myring profile (:func:`myring_radius`, R the radius)::
+
+        Z_ww = -(rho/2) c_dc int 2R dx       - 2 (rho/2) S_fin c_df
+        Z_qq = -(rho/2) c_dc int 2R x|x| dx  - 2 x_fin |x_fin| (rho/2) S_fin c_df
+        M_ww = (rho/2) c_dc int 2R x dx      - 2 x_fin (rho/2) S_fin c_df
+
+    Against the model's (local cross-flow w - x q, M = -x Z_F: :func:`crossflow_coefficients`), Z_qq has the
+    opposite sign, both terms (as for a local cross-flow w + x q), and M_ww's fins' term the opposite sign;
+    Z_ww is the model's."""
+    s = np.linspace(0.0, data.length_m, 200_001)
+    x, radius = data.x_B_from_nose_m - s, myring_radius(data, s)
+    half_rho = 0.5 * data.water_density_kg_m3
+    body, fin = half_rho * data.crossflow_drag, half_rho * data.fin_area_m2 * data.fin_crossflow_drag
+    xf = data.fin_x_m
+
+    def along(f: np.ndarray) -> float:
+        return float(np.trapezoid(f, s))  # (x = x_B - s: int dx over the hull = int ds)
+
+    return {
+        "Z_ww": -body * along(2.0 * radius) - 2.0 * fin,
+        "Z_qq": -body * along(2.0 * radius * x * np.abs(x)) - 2.0 * xf * abs(xf) * fin,
+        "M_ww": body * along(2.0 * radius * x) - 2.0 * xf * fin,
+    }
+
+
+def stability_index(data: PresteroRemus100 = PRESTERO_2001) -> float:
+    """The vertical plane's dynamic stability index with the fins held, Z_uw M_uq - M_uw (m + Z_uq) [kg^2]
+    (the constant term of the speed-squared part of the heave-pitch characteristic polynomial; negative:
+    unstable at speed, the Munk moment beating the pitch damping), from his table."""
+    mass = data.weight_N / data.gravity_m_s2
+    return data.Z_uw * data.M_uq - data.M_uw * (mass + data.Z_uq)
+
+
 _HEADER = """\
 The REMUS 100 AUV: a second vehicle, from its own published data.
 
@@ -251,7 +345,11 @@ vertical-plane coefficients, dimensional about the centre of buoyancy (the origi
 non-dimensional with rho/2 L^n, L = {length:.4f} m (l_f + c - c_offset; his 1.33 m), rho = {rho:g} kg/m^3.
 The hull's stations sample his profile (origin at the centre of buoyancy, {x_cb:g} m behind the nose;
 x = (10 - station) L / 20, so the nose is at station {nose_station:.4f}). Cross-flow drag: his c_dc = {cdc:g}
-over the hull. No bow planes. Stern-plane travel +-20 deg (Fossen's MSS remus100.m; Prestero gives none).
+over the hull, which gives (hull integral / with his fins' term / his table)
+{crossflow};
+his formulas in issue 38's signs: Z_qq {printed_Z_qq:+.3g}, M_ww {printed_M_ww:+.3g}.
+Fins-held stability index Z_uw M_uq - M_uw (m + Z_uq) = {index:.0f} kg^2 (negative: unstable at speed).
+No bow planes. Stern-plane travel +-20 deg, assumed (Fossen's MSS remus100.m; Prestero gives none).
 Neutrally buoyant: he measured B - W = {excess:g} N; the scenarios set each episode's loading. SI units."""
 
 
@@ -264,6 +362,13 @@ def remus100_toml() -> str:
         x_cb=data.x_B_from_nose_m,
         nose_station=10.0 - 20.0 * vehicle.hull.x_m[0] / vehicle.length_m,
         cdc=data.crossflow_drag,
+        crossflow=",\n".join(
+            f"{c.name} {c.hull:.3g} / {c.with_fins:.3g} / {c.tabulated:.3g}"
+            for c in crossflow_coefficients(data)
+        ),
+        printed_Z_qq=prestero_crossflow_formulas(data)["Z_qq"],
+        printed_M_ww=prestero_crossflow_formulas(data)["M_ww"],
+        index=stability_index(data),
         excess=data.buoyancy_N - data.weight_N,
     )
     return vehicle_to_toml(vehicle, header)

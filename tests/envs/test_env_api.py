@@ -50,6 +50,8 @@ def test_every_scenario_has_an_id_and_the_headline_id_is_randomized():
         "subenv/Mixed-v0",
         "subenv/PeriscopeDepth-v1",
         "subenv/PeriscopeDepthWaves-v0",
+        "subenv/PeriscopeDepth-v2",
+        "subenv/PeriscopeDepthWaves-v1",
     }
     assert set(ENV_IDS) == expected
     assert all(env_id in gym.registry for env_id in ENV_IDS)

@@ -34,6 +34,8 @@ DIGESTS = {
     "subenv/HardBallastLimits-v0": "3e425f44c6bff80b",
     "subenv/HardWaves18-v0": "e94a0bd4778f5125",
     "subenv/HardGusts-v0": "b5fc47623e250235",
+    "subenv/PeriscopeDepth-v2": "468daf294db3b53d",
+    "subenv/PeriscopeDepthWaves-v1": "83b8e7075b56cc12",
 }
 
 

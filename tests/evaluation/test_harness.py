@@ -147,8 +147,8 @@ def test_registered_suites_name_registered_scenarios():
         "LowSpeed",
         "NearCritical",
         "SpeedTransient",
-        "PeriscopeDepth-v1",
-        "PeriscopeDepthWaves",
+        "PeriscopeDepth-v2",
+        "PeriscopeDepthWaves-v1",
         "BallastOffset",
     )
     tiny = get_suite("tiny")

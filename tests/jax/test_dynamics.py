@@ -1,5 +1,6 @@
 """The dynamics on JAX (subenv.jax) against the compiled ones: the same source, traced."""
 
+# ruff: noqa: E402  (the module skips before importing what needs jax: pytest.importorskip comes first)
 import numpy as np
 import pytest
 
@@ -25,9 +26,14 @@ def _loadings(vehicle_name, rng, free_surface):
     """N loadings of one vehicle (one hull): its own, and variants of its metacentric height,
     longitudinal balance, excess buoyancy and cross-flow drag; near the surface with ``free_surface``."""
     vehicle = subenv.load_vehicle(vehicle_name)
-    surface = FreeSurface() if free_surface else FreeSurface(suction_factor=0.0)
-    variants = [model_params(vehicle, surface)]
-    for _ in range(7):
+    # (both theories of the suction, the loading's picked: FreeSurface.theory)
+    surfaces = (
+        (FreeSurface(), FreeSurface(theory="sources-only"))
+        if free_surface
+        else (FreeSurface(suction_factor=0.0),)
+    )
+    variants = [model_params(vehicle, surfaces[0])]
+    for i in range(7):
         variants.append(
             model_params(
                 vehicle.variant(
@@ -36,7 +42,7 @@ def _loadings(vehicle_name, rng, free_surface):
                     excess_buoyancy_N=rng.uniform(-0.01, 0.01) * vehicle.weight_N,
                     crossflow_drag=rng.uniform(0.0, 1.0),
                 ),
-                surface,
+                surfaces[(i + 1) % len(surfaces)],
             )
         )
     return stack_params([variants[i % len(variants)] for i in range(N)])

@@ -46,6 +46,8 @@ def _fly(env, steps: int) -> tuple[np.ndarray, list[float], str]:  # type: ignor
         "PeriscopeDepth",
         "PeriscopeDepth-v1",
         "PeriscopeDepthWaves",
+        "PeriscopeDepth-v2",
+        "PeriscopeDepthWaves-v1",
     ],
 )
 def test_the_full_scale_boat_flies_the_models_episode_froude_scaled(scenario) -> None:  # type: ignore[no-untyped-def]

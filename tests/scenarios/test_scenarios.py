@@ -33,9 +33,11 @@ def test_registry_lists_and_rejects():
         "BallastOffset",
         "Randomized",
     ]
-    assert scenario_names()[-6:] == [
+    assert scenario_names()[-8:] == [
         "PeriscopeDepth-v1",
         "PeriscopeDepthWaves",
+        "PeriscopeDepth-v2",
+        "PeriscopeDepthWaves-v1",
         "HardRateTransient",
         "HardBallastLimits",
         "HardWaves18",
