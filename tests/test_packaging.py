@@ -176,9 +176,9 @@ def test_wheel_installs_into_a_clean_venv_and_evaluates(tmp_path: Path):
         "thesis",
     ]  # the tiny suite: two scenarios, one episode
 
-    # The README's own controller, saved beside the user and run from the wheel's command.
-    readme = (ROOT / "README.md").read_text("utf-8")
-    (tmp_path / "depth_p.py").write_text(readme.split("```python\n# depth_p.py\n", 1)[1].split("```", 1)[0])
+    # The own-controller guide's controller, saved beside the user and run from the wheel's command.
+    guide = (ROOT / "docs" / "guides" / "controller.md").read_text("utf-8")
+    (tmp_path / "depth_p.py").write_text(guide.split("```python\n# depth_p.py\n", 1)[1].split("```", 1)[0])
     mine = tmp_path / "mine"
     _run(
         subenv,
