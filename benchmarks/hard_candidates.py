@@ -46,6 +46,7 @@ from subenv.evaluation import (
     rollout,
     run_episodes,
 )
+from subenv.evaluation.achievable import PlanReplay
 from subenv.scenarios import get_scenario, register_scenario
 from subenv.scenarios.scenario import Scenario
 from subenv.vehicles import Vehicle
@@ -293,35 +294,6 @@ class OrderedDepthStep:
         obs[:, 0] -= np.float32(self.step.offset_m(self._steps * self.dt_s))
         self._steps += 1
         return self.inner.act_batch(obs)
-
-    def reset(self, info: Mapping[str, Any], vehicle: Vehicle) -> None:
-        self.reset_batch([info], vehicle)
-
-    def act(self, observation: np.ndarray) -> np.ndarray:
-        action: np.ndarray = self.act_batch(np.asarray(observation)[None])[0]
-        return action
-
-
-class PlanReplay:
-    """A batch controller that plays stored plans (one per episode, in the order of the seeds run; float32
-    actions, one row per step), each held at its last action past its end: the harness's check of the
-    oracle's certificates (``--check-plans``)."""
-
-    name, control, alpha = "oracle_plan", "independent", 0.0
-
-    def __init__(self, plans: Sequence[np.ndarray]) -> None:
-        self.plans = [np.asarray(p, dtype=np.float32) for p in plans]
-        self._steps = 0
-
-    def reset_batch(self, infos: Sequence[Mapping[str, Any]], vehicle: Vehicle) -> None:
-        if len(infos) != len(self.plans):
-            raise ValueError(f"{len(infos)} episodes for {len(self.plans)} plans")
-        self._steps = 0
-
-    def act_batch(self, observations: np.ndarray) -> np.ndarray:
-        k = self._steps
-        self._steps += 1
-        return np.stack([p[min(k, len(p) - 1)] for p in self.plans])
 
     def reset(self, info: Mapping[str, Any], vehicle: Vehicle) -> None:
         self.reset_batch([info], vehicle)

@@ -270,9 +270,11 @@ def evaluate(args: argparse.Namespace) -> int:
     results are written, and each failure is a line on stderr)."""
     from subenv.atomic import OutputDirError
     from subenv.evaluation import (
+        BENCHMARK_SUITES,
         DEFAULT_SEED,
         ENTRY_POINT_GROUP,
         controller_names,
+        run_benchmark,
         run_comparison,
         suite_names,
     )
@@ -299,33 +301,37 @@ def evaluate(args: argparse.Namespace) -> int:
             print(f"(skipped the plots: {exc})", file=sys.stderr)
             plots = False
     out = args.out or f"results/evaluation/{time.strftime('%Y%m%d-%H%M%S')}"
+    # No --suite: the benchmark's tracks (the default and the Hard one), each its own leaderboard; so too
+    # with several suite names. Otherwise one suite (a name, or scenarios).
+    suites = list(BENCHMARK_SUITES) if args.suite is None else args.suite
+    several = len(suites) > 1 and all(name in suite_names() for name in suites)
+    common = {
+        "overwrite": args.force,
+        "seed": DEFAULT_SEED if args.seed is None else args.seed,
+        "progress": not args.no_progress,
+        "plots": plots,
+        "vehicle": args.vehicle,
+        "env_kwargs": args.env_kwargs,
+    }
     try:
-        comparison = run_comparison(
-            args.controllers,
-            args.suite,  # (None: the default suite)
-            args.episodes,
-            out,
-            overwrite=args.force,
-            seed=DEFAULT_SEED if args.seed is None else args.seed,
-            progress=not args.no_progress,
-            plots=plots,
-            vehicle=args.vehicle,
-            env_kwargs=args.env_kwargs,
-        )
+        if several:
+            comparisons = run_benchmark(args.controllers, suites, args.episodes, out, **common)
+        else:
+            comparisons = [run_comparison(args.controllers, suites, args.episodes, out, **common)]
     except (FileExistsError, OutputDirError) as exc:
         raise SystemExit(f"subenv evaluate: --out: {exc}") from None
     except ValueError as exc:
         raise SystemExit(f"subenv evaluate: {exc}") from None
-    print(comparison.leaderboard)
-    print(
-        f"\n{len(comparison.results)} episodes in {comparison.elapsed_s:.1f} s; "
-        f"results in {comparison.out_dir}/"
-    )
+    print("\n".join(c.leaderboard for c in comparisons))
+    episodes = sum(len(c.results) for c in comparisons)
+    seconds = sum(c.elapsed_s for c in comparisons)
+    print(f"\n{episodes} episodes in {seconds:.1f} s; results in {out}/")
     # A failed controller cost the others nothing (their results are written); the run still did not do
     # what was asked: each failure on one line, and a non-zero status.
-    for failure in comparison.failures:
+    failures = [failure for c in comparisons for failure in c.failures]
+    for failure in failures:
         print(f"subenv evaluate: {failure.message}", file=sys.stderr)
-    return 1 if comparison.failures else 0
+    return 1 if failures else 0
 
 
 def train(argv: Sequence[str]) -> int:
@@ -527,7 +533,10 @@ def _parser() -> argparse.ArgumentParser:
         "--controllers", type=_names, help="comma-separated controller names (default: all registered)"
     )
     p_eval.add_argument(
-        "--suite", type=_names, help="suite name or comma-separated scenario names (default: 'default')"
+        "--suite",
+        type=_names,
+        help="a suite name, comma-separated suite names (one leaderboard each, in one results folder), or "
+        "comma-separated scenario names (default: 'default,hard', the default and the Hard track)",
     )
     p_eval.add_argument(
         "--episodes", type=int, help="episodes per scenario and controller (default: the suite's)"

@@ -13,6 +13,8 @@ __all__ = [
     "REVERSAL_SCENARIOS",
     "check_harness_kwargs",
     "evaluation_record",
+    "score_record",
+    "score_table",
     "table",
     "target_met",
 ]
@@ -59,6 +61,55 @@ def evaluation_record(results: Sequence[Any]) -> dict[str, dict[str, dict[str, f
             "episodes": row["episodes"],
         }
     return out
+
+
+def score_record(results: Sequence[Any]) -> dict[str, dict[str, dict[str, Any]]]:
+    """The benchmark-v1 score of each controller on each scenario and pooled (``"all"``,
+    :mod:`subenv.evaluation.score`): ``{controller: {scenario: {episodes, scored, wins, success_rate,
+    quality, score, score_ci_low, score_ci_high, outcomes}}}``, ``success_rate`` over the scored (winnable)
+    episodes and ``outcomes`` the count of each failure outcome among them."""
+    from subenv.evaluation.results import outcome_counts
+    from subenv.evaluation.score import POOLED, scores
+
+    out: dict[str, dict[str, dict[str, Any]]] = {}
+    for s in scores(results):
+        counted = [
+            r.metrics
+            for r in results
+            if r.controller == s.controller and r.counts and s.scenario in (POOLED, r.scenario)
+        ]
+        failures = {o: n for o, n in outcome_counts(counted).items() if n and o != "success"}
+        out.setdefault(s.controller, {})[s.scenario] = {
+            "episodes": s.episodes,
+            "scored": s.scored,
+            "wins": s.wins,
+            "success_rate": s.success_rate,
+            "quality": s.quality,
+            "score": s.score,
+            "score_ci_low": s.score_ci[0],
+            "score_ci_high": s.score_ci[1],
+            "outcomes": failures,
+        }
+    return out
+
+
+def score_table(record: Mapping[str, Mapping[str, Mapping[str, Any]]]) -> str:
+    """A Markdown table of :func:`score_record`'s wins over the scored episodes and the score [95%
+    interval], per scenario (then pooled) and controller."""
+    controllers = list(record)
+    scenarios = list(next(iter(record.values())))
+    lines = [
+        "| scenario | " + " | ".join(f"{c}: wins / scored | {c}: score [95% CI]" for c in controllers) + " |",
+        "|---|" + "---:|---:|" * len(controllers),
+    ]
+    for s in scenarios:
+        cells = []
+        for c in controllers:
+            r = record[c][s]
+            interval = f"[{r['score_ci_low']:.0f}, {r['score_ci_high']:.0f}]"
+            cells.append(f"{r['wins']}/{r['scored']} | {r['score']:.0f} {interval}")
+        lines.append(f"| {'all (pooled)' if s == 'all' else s} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
 
 
 def table(record: dict[str, dict[str, dict[str, float]]], scenarios: Sequence[str]) -> str:

@@ -89,6 +89,7 @@ def test_wheel_installs_into_a_clean_venv_and_evaluates(tmp_path: Path):
     names = archive.namelist()
     for name in (
         "subenv/vehicles/data/suboff.toml",
+        "subenv/evaluation/data/achievable-hard.json",
         "subenv/py.typed",
         "subenv_baselines/thesis.py",
         "subenv_agents/shipped.py",

@@ -8,7 +8,8 @@
 - :mod:`~subenv.analysis.continuation`: pseudo-arclength continuation over speed or x_GB.
 - :mod:`~subenv.analysis.bifurcation`: cusps and bifurcation sets (eqs 4.7, 4.37, 4.39, 4.43-4.45, 5.1-5.2).
 - :mod:`~subenv.analysis.reversal`: level-flight trim through the critical speed (Fig. 5-2).
-- :mod:`~subenv.analysis.curriculum`: speed stages relative to the critical speed.
+- :mod:`~subenv.analysis.curriculum`: speed stages relative to the critical speed, and how hard an
+  episode is (its distance to u_cr, its loading's trim margin).
 - :mod:`~subenv.analysis.hopf`: beyond the thesis (its Ch. VI): the Hopf bifurcation of level flight at
   speed, its criticality, and the periodic orbits born there.
 - :mod:`~subenv.analysis.free_surface`: beyond the thesis (its Ch. VI's first recommendation): level
@@ -41,7 +42,7 @@ if TYPE_CHECKING:  # (the names as the type checkers see them; imported on use a
     )
     from subenv.analysis.continuation import Branch, ContinuationError, continue_equilibria
     from subenv.analysis.critical import critical_froude, critical_speed, froude_number
-    from subenv.analysis.curriculum import SpeedStage, speed_curriculum
+    from subenv.analysis.curriculum import EpisodeDifficulty, SpeedStage, episode_difficulty, speed_curriculum
     from subenv.analysis.design import (
         THESIS_POLES,
         closed_loop_eigenvalues,
@@ -84,7 +85,7 @@ _MODULES: Final = {
     ),
     "continuation": ("Branch", "ContinuationError", "continue_equilibria"),
     "critical": ("critical_froude", "critical_speed", "froude_number"),
-    "curriculum": ("SpeedStage", "speed_curriculum"),
+    "curriculum": ("EpisodeDifficulty", "SpeedStage", "episode_difficulty", "speed_curriculum"),
     "design": (
         "THESIS_POLES",
         "closed_loop_eigenvalues",
@@ -126,6 +127,7 @@ __all__ = [
     "Branch",
     "ContinuationError",
     "DepthHoldingTrim",
+    "EpisodeDifficulty",
     "Equilibrium",
     "HopfPoint",
     "LevelFlightDepth",
@@ -145,6 +147,7 @@ __all__ = [
     "critical_froude",
     "critical_speed",
     "depth_holding_trim",
+    "episode_difficulty",
     "equilibria",
     "exact_bifurcation_set",
     "exact_cusp",

@@ -125,7 +125,8 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
 
     - ``scenario``: a registered name (``subenv.scenarios.scenario_names()``) or a
       :class:`~subenv.scenarios.Scenario`. Each registered scenario also has its own id,
-      ``subenv/<Name>-v0``; ``subenv/DivePlane-v0`` is ``Randomized``.
+      ``subenv/<Name>-v0``; ``subenv/DivePlane-v0`` is ``Randomized``. The Hard ids register some of
+      the arguments below too (their limits: :data:`subenv.envs.registration.ID_ARGUMENTS`).
     - ``vehicle``: a shipped name, a vehicle file path, or a :class:`~subenv.vehicles.Vehicle`.
       The shipped scenarios are SUBOFF's: on a vehicle of another length L every episode is
       Froude-scaled by lambda = L / 4.26 m (depths, ``max_depth_error_m`` and ``depth_scale_m``
@@ -174,6 +175,13 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
       cards report it); ``Randomized`` and ``Mixed`` draw from it, unchanged.
     - ``PeriscopeDepthWaves-v0`` (2026-12): new, ``PeriscopeDepth-v1`` in a seeded head sea.
       Every other id's seeded rollouts are unchanged, bit for bit.
+    - The Hard track's ids (2026-12), new: ``HardRateTransient-v0`` (``SpeedTransient`` with the
+      planes rate-limited to 0.05 rad/s, the id's ``plane_rate_limit_radps``), ``HardBallastLimits-v0``
+      (``BallastOffset`` with sensor noise, a 1 N heave-force disturbance, 0.03 rad/s and a 0.3 rad
+      pitch limit), ``HardWaves18-v0`` (``PeriscopeDepthWaves`` at H_s 18 cm) and ``HardGusts-v0``
+      (``NearCritical`` with sensor noise and a 6 N heave-force disturbance); the suite ``hard`` of
+      ``subenv evaluate`` scores them over the episodes a stored full-information plan won
+      (:mod:`subenv.evaluation.achievable`). Every other id's seeded rollouts are unchanged.
     """
 
     metadata: dict[str, Any] = {"render_modes": ["human", "rgb_array"], "render_fps": 30}

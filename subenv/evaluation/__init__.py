@@ -22,7 +22,13 @@ registry), :mod:`~subenv.evaluation.suites` (named sets of scenarios) and
 :mod:`~subenv.evaluation.progress` (progress on a terminal or in a log).
 """
 
-from subenv.evaluation.comparison import DEFAULT_OUT_DIR, Comparison, run_comparison, write_comparison
+from subenv.evaluation.comparison import (
+    DEFAULT_OUT_DIR,
+    Comparison,
+    run_benchmark,
+    run_comparison,
+    write_comparison,
+)
 from subenv.evaluation.controller import (
     ENTRY_POINT_GROUP,
     BatchController,
@@ -51,6 +57,7 @@ from subenv.evaluation.rollout import (
 )
 from subenv.evaluation.score import PairedComparison, Score, paired_comparisons, scores
 from subenv.evaluation.suites import (
+    BENCHMARK_SUITES,
     DEFAULT_SEED,
     DEFAULT_SUITE,
     Suite,
@@ -60,6 +67,7 @@ from subenv.evaluation.suites import (
 )
 
 __all__ = [
+    "BENCHMARK_SUITES",
     "DEFAULT_OUT_DIR",
     "DEFAULT_SEED",
     "DEFAULT_SUITE",
@@ -91,6 +99,7 @@ __all__ = [
     "register_suite",
     "resolve",
     "roll_out",
+    "run_benchmark",
     "run_comparison",
     "run_episode",
     "run_episodes",

@@ -7,11 +7,12 @@ flew it, so that every controller of a comparison is judged on the same episodes
 - ``winnable`` (:func:`winnable_episode`): the loading has a depth-holding trim within the plane and
   pitch limits at the speed the episode holds at its end, with every plane pair the vehicle has free
   (:func:`subenv.analysis.winnable`): a static test, necessary and not sufficient.
+- ``achievable`` (:func:`~subenv.evaluation.achievable.achievable_episode`): a full-information plan,
+  stored per id and seed, won the episode on replay (:mod:`subenv.evaluation.achievable`); the Hard
+  suite is scored by it.
 - A suite scores the episodes its classifier calls True (:attr:`Suite.scored_by
-  <subenv.evaluation.suites.Suite.scored_by>`): ``winnable`` today. A classifier is a function of the
-  :class:`EpisodeDraw` (which names the scenario and the seed), registered by name with
-  :func:`register_classifier`: one that reads stored certificates of achievability per scenario and
-  seed plugs in there, and a suite that names it is scored by it.
+  <subenv.evaluation.suites.Suite.scored_by>`). A classifier is a function of the :class:`EpisodeDraw`
+  (which names the scenario and the seed), registered by name with :func:`register_classifier`.
 
 An episode whose classifier cannot say (None: no certificate stored) is judged by ``winnable``
 instead (:attr:`EpisodeResult.counts <subenv.evaluation.measure.EpisodeResult.counts>`).
@@ -27,6 +28,8 @@ from typing import Any
 from subenv.analysis.winnable import winnable
 from subenv.dynamics.free_surface import NO_FREE_SURFACE, FreeSurface
 from subenv.dynamics.waves import SeaState
+from subenv.envs.config import DivePlaneConfig
+from subenv.evaluation.achievable import achievable_episode
 from subenv.scenarios.scenario import EpisodeConfig
 from subenv.vehicles.vehicle import Vehicle
 
@@ -62,6 +65,10 @@ class EpisodeDraw:
         The environment's pitch limit [rad].
     options : mapping or None
         The reset options (``speed``, ``depth_command``) that placed the episode, if any.
+    config : DivePlaneConfig or None
+        The environment's configuration (its scenario, vehicle and settings; None: not known).
+    max_episode_steps : int or None
+        Where the environment truncated episodes (None: at the scenario's duration only).
     """
 
     scenario: str
@@ -71,6 +78,8 @@ class EpisodeDraw:
     critical_speed_mps: float
     max_pitch_rad: float
     options: Mapping[str, Any] | None = None
+    config: DivePlaneConfig | None = None
+    max_episode_steps: int | None = None
 
     @property
     def final_speed_mps(self) -> float:
@@ -122,7 +131,7 @@ def winnable_episode(draw: EpisodeDraw) -> bool:
     )
 
 
-_CLASSIFIERS: dict[str, Classifier] = {"winnable": winnable_episode}
+_CLASSIFIERS: dict[str, Classifier] = {"winnable": winnable_episode, "achievable": achievable_episode}
 
 
 def register_classifier(name: str, classifier: Classifier, *, overwrite: bool = False) -> None:

@@ -68,11 +68,18 @@ from subenv.evaluation.results import (
 from subenv.evaluation.results_format import FORMAT_VERSION
 from subenv.evaluation.rollout import roll_out
 from subenv.evaluation.stats import CONFIDENCE_LEVEL
-from subenv.evaluation.suites import DEFAULT_SEED, DEFAULT_SUITE, Suite
+from subenv.evaluation.suites import BENCHMARK_SUITES, DEFAULT_SEED, DEFAULT_SUITE, Suite
 from subenv.evaluation.trajectory import Trajectory
 from subenv.vehicles.vehicle import Vehicle
 
-__all__ = ["DEFAULT_OUT_DIR", "RESULTS_KIND", "Comparison", "run_comparison", "write_comparison"]
+__all__ = [
+    "DEFAULT_OUT_DIR",
+    "RESULTS_KIND",
+    "Comparison",
+    "run_benchmark",
+    "run_comparison",
+    "write_comparison",
+]
 
 DEFAULT_OUT_DIR = "results/evaluation"
 
@@ -197,6 +204,52 @@ def run_comparison(
         ``plots`` without matplotlib installed.
     """
     plan = resolve(controllers, suite, episodes, seed, vehicle=vehicle, env_kwargs=env_kwargs)
+    (comparison,) = _run_plans([plan], out_dir, overwrite, progress, plots, nested=False)
+    return comparison
+
+
+def run_benchmark(
+    controllers: Sequence[Controller | str] | None = None,
+    suites: Sequence[Suite | str] = BENCHMARK_SUITES,
+    episodes: int | None = None,
+    out_dir: str | os.PathLike[str] | None = DEFAULT_OUT_DIR,
+    overwrite: bool = False,
+    seed: int = DEFAULT_SEED,
+    progress: bool = True,
+    *,
+    plots: bool = True,
+    vehicle: str | Vehicle = "suboff",
+    env_kwargs: Mapping[str, Any] | None = None,
+) -> list[Comparison]:
+    """Compare controllers on several suites, each its own leaderboard (``subenv evaluate`` without
+    ``--suite``: :data:`~subenv.evaluation.suites.BENCHMARK_SUITES`, the default and the Hard track).
+
+    The arguments are :func:`run_comparison`'s, for every suite (``episodes`` None: each suite's own).
+    Every suite is resolved and checked before the first episode. ``out_dir`` holds one results folder
+    per suite, ``<out_dir>/<suite>/`` (:func:`run_comparison`'s files), and ``leaderboard.md``, the
+    suites' leaderboards one after the other; it appears complete or not at all.
+    """
+    plans = [
+        resolve(controllers, suite, episodes, seed, vehicle=vehicle, env_kwargs=env_kwargs)
+        for suite in suites
+    ]
+    names = [plan.suite.name for plan in plans]
+    if len(set(names)) != len(names):
+        raise ValueError(f"suites={names!r} is invalid: each suite once")
+    return _run_plans(plans, out_dir, overwrite, progress, plots, nested=True)
+
+
+def _run_plans(
+    plans: Sequence[Plan],
+    out_dir: str | os.PathLike[str] | None,
+    overwrite: bool,
+    progress: bool,
+    plots: bool,
+    *,
+    nested: bool,
+) -> list[Comparison]:
+    """Roll out, classify, measure and report each plan; write the results folder (each plan's in a
+    subfolder named after its suite where ``nested``)."""
     if out_dir is not None and plots:
         from subenv.evaluation.plots import require_matplotlib
 
@@ -208,17 +261,25 @@ def run_comparison(
         if out_dir is None
         else atomic_output_dir(out_dir, overwrite=overwrite, kind=RESULTS_KIND)
     )
+    comparisons = []
     with folder_block as folder:
-        start = time.perf_counter()
-        failures: list[ControllerFailure] = []
-        results = roll_out(plan, progress, keep_trajectories=1, on_failure=failures.append)
-        elapsed = time.perf_counter() - start
-        comparison = report(
-            plan, results, failures, elapsed, out_dir=None if out_dir is None else Path(out_dir)
-        )
-        if folder is not None:
-            _write_files(comparison, folder, plots=plots, controllers=plan.controllers, vehicle=plan.vehicle)
-    return comparison
+        for plan in plans:
+            start = time.perf_counter()
+            failures: list[ControllerFailure] = []
+            results = roll_out(plan, progress, keep_trajectories=1, on_failure=failures.append)
+            elapsed = time.perf_counter() - start
+            where = None if out_dir is None else Path(out_dir) / (plan.suite.name if nested else "")
+            comparison = report(plan, results, failures, elapsed, out_dir=where)
+            if folder is not None:
+                inside = folder / plan.suite.name if nested else folder
+                inside.mkdir(exist_ok=True)
+                _write_files(
+                    comparison, inside, plots=plots, controllers=plan.controllers, vehicle=plan.vehicle
+                )
+            comparisons.append(comparison)
+        if folder is not None and nested:
+            atomic_write_text(folder / "leaderboard.md", "\n".join(c.leaderboard for c in comparisons))
+    return comparisons
 
 
 def report(
@@ -237,7 +298,11 @@ def report(
     score_table = [s for s in every_score if s.controller not in failed]
     summary = summarize(results, score_table=every_score)
     board = leaderboard_markdown(
-        ranked, title=f"Leaderboard: suite '{plan.suite.name}'", failures=failures, score_table=score_table
+        ranked,
+        title=f"Leaderboard: suite '{plan.suite.name}'",
+        failures=failures,
+        score_table=score_table,
+        scored_by=plan.suite.scored_by,
     )
     paired = sc.paired_comparisons(ranked)
     return Comparison(

@@ -18,6 +18,7 @@ from subenv.evaluation.controller import (
     UNINFORMED_SUFFIX,
     Controller,
     controller_names,
+    informed,
     make_controller,
     uninformed,
 )
@@ -26,7 +27,7 @@ from subenv.evaluation.suites import DEFAULT_SEED, DEFAULT_SUITE, Suite, resolve
 from subenv.vehicles.loader import load_vehicle
 from subenv.vehicles.vehicle import Vehicle
 
-__all__ = ["Plan", "needs_bow_planes", "resolve", "resolve_controllers"]
+__all__ = ["Plan", "needs_bow_planes", "resolve", "resolve_controllers", "with_uninformed_twins"]
 
 
 @dataclass(frozen=True)
@@ -93,6 +94,8 @@ def resolve(
     ctrls = resolve_controllers(controllers, boat)
     the_suite = resolve_suite(suite)
     check_classifier(the_suite.scored_by)
+    if controllers is None and the_suite.uninformed_twins:
+        ctrls = with_uninformed_twins(ctrls)
     return Plan(
         suite=the_suite,
         controllers=tuple(ctrls),
@@ -102,6 +105,21 @@ def resolve(
         vehicle_name=vehicle if isinstance(vehicle, str) else vehicle.name,
         env_kwargs=check_env_kwargs(env_kwargs, the_suite.scenarios, boat),
     )
+
+
+def with_uninformed_twins(controllers: Sequence[Controller]) -> list[Controller]:
+    """``controllers``, each that takes the environment's settings followed by a fresh instance of it run
+    untold, ``<name>:uninformed`` (:attr:`Suite.uninformed_twins
+    <subenv.evaluation.suites.Suite.uninformed_twins>`; registered controllers only, as the default
+    selection is)."""
+    names = {c.name for c in controllers}
+    twinned: list[Controller] = []
+    for c in controllers:
+        twinned.append(c)
+        twin = c.name + UNINFORMED_SUFFIX
+        if informed(c) and twin not in names:
+            twinned.append(_made(twin))
+    return twinned
 
 
 def needs_bow_planes(controller: Controller) -> bool:

@@ -400,6 +400,17 @@ SCORE_NOTE: Final = (
 """The leaderboard's caption of the score: the formula and why."""
 
 
+COUNTED: Final = {
+    "winnable": "winnable: a depth-holding trim exists within the limits, subenv.analysis.winnable",
+    "achievable": (
+        "achievable: a full-information plan stored for the episode won it on replay, "
+        "subenv.evaluation.achievable; where none is stored, winnable"
+    ),
+}
+"""What the leaderboard's caption says the score counts, per classifier (:attr:`Suite.scored_by
+<subenv.evaluation.suites.Suite.scored_by>`)."""
+
+
 def leaderboard_markdown(
     results: Sequence[EpisodeResult],
     *,
@@ -407,6 +418,7 @@ def leaderboard_markdown(
     confidence: float = CONFIDENCE_LEVEL,
     failures: Sequence[ControllerFailure] = (),
     score_table: Sequence[Score] | None = None,
+    scored_by: str = "winnable",
 ) -> str:
     """Markdown leaderboard: controllers ranked by their score over the suite, with intervals.
 
@@ -419,7 +431,8 @@ def leaderboard_markdown(
     gives per scenario). (3) The score per scenario. (4) Paired comparisons of the controllers next to
     each other in the ranking (:func:`~subenv.evaluation.score.paired_comparisons`: McNemar on success,
     Wilcoxon on quality). Every interval is at level ``confidence``; ``score_table`` is
-    :func:`~subenv.evaluation.score.scores` of ``results`` if it is already computed.
+    :func:`~subenv.evaluation.score.scores` of ``results`` if it is already computed; ``scored_by``
+    the suite's classifier, which the caption names (:data:`COUNTED`).
 
     A controller with ``failures`` (:class:`~subenv.evaluation.failures.ControllerFailure`) is not
     ranked, whatever it completed: its failures are listed below the tables (:func:`failures_markdown`).
@@ -483,9 +496,10 @@ def leaderboard_markdown(
     n_scored = sum(r.counts for r in results if r.controller == first)
     n_all = sum(r.controller == first for r in results)
     note = (
-        f"Ranked by the score over the {n_scored} of {n_all} episodes that count (those that can be won; "
-        f"the same seeds for every controller), {100 * confidence:.0f}% intervals: success Wilson, score "
-        "and quality a bootstrap stratified by scenario. 'rank by success': by W / N alone (ties share a "
+        f"Ranked by the score over the {n_scored} of {n_all} episodes that count "
+        f"({COUNTED.get(scored_by, scored_by)}; the same seeds for every controller), "
+        f"{100 * confidence:.0f}% intervals: success Wilson, score and quality a bootstrap stratified by "
+        "scenario. 'rank by success': by W / N alone (ties share a "
         f"rank). 'informed': told the environment's settings (limits, control period). {SCORE_NOTE}"
     )
     parts = [

@@ -272,6 +272,8 @@ def _run_single(
         trajectory.critical_speed_mps,
         config.max_pitch_rad,
         options,
+        config,
+        limit,
     )
     return _Rollout(seed, episode, trajectory, draw, keep)
 
@@ -333,6 +335,8 @@ def _run_batch(
             trajectory.critical_speed_mps,
             config.max_pitch_rad,
             options,
+            config,
+            env.max_episode_steps,
         )
         rollouts.append(_Rollout(seed, first_episode + i, trajectory, drawn_for, i < keep))
     return rollouts

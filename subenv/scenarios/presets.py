@@ -7,6 +7,7 @@ For DARPA SUBOFF at alpha = 0, u_cr = 1.8979 fps = 0.5785 m/s.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Final
 
 from subenv.dynamics.free_surface import FreeSurface
@@ -15,7 +16,7 @@ from subenv.scenarios.registry import register_scenario
 from subenv.scenarios.scenario import Scenario, SpeedRamp
 from subenv.thesis import REFERENCE_LENGTH_M, THESIS_DESIGN_SPEED_MPS
 
-__all__ = ["BASE_SCENARIOS"]
+__all__ = ["BASE_SCENARIOS", "HARD_SCENARIOS"]
 
 _SMALL_PITCH = (-0.05, 0.05)  # rad, about +-3 deg
 # The scenarios' depths, m/s speeds, times, loadings and disturbances are SUBOFF's (REFERENCE_LENGTH_M):
@@ -161,4 +162,50 @@ PERISCOPE_DEPTH_WAVES = PERISCOPE_DEPTH_V1.replace(
 )
 
 for _scenario in (*BASE_SCENARIOS, RANDOMIZED, MIXED, PERISCOPE_DEPTH_V1, PERISCOPE_DEPTH_WAVES):
+    register_scenario(_scenario)
+
+# --- the Hard track ------------------------------------------------------------------------------------
+# Each an existing scenario made harder: what the best controllers do not all win, and what a
+# full-information plan certifies can be won (the suite "hard", scored over those achievable episodes:
+# subenv.evaluation.achievable). Their environment settings (the planes' rate limit, the pitch limit) are
+# their ids' arguments, subenv.envs.registration.ID_ARGUMENTS, where gym.make and the harness read them.
+
+HARD_RATE_TRANSIENT = SPEED_TRANSIENT.replace(
+    name="HardRateTransient",
+    description=(
+        "SpeedTransient with rate-limited planes (its id's plane_rate_limit_radps): through u_cr the planes "
+        "cannot follow a controller that does not plan for their rate."
+    ),
+)
+HARD_BALLAST_LIMITS = BALLAST_OFFSET.replace(
+    name="HardBallastLimits",
+    description=(
+        "BallastOffset with sensor noise, a 1 N heave-force disturbance, rate-limited planes and a tighter "
+        "pitch limit (its id's plane_rate_limit_radps and max_pitch_rad)."
+    ),
+    sensor_noise=True,
+    disturbance_std_N=1.0,
+)
+HARD_WAVES18 = PERISCOPE_DEPTH_WAVES.replace(
+    name="HardWaves18",
+    description=(
+        "PeriscopeDepthWaves in a sea three times as high (JONSWAP, H_s 18 cm, T_p 2 s at SUBOFF's scale; "
+        "at 1:24, H_s 4.3 m): the waves' forcing near the broaching depth."
+    ),
+    sea_state=dataclasses.replace(PERISCOPE_SEA, significant_height_m=0.18),
+    version=0,
+)
+HARD_GUSTS = NEAR_CRITICAL.replace(
+    name="HardGusts",
+    description=(
+        "NearCritical with sensor noise and a 6 N heave-force disturbance (30 s correlation): gusts the "
+        "planes can barely answer where they have almost no net effect on depth."
+    ),
+    sensor_noise=True,
+    disturbance_std_N=6.0,
+)
+
+HARD_SCENARIOS = (HARD_RATE_TRANSIENT, HARD_BALLAST_LIMITS, HARD_WAVES18, HARD_GUSTS)
+
+for _scenario in HARD_SCENARIOS:
     register_scenario(_scenario)

@@ -4,6 +4,7 @@ and its policy is a controller of subenv.evaluation, the shipped one included.""
 from __future__ import annotations
 
 import json
+import re
 import shutil
 import tempfile
 from pathlib import Path
@@ -21,6 +22,7 @@ import jax.numpy as jnp
 
 from subenv.evaluation import controller_names, evaluate, make_controller
 from subenv_agents import jax_ppo
+from subenv_agents.difficulty import table_difficulties
 from subenv_agents.jax_ppo import (
     JaxPPOController,
     PPOConfig,
@@ -29,8 +31,10 @@ from subenv_agents.jax_ppo import (
     advantages,
     init_network,
     load,
+    main,
     make_train,
     policy_mean,
+    policy_step,
     save,
 )
 from subenv_agents.records import REVERSAL_SCENARIOS, evaluation_record
@@ -71,6 +75,10 @@ def test_training_runs_as_one_program_and_reports_every_update(trained):
     # The observation statistics are those of everything observed: the resets, then every step.
     assert float(state.obs_stats.count) == pytest.approx(32 * (1 + 2 * 16), rel=1e-6)
     assert env.num_actions == 2
+    # (Nominal's episodes last 400 steps: none of these 32 x 32 steps ended one by its time, so none was won)
+    assert np.all(np.asarray(metrics.won) == 0) and np.all(
+        np.asarray(metrics.won) <= np.asarray(metrics.episodes)
+    )
 
 
 def test_a_saved_model_loads_and_acts_as_the_policy_mean(trained, tmp_path):
@@ -176,6 +184,126 @@ def test_a_model_trained_on_other_dynamics_is_refused_as_a_controller(trained):
         JaxPPOController.of(config, state.network, state.obs_stats, "other")
 
 
+MEMORY = PPOConfig(**{**TINY.__dict__, "memory": 8, "depth_integral_s": 100.0})
+
+
+@pytest.fixture(scope="module")
+def trained_memory():
+    """Two updates of a tiny training of a policy with a memory and the depth-error integral."""
+    train, _ = make_train(MEMORY)
+    state, metrics = jax.block_until_ready(jax.jit(train)(jax.random.key(1)))
+    return state, metrics
+
+
+def _episode(controller, seed, steps):
+    """The controller's actions over ``steps`` steps of Nominal's episode ``seed``, and its observations."""
+    env = gym.make("subenv/Nominal-v0", control="independent")
+    obs, info = env.reset(seed=seed)
+    controller.reset(info, env.unwrapped.vehicle)
+    observations, actions = [], []
+    for _ in range(steps):
+        observations.append(obs)
+        actions.append(controller.act(obs))
+        obs, *_ = env.step(actions[-1])
+    return np.array(observations), np.array(actions)
+
+
+def test_a_policy_with_memory_trains_and_acts_as_its_memory_and_integral_say(trained_memory, tmp_path):
+    from subenv_agents.config import DepthIntegralConfig
+    from subenv_agents.features import DepthIntegral
+
+    state, metrics = trained_memory
+    assert state.memory.shape == (32, 8) and np.all(np.isfinite(np.asarray(metrics.reward)))
+    first = init_network(jax.random.split(jax.random.key(1), 3)[1], 9, 2, MEMORY.hidden, memory=8)
+    assert not np.array_equal(np.asarray(first["gru"]["wh"]), np.asarray(state.network["gru"]["wh"]))
+    folder = save(tmp_path / "model", MEMORY, state.network, state.obs_stats, {"env_steps": 1024})
+    config, network, stats = load(folder)
+    assert config == MEMORY and config.observation[-1] == "depth_error_integral_ms"
+    np.testing.assert_array_equal(np.asarray(network["gru"]["wi"]), np.asarray(state.network["gru"]["wi"]))
+    controller = JaxPPOController(folder)
+    observations, actions = _episode(controller, seed=1, steps=6)
+    # By hand: the Stable-Baselines3 agents' integral (I_0 = 0, then advanced by each observation) and the
+    # policy's memory, carried from step to step
+    integral = DepthIntegral(1, 0.5, DepthIntegralConfig(time_constant_s=100.0))
+    memory = jnp.zeros((1, 8))
+    for k, obs in enumerate(observations):
+        if k:
+            integral.update(obs[None])
+        observed = jnp.asarray(integral.append(obs[None], integral.value), dtype=jnp.float64)
+        memory, mean = policy_step(network, stats, memory, observed)
+        np.testing.assert_allclose(actions[k], np.clip(np.asarray(mean)[0], -1, 1), rtol=1e-5, atol=1e-6)
+    # The memory is used: the last observation alone, at an episode's start, is acted on otherwise
+    controller.reset_batch([{}], None)
+    assert not np.allclose(controller.act(observations[-1]), actions[-1])
+
+
+def test_a_policy_with_memory_keeps_each_rows_own_in_a_batch(trained_memory, tmp_path):
+    state, _ = trained_memory
+    controller = JaxPPOController.of(MEMORY, state.network, state.obs_stats, "memory")
+    alone = [_episode(controller, seed, steps=5) for seed in (1, 2)]
+    controller.reset_batch([{}, {}], None)
+    together = [controller.act_batch(np.stack([alone[0][0][k], alone[1][0][k]])) for k in range(5)]
+    for row in (0, 1):
+        np.testing.assert_allclose(np.array(together)[:, row], alone[row][1], rtol=1e-5, atol=1e-6)
+
+
+def test_a_model_trained_for_another_observation_space_is_refused_naming_both(trained, tmp_path, monkeypatch):
+    state, *_ = trained
+    folder = save(tmp_path / "model", TINY, state.network, state.obs_stats, {"env_steps": 1024})
+    names = list(jax_ppo.OBSERVATION_NAMES)
+    monkeypatch.setattr(
+        jax_ppo, "OBSERVATION_NAMES", (*names, "salinity_psu")
+    )  # (the environment observes more)
+    trained_for = re.escape(f"trained for the observation space {names} (8 components)")
+    observes = re.escape(
+        f"subenv/Nominal-v0 with its settings observes {[*names, 'salinity_psu']} (9 components)"
+    )
+    with pytest.raises(ValueError, match=rf"config\.json: the model was {trained_for}, and {observes}"):
+        load(folder)
+    with pytest.raises(ValueError, match="salinity_psu"):
+        JaxPPOController(folder)
+    monkeypatch.undo()
+    settings_ = json.loads((folder / "config.json").read_text())
+    settings_["depth_integral_s"] = 100.0  # (it did not observe the integral the settings now name)
+    (folder / "config.json").write_text(json.dumps(settings_))
+    with pytest.raises(ValueError, match=r"observes \[.*'depth_error_integral_ms'\] \(9 components\)"):
+        load(folder)
+
+
+def test_the_difficulty_curriculum_resets_only_to_episodes_that_can_be_won():
+    config = PPOConfig(
+        **{
+            **TINY.__dict__,
+            "env_id": "subenv/BallastOffset-v0",
+            "episodes": 12,
+            "num_envs": 128,
+            "total_timesteps": 128 * 16,
+            "curriculum": "difficulty",
+        }
+    )
+    winnable = [d.winnable for d in table_difficulties(config.env_id, config.env_kwargs, range(12))]
+    assert winnable.count(False) == 2  # (of 128 uniform resets, all winnable: (10/12)^128 = 7e-11)
+    train, env = make_train(config)
+    state, _ = jax.block_until_ready(jax.jit(train)(jax.random.key(0)))
+    table = np.asarray(env.default_params.table.episode.params)
+    drawn = np.asarray(state.env_state.episode.params)
+    rows = [int(np.flatnonzero(np.all(table == row, axis=1))[0]) for row in drawn]
+    assert all(winnable[row] for row in rows) and len(set(rows)) > 5
+
+
+def test_the_command_refuses_an_output_folder_it_did_not_write_in_one_line(tmp_path, capsys):
+    """It raised FileExistsError with a traceback (check_output_dir's), not argparse's one-line error."""
+    (tmp_path / "taken").mkdir()
+    (tmp_path / "taken" / "notes.txt").write_text("mine")
+    with pytest.raises(SystemExit) as exited:
+        main(["--out", str(tmp_path / "taken"), "--total-timesteps", "1024", "--num-envs", "16"])
+    assert exited.value.code == 2
+    assert (
+        "output folder" in capsys.readouterr().err
+        and (tmp_path / "taken" / "notes.txt").read_text() == "mine"
+    )
+
+
 def test_a_truncated_episode_bootstraps_from_its_final_observations_value():
     """Three steps of one environment: the first goes on, the second is truncated (the third is a new
     episode's), the third terminated. Each bootstraps from where it led: the next step's value, the
@@ -184,6 +312,7 @@ def test_a_truncated_episode_bootstraps_from_its_final_observations_value():
     column = lambda *values: jnp.asarray(values, dtype=jnp.float32)[:, None]  # noqa: E731 (a table's column)
     rollout = Rollout(
         obs=jnp.zeros((3, 1, 8)),
+        first=jnp.asarray([[True], [False], [True]]),
         action=jnp.zeros((3, 1, 2)),
         log_prob=column(0.0, 0.0, 0.0),
         value=column(1.0, 2.0, 3.0),
@@ -306,6 +435,74 @@ def test_a_damaged_model_folder_is_refused_naming_the_file_and_field(model_folde
         load(folder)
     with pytest.raises(ValueError, match=match):
         JaxPPOController(folder)
+
+
+@pytest.fixture(scope="module")
+def memory_folder(tmp_path_factory):
+    """A model folder of MEMORY's network: a GRU of 8 units, the integral observed (not trained)."""
+    network = init_network(jax.random.key(0), 9, 2, MEMORY.hidden, memory=8)
+    stats = RunningStats.empty((9,)).update(jnp.asarray(np.random.default_rng(0).normal(size=(64, 9))))
+    return save(tmp_path_factory.mktemp("models") / "memory", MEMORY, network, stats, {"env_steps": 0})
+
+
+MEMORY_DAMAGE = {
+    "settings without the memory": (
+        ("setting", "memory", 0),
+        r"network\.npz does not hold the network config\.json describes: hidden=\[16, 16\], 2 action "
+        r"components: unknown \['embed/b', 'embed/w', 'gru/bhn', 'gru/bi', 'gru/wh', 'gru/wi'\]",
+    ),
+    "a memory of another width": (
+        ("setting", "memory", 4),
+        r"network\.npz: actor/0/w has shape \(17, 16\): must have shape \(13, 16\)",
+    ),
+    "a GRU weight's shape": (
+        ("array", "gru/wh", np.zeros((8, 16), np.float32)),
+        r"network\.npz: gru/wh has shape \(8, 16\): must have shape \(8, 24\)",
+    ),
+    "NaN in the GRU": (
+        ("array", "gru/bhn", np.full(8, np.nan, np.float32)),
+        r"network\.npz: gru/bhn has 8 NaN or infinite",
+    ),
+    "GRU weights that overflow": (
+        ("array", "gru/wi", np.full((8, 24), 5e37, np.float32)),  # (8 x 5e37 > 3.4e38)
+        r"network\.npz: gru/wi and gru/wh and gru/bi and gru/bhn are invalid: .* beyond float32's range",
+    ),
+    "an embedding that overflows": (
+        ("array", "embed/w", np.full((9, 8), 1e37, np.float32)),  # (9 x 10 x 1e37 > 3.4e38)
+        r"network\.npz: embed/w and embed/b are invalid: .* beyond float32's range",
+    ),
+}
+
+
+def test_a_model_with_memory_loads_whole_and_acts_with_finite_numbers(memory_folder):
+    config, network, stats = load(memory_folder)
+    assert config == MEMORY and sorted(network["gru"]) == ["bhn", "bi", "wh", "wi"]
+    high = np.finfo(np.float32).max
+    obs = jnp.asarray(np.stack([np.zeros(9), np.full(9, high), np.full(9, -high)]), jnp.float32)
+    memory, mean = policy_step(network, stats, jnp.ones((3, 8)), obs)
+    assert np.all(np.isfinite(np.asarray(mean))) and np.all(np.abs(np.asarray(memory)) <= 1.0)
+
+
+@pytest.mark.parametrize("name", list(MEMORY_DAMAGE))
+def test_a_damaged_model_folder_with_memory_is_refused_naming_the_file_and_field(
+    memory_folder, tmp_path, name
+):
+    folder = Path(shutil.copytree(memory_folder, tmp_path / "model"))
+    damage, match = MEMORY_DAMAGE[name]
+    _damage(folder, *damage)
+    with pytest.raises(ValueError, match=match):
+        load(folder)
+    with pytest.raises(ValueError, match=match):
+        JaxPPOController(folder)
+
+
+def test_a_model_with_memory_lacking_an_array_is_refused_naming_it(memory_folder, tmp_path):
+    folder = Path(shutil.copytree(memory_folder, tmp_path / "model"))
+    arrays = _arrays(folder)
+    del arrays["gru/bhn"]
+    np.savez(folder / "network.npz", **arrays)
+    with pytest.raises(ValueError, match=r"memory=8, 2 action components: it lacks \['gru/bhn'\]"):
+        load(folder)
 
 
 def test_the_shipped_model_loads_as_it_was_saved():

@@ -30,6 +30,10 @@ DIGESTS = {
     "subenv/Mixed-v0": "6d5dcd26c5f265b6",
     "subenv/PeriscopeDepth-v1": "3aa630265a7c8a5f",
     "subenv/PeriscopeDepthWaves-v0": "1e534e3e9bfb06ca",
+    "subenv/HardRateTransient-v0": "811431cef0e47b61",
+    "subenv/HardBallastLimits-v0": "3e425f44c6bff80b",
+    "subenv/HardWaves18-v0": "e94a0bd4778f5125",
+    "subenv/HardGusts-v0": "b5fc47623e250235",
 }
 
 

@@ -33,7 +33,14 @@ def test_registry_lists_and_rejects():
         "BallastOffset",
         "Randomized",
     ]
-    assert scenario_names()[-2:] == ["PeriscopeDepth-v1", "PeriscopeDepthWaves"]
+    assert scenario_names()[-6:] == [
+        "PeriscopeDepth-v1",
+        "PeriscopeDepthWaves",
+        "HardRateTransient",
+        "HardBallastLimits",
+        "HardWaves18",
+        "HardGusts",
+    ]
     with pytest.raises(ValueError, match=r"scenario='Slow' is unknown: must be one of \['Nominal'"):
         get_scenario("Slow")
     with pytest.raises(ValueError, match="already registered"):
