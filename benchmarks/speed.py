@@ -90,8 +90,19 @@ def control_periods_in_blocks(x: np.ndarray, prm: np.ndarray, hull: np.ndarray, 
 
 
 # --- timing ----------------------------------------------------------------------------------
+def _from_states(
+    step: Callable[..., None], states: np.ndarray, source: np.ndarray, args: tuple[Any, ...]
+) -> None:
+    """``step(*args)`` from the states ``source`` holds, copied into ``states`` (which ``args`` hold)."""
+    states[:] = source
+    step(*args)
+
+
 def best_rate(run: Callable[[int], None], per_call: int, seconds: float, repeats: int) -> float:
-    """Best over ``repeats`` of (env-steps per second) for ``run(k)``, which makes call k, ``per_call`` env-steps."""
+    """Best over ``repeats`` of (env-steps per second) for ``run(k)``.
+
+    ``run(k)`` makes call k, of ``per_call`` env-steps.
+    """
     best = 0.0
     calls_per_check = max(1, 4096 // per_call)
     for _ in range(repeats):
@@ -391,25 +402,19 @@ def cost_table(seconds: float) -> list[str]:
             report,
         )
 
-        def step() -> None:
-            state[:] = vec._state  # the same states every time (no episode ends inside the timing)
-            tr.step(*args)
-
-        copy_ns = ns_per_item(lambda: state.__setitem__(slice(None), vec._state), n)
-        kernel[env_id] = ns_per_item(step, n) - copy_ns
+        # The same states every time (no episode ends inside the timing): the copy's time is taken off.
+        copy_ns = ns_per_item(functools.partial(np.copyto, state, vec._state), n)
+        kernel[env_id] = ns_per_item(functools.partial(_from_states, tr.step, state, vec._state, args), n)
+        kernel[env_id] -= copy_ns
 
         # The same steps shared among two of numba's threads, as the vector env shares them with threads=2:
         # what two cores make of the kernel alone.
-        def on_two_threads() -> None:
-            state[:] = vec._state
-            tr.step_parallel(*args)
-
+        on_two_threads = functools.partial(_from_states, tr.step_parallel, state, vec._state, args)
         before = numba.get_num_threads()
         numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
         two_threads[env_id] = ns_per_item(on_two_threads, n) - copy_ns
         numba.set_num_threads(before)
-        index = np.arange(64)
-        reset_ns = ns_per_item(lambda: vec._reset_envs(index, {}, report), 64)
+        reset_ns = ns_per_item(functools.partial(vec._reset_envs, np.arange(64), {}, report), 64)
         resets[env_id] = (ends / (200 * n), reset_ns)
         env.close()
     for env_id in SUBENV_IDS:
@@ -443,7 +448,7 @@ def cost_table(seconds: float) -> list[str]:
         ("the exact hull drag integral, one state (`crossflow_point`)", drag, per_state, ".1f"),
     )
     for label, fn, args, fmt in parts:
-        lines.append(f"| {label} | {ns_per_item(lambda: fn(*args), n):{fmt}} |")
+        lines.append(f"| {label} | {ns_per_item(functools.partial(fn, *args), n):{fmt}} |")
     for env_id in SUBENV_IDS:
         rate, reset_ns = resets[env_id]
         lines.append(
@@ -543,7 +548,8 @@ from subenv.dynamics import derivatives, model_params
 t1 = time.perf_counter()
 env = gym.make("subenv/DivePlane-v0"); env.reset(seed=0); env.step(np.zeros(1, dtype=np.float32))
 t2 = time.perf_counter()
-venv = gym.make_vec("subenv/Nominal-v0", num_envs=8, threads=2); venv.reset(seed=0); venv.step(np.zeros((8, 1)))
+venv = gym.make_vec("subenv/Nominal-v0", num_envs=8, threads=2)
+venv.reset(seed=0); venv.step(np.zeros((8, 1)))
 t3 = time.perf_counter()
 derivatives(np.zeros(4), 1.0, 0.0, 0.0, model_params(subenv.load_vehicle("suboff")))
 t4 = time.perf_counter()

@@ -149,6 +149,7 @@ class ExactEpisode:
         rng, _ = seeding.np_random(seed)
         draw, loading, episode, state = draw_episode(config, rng, Loadings(config))
         self.draw = draw
+        assert loading.vehicle is not None  # (one episode's draw: only a batch's loadings have none)
         self.vehicle: Vehicle = loading.vehicle
         self.state = np.zeros(1, dtype=tr.STATE_DTYPE)
         self.episode = np.zeros(1, dtype=tr.EPISODE_DTYPE)

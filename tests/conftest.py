@@ -5,10 +5,13 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import subprocess
+import sys
 from pathlib import Path
 from typing import Any, NamedTuple
 
 import pytest
+from hypothesis import settings
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")  # pygame renders headless in tests
 os.environ.setdefault("MPLBACKEND", "Agg")
@@ -22,6 +25,13 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ["NUMBA_NUM_THREADS"] = str(
     max(2, int(os.environ.get("NUMBA_NUM_THREADS", "0") or 0), os.cpu_count() or 1)
 )
+
+# The property tests draw the same examples on every run and machine (from a seed made of each test's source,
+# so an edit of a test may draw others: keep a failure it found as an @example), keep no database of earlier
+# failures between runs, and set no time limit per example, which a busy machine would break. Explore with
+# fresh random examples by pytest --hypothesis-profile=default (Hypothesis' own settings).
+settings.register_profile("ci", derandomize=True, database=None, deadline=None)
+settings.load_profile("ci")
 
 _MEASURED: list[tuple[str, str]] = []
 
@@ -48,60 +58,98 @@ def pytest_configure(config: pytest.Config) -> None:
     discover_controllers(EntryPoint(name, value, ENTRY_POINT_GROUP) for name, value in declared.items())
 
 
+# Until the compiled kernels are in numba's on-disk cache (a fresh checkout, an edit of their sources), the
+# first call of each in a process compiles it, 10-20 s on a quiet core for the environments' step. Each
+# pytest-xdist worker would compile those its first tests call, both workers the same ones at once, and so
+# would a test's subprocess that starts before they are cached. So a run with workers compiles them first,
+# once, before the workers start: in two processes, one half each, for two cores; every process then loads
+# them. (tests/dynamics/test_model.py and tests/test_packaging.py compile in caches of their own, on purpose.)
+_WARM_UP = (
+    # The environments' step as gym.make builds them, and the vector environment's on two threads.
+    """
+import numpy as np, gymnasium as gym, subenv
+env = gym.make("subenv/DivePlane-v0"); env.reset(seed=0); env.step(np.zeros(1, dtype=np.float32))
+vec = gym.make_vec("subenv/Nominal-v0", num_envs=4, threads=2); vec.reset(seed=0); vec.step(np.zeros((4, 1)))
+""",
+    # The step of a copied environment (its arrays come back writable: numba compiles another signature),
+    # and the batched right-hand side and hull integrals, for one state and for rows of them.
+    """
+import copy, numpy as np, gymnasium as gym, subenv
+from subenv.dynamics import crossflow_integrals, derivatives, model_params
+from subenv.dynamics.free_surface import suction
+env = copy.deepcopy(gym.make("subenv/DivePlane-v0"))
+env.reset(seed=0); env.step(np.zeros(1, dtype=np.float32))
+params, x = model_params(subenv.load_vehicle("suboff")), np.linspace(-1.0, 1.0, 7)
+derivatives(np.zeros(4), 1.0, 0.0, 0.0, params)
+derivatives(np.stack([0.1 * x, 0.05 * x, 0.01 * x, 10 + x], axis=-1), 1.2, 0.05 * x, -0.02, params)
+crossflow_integrals(params.hull, 0.05 * x, 0.01 * x)
+suction(params.hull, 0.1 * x, 1.0 + 0.2 * x, 1.0, 1000.0)
+""",
+)
+
+
+def pytest_sessionstart(session: pytest.Session) -> None:
+    # (before pytest-xdist's own, which starts the workers: it is trylast)
+    config = session.config
+    # (Only where there are kernels to compile: not in the projects that tests/test_conftest.py makes.)
+    checkout = (config.rootpath / "subenv" / "dynamics").is_dir()
+    if checkout and config.getoption("numprocesses", None) and not config.option.collectonly:
+        # (Their stderr is the session's: where they compile, subenv says so there, once each.)
+        processes = [subprocess.Popen([sys.executable, "-c", program]) for program in _WARM_UP]
+        for process in processes:  # (one that fails leaves the compiling to the tests, which report why)
+            process.wait()
+
+
 def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addoption("--run-slow", action="store_true", help="also run tests marked slow (minutes)")
 
 
-# Under pytest-xdist (./dev test runs ``-n auto --dist loadfile``) a test file's tests run in one worker,
-# so that a module-scoped fixture (the shipped cards' 300 episodes, the training runs per algorithm, the
-# rl_zoo3 trainings) is computed once. The files that share an expensive session fixture run in one worker
-# too: these. (xdist's own grouping, --dist loadgroup with xdist_group marks, does nothing on pytest 9.2:
-# xdist 3.8 renames the node ids through an attribute pytest 9 no longer reads: pytest-xdist#1386.
-# The scheduler below overrides LoadFileScheduling._split_scope, the one method loadgroup's overrides
-# too.) One Ray instance in the suite also means that the sweep test which kills "a Ray worker running a
+# Under pytest-xdist, ./dev test runs ``-n auto --dist loadgroup``: tests marked ``xdist_group(name)`` run
+# in one worker, the group's. Each test file is one group, so that a module-scoped fixture (the shipped
+# cards' 300 episodes, the training runs per algorithm, the rl_zoo3 trainings) is computed once; and the
+# files whose tests use one of these session fixtures are one group, named after it, so that it is computed
+# once too. One Ray instance in the suite also means that the sweep test which kills "a Ray worker running a
 # chunk" finds its own.
-_SHARED_SESSION_FIXTURES = {
-    "analysis_report": (
-        "tests/analysis/test_analysis.py",
-        "tests/analysis/test_hopf.py",
-        "tests/test_cli.py",
-    ),
-    "local_ray": ("tests/test_sweep.py", "tests/agents/test_tune.py", "tests/agents/test_reference.py"),
-    "small_run": ("tests/evaluation/test_results.py", "tests/evaluation/test_plots.py"),
-}
-_FILE_GROUP = {file: name for name, files in _SHARED_SESSION_FIXTURES.items() for file in files}
+SHARED_SESSION_FIXTURES = ("analysis_report", "local_ray", "small_run")
 
 
-@pytest.hookimpl(optionalhook=True)  # (a hook of pytest-xdist, which may not be installed)
-def pytest_xdist_make_scheduler(config: pytest.Config, log):  # type: ignore[no-untyped-def]
-    if config.getvalue("dist") != "loadfile":
-        return None
-    from xdist.scheduler import LoadFileScheduling
-
-    class SharedFixtureScheduling(LoadFileScheduling):
-        def _split_scope(self, nodeid: str) -> str:
-            file = super()._split_scope(nodeid)
-            return _FILE_GROUP.get(file, file)
-
-    return SharedFixtureScheduling(config, log)
-
-
+@pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the marks, in its own hook of this name
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    for item in items:  # a new user of a shared fixture is added to its group above
+    shared: dict[str, set[str]] = {}
+    for item in items:
         file = item.nodeid.split("::", 1)[0]
-        for name in set(getattr(item, "fixturenames", ())) & _SHARED_SESSION_FIXTURES.keys():
-            # (tests/envs/test_rllib.py has a local_ray of its own: RLlib's, run in .venv-gym12/)
-            if file not in _SHARED_SESSION_FIXTURES[name] and file != "tests/envs/test_rllib.py":
-                raise pytest.UsageError(
-                    f"{file} uses the session fixture {name}: add it to "
-                    f"_SHARED_SESSION_FIXTURES['{name}'] in tests/conftest.py"
-                )
+        # (tests/envs/test_rllib.py's local_ray is a module fixture of its own: RLlib's, run in .venv-gym12/)
+        if file != "tests/envs/test_rllib.py":
+            shared.setdefault(file, set()).update(set(item.fixturenames) & set(SHARED_SESSION_FIXTURES))
+    for item in items:
+        file = item.nodeid.split("::", 1)[0]
+        names = shared.get(file, set())
+        if len(names) > 1:
+            raise pytest.UsageError(
+                f"{file} uses the session fixtures {sorted(names)}, each computed in its own group of files "
+                "(tests/conftest.py): move the tests that use one of them to another file"
+            )
+        item.add_marker(pytest.mark.xdist_group(min(names) if names else file))
     if config.getoption("--run-slow"):
         return
     skip = pytest.mark.skip(reason="slow: opt in with --run-slow")
     for item in items:
         if "slow" in item.keywords:
             item.add_marker(skip)
+
+
+@pytest.hookimpl(optionalhook=True)  # (a hook of pytest-xdist, which may not be installed)
+def pytest_xdist_node_collection_finished(node, ids: list[str]) -> None:  # type: ignore[no-untyped-def]
+    # pytest-xdist's workers tell its loadgroup scheduler a test's group by appending "@<group>" to the test's
+    # id, which pytest 9.2 no longer lets them change (pytest-xdist#1386, open): nothing is grouped then, and
+    # without a word, each worker computing the shared fixtures again. Hence the test extra's pytest<9.2.
+    if node.config.getoption("dist") == "loadgroup":
+        ungrouped = [nodeid for nodeid in ids if "@" not in nodeid]
+        if ungrouped:
+            raise pytest.UsageError(
+                f"pytest-xdist's --dist loadgroup did not group {ungrouped[0]} (pytest-xdist#1386, on "
+                f"pytest {pytest.__version__}): install the test extra, which requires pytest<9.2"
+            )
 
 
 @pytest.fixture
@@ -149,8 +197,8 @@ class AnalysisReport(NamedTuple):
 def analysis_report(tmp_path_factory: pytest.TempPathFactory) -> AnalysisReport:
     """The reproduction report of Riedel (1993), written once per session (tens of seconds).
 
-    ``subenv analyze --out <folder>`` writes it: the command calls ``write_report(folder,
-    load_vehicle("suboff"))``, so the tests of ``write_report`` (tests/analysis) and of the command
+    ``subenv analyze --out <folder>`` writes it: the command calls ``write_findings(folder,
+    load_vehicle("suboff"))``, so the tests of ``write_findings`` (tests/analysis) and of the command
     (tests/test_cli.py) share this one folder. Its parent holds nothing else. Tests read it and must
     not change it; one that needs an existing report to replace works on a copy.
 

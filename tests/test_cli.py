@@ -27,6 +27,7 @@ from subenv.evaluation import controller
 
 
 def test_demo_prints_the_summary_and_writes_the_plot(tmp_path: Path, capsys):
+    pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")
     out = tmp_path / "figs" / "demo.png"
     assert main(["demo", "--out", str(out)]) == 0
     text = capsys.readouterr().out
@@ -112,6 +113,7 @@ def test_analyze_writes_the_report_and_refuses_to_overwrite(tmp_path: Path, anal
 
 
 def test_evaluate_end_to_end_on_the_tiny_suite(tmp_path: Path, capsys):
+    pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")
     out = tmp_path / "eval"
     assert (
         main(
@@ -141,6 +143,7 @@ def test_evaluate_end_to_end_on_the_tiny_suite(tmp_path: Path, capsys):
 
 
 def test_evaluate_rejects_unknown_names(tmp_path: Path):
+    pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")
     with pytest.raises(SystemExit, match=r"controller='pid' is unknown: must be one of \[") as error:
         main(["evaluate", "--controllers", "pid", "--out", str(tmp_path / "x"), "--no-progress"])
     assert all(f"'{name}'" in str(error.value) for name in ("thesis", "scheduled", "lqr", "reversal_aware"))
@@ -180,6 +183,7 @@ EVALUATE = ["evaluate", "--suite", "tiny", "--episodes", "1", "--controllers", "
 def test_an_output_folder_that_cannot_be_written_is_refused_before_any_work(
     tmp_path: Path, monkeypatch, no_work, command
 ):
+    pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")
     (tmp_path / "afile").write_text("x")
     with pytest.raises(
         SystemExit,
@@ -200,6 +204,7 @@ def test_an_output_folder_that_cannot_be_written_is_refused_before_any_work(
 
 @pytest.mark.parametrize("command", [EVALUATE, ["analyze"]], ids=["evaluate", "analyze"])
 def test_force_replaces_only_an_earlier_result_of_the_command(tmp_path: Path, no_work, command):
+    pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")
     project = tmp_path / "project"
     (project / ".git").mkdir(parents=True)
     (project / "src").mkdir()
@@ -229,7 +234,15 @@ def test_an_empty_out_folder_is_accepted(tmp_path: Path, monkeypatch, command, f
     monkeypatch.setattr(subenv.analysis.report, "reproduce_numbers", started)
     (tmp_path / "empty").mkdir()
     with pytest.raises(_WorkStarted):
-        main([*command, "--out", str(tmp_path / "empty"), *force])
+        main(
+            [
+                *command,
+                "--out",
+                str(tmp_path / "empty"),
+                *force,
+                *(["--no-plots"] if command == EVALUATE else []),
+            ]
+        )
     assert [p.name for p in tmp_path.iterdir()] == ["empty"] and not any((tmp_path / "empty").iterdir())
 
 
@@ -296,6 +309,7 @@ def test_an_empty_out_is_refused_by_every_command(capsys, no_work, command):
 
 
 def test_evaluate_takes_scenario_names_for_the_suite(tmp_path: Path, capsys):
+    pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")
     out = tmp_path / "eval"
     assert (
         main(
@@ -352,13 +366,7 @@ _WORDS = st.sampled_from(
 )
 
 
-@settings(
-    max_examples=60,
-    deadline=None,
-    derandomize=True,
-    database=None,
-    suppress_health_check=[HealthCheck.function_scoped_fixture],
-)
+@settings(max_examples=60, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(
     options=st.lists(
         st.tuples(
@@ -512,7 +520,7 @@ def test_evaluate_takes_a_vehicle_and_says_what_is_not_scaled(tmp_path: Path, ca
 )
 def test_evaluate_refuses_bad_env_kwargs_in_one_line_before_any_work(tmp_path: Path, no_work, value, message):
     with pytest.raises(SystemExit) as exit_:
-        main([*EVALUATE, "--env-kwargs", value, "--out", str(tmp_path / "out")])
+        main([*EVALUATE, "--no-plots", "--env-kwargs", value, "--out", str(tmp_path / "out")])
     assert str(exit_.value.code).startswith(message) and "\n" not in str(exit_.value.code)
     assert not (tmp_path / "out").exists()
 
@@ -528,6 +536,7 @@ def test_evaluate_env_kwargs_must_be_a_json_object(tmp_path: Path, capsys, no_wo
 
 
 def test_evaluate_passes_env_kwargs_to_the_environments_and_records_them(tmp_path: Path) -> None:
+    pytest.importorskip("daqp", reason="the 'mpc' extra is not installed")
     out = tmp_path / "out"
     settings = '{"plane_rate_limit_radps": 0.05, "max_pitch_rad": 0.4}'
     assert (

@@ -16,7 +16,7 @@ from subenv.scenarios import get_scenario
 from subenv.sweep import Chunk, SweepSpec, run_sweep
 
 ray = pytest.importorskip("ray", reason="the 'ray' extra is not installed")
-pq = pytest.importorskip("pyarrow.parquet")
+pq = pytest.importorskip("pyarrow.parquet", reason="the 'ray' extra is not installed")
 
 SPEC = SweepSpec(
     controllers=("lqr", "thesis"),
@@ -207,7 +207,7 @@ def test_the_command_line_sweeps_a_grid_and_prints_success_per_point(local_ray, 
 
 
 def test_performance_maps_are_drawn_from_a_two_axis_sweep(local_ray, tmp_path) -> None:  # type: ignore[no-untyped-def]
-    pytest.importorskip("matplotlib")
+    pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")
     from subenv.sweep import plot_performance_maps
 
     spec = SweepSpec(

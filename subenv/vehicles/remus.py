@@ -15,9 +15,10 @@ two independent public transcriptions of his tables, which agree (the thesis PDF
 the machine this was built on).
 
 How they map onto this package's model (Riedel 1993 eqs 2.38-2.43, the same vertical-plane form as
-Prestero's): the origin is his, the centre of buoyancy (so x_B = x_G = 0); his ``Z_uw u w``, ``(Z_uq + m) u q``,
-``M_uw u w``, ``(M_uq - m x_G) u q``, ``Z_uuds u^2 delta_s``, ``M_uuds u^2 delta_s`` are the model's Z_w, Z_q,
-M_w, M_q and stern-plane derivatives, made non-dimensional here with rho/2 L^n; the added masses likewise.
+Prestero's): the origin is his, the centre of buoyancy (so x_B = x_G = 0); his ``Z_uw u w``,
+``(Z_uq + m) u q``, ``M_uw u w``, ``(M_uq - m x_G) u q``, ``Z_uuds u^2 delta_s``, ``M_uuds u^2 delta_s`` are
+the model's Z_w, Z_q, M_w, M_q and stern-plane derivatives, made non-dimensional here with rho/2 L^n; the
+added masses likewise.
 His cross-flow drag terms (Z_ww, Z_qq, M_ww, M_qq) are not coefficients in this model: it integrates the
 quadratic cross-flow drag over the hull (:class:`~subenv.vehicles.HullOffsets`), here his Myring hull with his
 cross-flow drag coefficient c_dc = 1.1. That integral plus his fins' term gives Z_ww = -132.1 kg/m against
@@ -57,7 +58,10 @@ REMUS100_NAME: Final = "remus100"
 
 @dataclass(frozen=True)
 class PresteroRemus100:
-    """The REMUS 100's published data, as Prestero (2001) tabulates them (SI; about the centre of buoyancy)."""
+    """The REMUS 100's published data, as Prestero (2001) tabulates them.
+
+    SI units, about the centre of buoyancy.
+    """
 
     # Hull profile: Myring's equations and their parameters [m, -, rad].
     nose_length_m: float  # a
@@ -140,8 +144,11 @@ PRESTERO_2001: Final = PresteroRemus100(
 """Prestero (2001)'s REMUS 100, as he tabulates it."""
 
 PLANE_LIMIT_RAD: Final = math.radians(20.0)
-"""The stern planes' travel, +-20 deg: Prestero gives none; this is the limit of the REMUS 100 model in Fossen's
-Marine Systems Simulator (``VESSELS/remus100.m``)."""
+"""The stern planes' travel, +-20 deg.
+
+Prestero gives none; this is the limit of the REMUS 100 model in Fossen's Marine Systems Simulator
+(``VESSELS/remus100.m``).
+"""
 
 _NOSE_POINTS: Final = 9
 _TAIL_POINTS: Final = 15
@@ -150,8 +157,11 @@ piecewise-linear hull whose planform area is within 0.3% of the curve's."""
 
 
 def myring_radius(data: PresteroRemus100, s_m: np.ndarray) -> np.ndarray:
-    """The hull radius [m] at ``s_m`` behind the nose: Myring's nose, midbody and tail, as Prestero (2001) writes them,
-    with the nose and tail truncated by their offsets (a blunt nose; a tail cone ending at the propeller)."""
+    """The hull radius [m] at ``s_m`` behind the nose.
+
+    Myring's nose, midbody and tail, as Prestero (2001) writes them, with the nose and tail truncated by
+    their offsets (a blunt nose; a tail cone ending at the propeller).
+    """
     s = np.asarray(s_m, dtype=float)
     a, a0, c, d, n = (
         data.nose_length_m,
@@ -186,8 +196,8 @@ def remus100(data: PresteroRemus100 = PRESTERO_2001) -> Vehicle:
     return Vehicle(
         name=REMUS100_NAME,
         description=f"REMUS 100 AUV (Prestero 2001), stern planes only, L = {L:.4f} m, neutrally buoyant",
-        source="T. Prestero, Verification of a Six-Degree of Freedom Simulation Model for the REMUS Autonomous "
-        "Underwater Vehicle, MS thesis, MIT/WHOI, 2001 (subenv.vehicles.remus)",
+        source="T. Prestero, Verification of a Six-Degree of Freedom Simulation Model for the REMUS "
+        "Autonomous Underwater Vehicle, MS thesis, MIT/WHOI, 2001 (subenv.vehicles.remus)",
         length_m=L,
         weight_N=data.weight_N,
         buoyancy_N=data.weight_N,

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-pytest.importorskip("stable_baselines3")
+pytest.importorskip("stable_baselines3", reason="the 'rl' extra is not installed")
 
 from subenv.cli import main as subenv_main
 from subenv_agents import shipped_models

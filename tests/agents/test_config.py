@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-pytest.importorskip("yaml")
-pytest.importorskip("stable_baselines3")
+pytest.importorskip("yaml", reason="the 'rl' extra is not installed")
+pytest.importorskip("stable_baselines3", reason="the 'rl' extra is not installed")
 
 from subenv_agents.config import (
     ALGORITHMS,

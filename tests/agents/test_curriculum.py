@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-pytest.importorskip("stable_baselines3")
+pytest.importorskip("stable_baselines3", reason="the 'rl' extra is not installed")
 
 from subenv.analysis import critical_speed
 from subenv.analysis.curriculum import DEFAULT_STAGES

@@ -14,7 +14,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-pytest.importorskip("optax")  # the jax-rl extra (in dev)
+pytest.importorskip("optax", reason="the 'jax-rl' extra is not installed")
 
 import gymnasium as gym
 import jax
@@ -542,7 +542,7 @@ _CORRUPTIONS = st.one_of(
 )
 
 
-@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=120, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(corruptions=st.lists(_CORRUPTIONS, min_size=1, max_size=2))
 def test_any_damage_is_refused_naming_the_file_or_loads_a_model_with_finite_actions(
     model_folder, corruptions

@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-pytest.importorskip("stable_baselines3")
+pytest.importorskip("stable_baselines3", reason="the 'rl' extra is not installed")
 pytest.importorskip("ray.tune", reason="the 'ray' extra is not installed")
 pytest.importorskip("rliable", reason="the 'stats' extra is not installed")
 

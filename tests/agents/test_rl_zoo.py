@@ -25,8 +25,8 @@ import pytest
 # (rl_zoo3/gym_patches.py adds info["TimeLimit.truncated"]), which would change what every later
 # test sees from gym.make. rl_zoo3 runs in subprocesses below.
 if importlib.util.find_spec("rl_zoo3") is None:
-    pytest.skip("rl_zoo3 is not installed (the zoo extra)", allow_module_level=True)
-pytest.importorskip("stable_baselines3")
+    pytest.skip("the 'zoo' extra is not installed", allow_module_level=True)
+pytest.importorskip("stable_baselines3", reason="the 'rl' extra is not installed")
 
 import yaml
 from stable_baselines3 import PPO, SAC

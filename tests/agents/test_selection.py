@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-pytest.importorskip("stable_baselines3")
+pytest.importorskip("stable_baselines3", reason="the 'rl' extra is not installed")
 
 from subenv.evaluation import DEFAULT_SEED
 from subenv_agents.config import load_config

@@ -10,8 +10,8 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-pytest.importorskip("stable_baselines3")
-pytest.importorskip("yaml")
+pytest.importorskip("stable_baselines3", reason="the 'rl' extra is not installed")
+pytest.importorskip("yaml", reason="the 'rl' extra is not installed")
 
 from subenv.evaluation import evaluate
 from subenv_agents.card import lineage, total_training_time_s

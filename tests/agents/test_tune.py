@@ -9,9 +9,9 @@ import signal
 
 import pytest
 
-pytest.importorskip("stable_baselines3")
+pytest.importorskip("stable_baselines3", reason="the 'rl' extra is not installed")
 pytest.importorskip("ray.tune", reason="the 'ray' extra is not installed")
-pytest.importorskip("optuna")
+pytest.importorskip("optuna", reason="the 'ray' extra is not installed")
 
 from subenv_agents.tune import search
 

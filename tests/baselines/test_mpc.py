@@ -9,7 +9,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-pytest.importorskip("daqp")
+pytest.importorskip("daqp", reason="the 'mpc' extra is not installed")
 
 from subenv.dynamics import model_params
 from subenv.evaluation import run_episodes

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-pytest.importorskip("daqp")
+pytest.importorskip("daqp", reason="the 'mpc' extra is not installed")
 
 from subenv.envs import DivePlaneEnv
 from subenv.envs.config import DivePlaneConfig

@@ -29,6 +29,11 @@ def _thesis_gain(vehicle) -> np.ndarray:
     return place_poles(lm.A, lm.B[:, None], [-0.3, -0.31, -0.32, -0.33]).gain_matrix[0]
 
 
+def _held(speed, planes: float, params: ModelParams):
+    """The right-hand side over a control period, its planes held at ``planes`` (zero-order hold)."""
+    return lambda t, x: derivatives(x, speed(t), planes, 0.0, params)
+
+
 def _planes(mode: str, gain: np.ndarray, x: np.ndarray, t: float) -> float:
     if mode == "open":
         return 0.1 * np.sin(0.05 * t)  # a slow open-loop sweep of the stern planes
@@ -40,15 +45,17 @@ def _planes(mode: str, gain: np.ndarray, x: np.ndarray, t: float) -> float:
 def test_rk4_matches_solve_ivp_over_600_s(suboff, report, mode, speed):
     params = model_params(suboff)
     gain = _thesis_gain(suboff)
+
+    def steady(t: float) -> float:
+        return speed
+
     x_rk = x_ref = np.array([0.05, 0.0, 0.0, 8.0])
     worst_depth = worst_pitch = 0.0
     for k in range(round(DURATION_S / CONTROL_PERIOD_S)):
         t = k * CONTROL_PERIOD_S
-        d_rk = _planes(mode, gain, x_rk, t)
-        d_ref = _planes(mode, gain, x_ref, t)
-        x_rk = rk4(lambda s, x: derivatives(x, speed, d_rk, 0.0, params), t, x_rk, CONTROL_PERIOD_S, SUBSTEPS)
+        x_rk = rk4(_held(steady, _planes(mode, gain, x_rk, t), params), t, x_rk, CONTROL_PERIOD_S, SUBSTEPS)
         sol = solve_ivp(
-            lambda s, x: derivatives(x, speed, d_ref, 0.0, params),
+            _held(steady, _planes(mode, gain, x_ref, t), params),
             (t, t + CONTROL_PERIOD_S),
             x_ref,
             method="DOP853",
@@ -81,13 +88,11 @@ def test_rk4_matches_solve_ivp_through_a_deceleration(suboff, report):
     worst_depth = worst_pitch = 0.0
     for k in range(round(DURATION_S / CONTROL_PERIOD_S)):
         t = k * CONTROL_PERIOD_S
-        d_rk = _planes("closed", gain, x_rk, t)
-        d_ref = _planes("closed", gain, x_ref, t)
         x_rk = rk4(
-            lambda s, x: derivatives(x, speed(s), d_rk, 0.0, params), t, x_rk, CONTROL_PERIOD_S, SUBSTEPS
+            _held(speed, _planes("closed", gain, x_rk, t), params), t, x_rk, CONTROL_PERIOD_S, SUBSTEPS
         )
         sol = solve_ivp(
-            lambda s, x: derivatives(x, speed(s), d_ref, 0.0, params),
+            _held(speed, _planes("closed", gain, x_ref, t), params),
             (t, t + CONTROL_PERIOD_S),
             x_ref,
             method="DOP853",

@@ -99,7 +99,7 @@ def test_the_same_bits_traced_by_jax():
     assert ints.tolist() == [3, 2] and np.issubdtype(ints.dtype, np.integer)
 
 
-@settings(max_examples=50, deadline=None)
+@settings(max_examples=50)
 @given(
     hnp.arrays(np.float64, 16, elements=st.floats(allow_subnormal=False)),
     hnp.arrays(np.float64, 16, elements=st.floats(allow_subnormal=False)),

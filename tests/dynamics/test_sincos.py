@@ -1,4 +1,7 @@
-"""The right-hand side's own sine and cosine: within 1 ulp, NaN where it gives up, the same bits in SIMD code."""
+"""The right-hand side's own sine and cosine.
+
+Within 1 ulp, NaN where it gives up, the same bits in SIMD code.
+"""
 
 from __future__ import annotations
 

@@ -65,14 +65,25 @@ def test_gymnasium_check_env(env_id):
     gym_check_env(env.unwrapped, skip_render_check=True)
 
 
-@pytest.mark.parametrize("vehicle", subenv.available_vehicles())
-def test_every_shipped_vehicle_passes_the_checkers(vehicle):
-    """Each vehicle file (the Froude-scaled full-scale SUBOFF too) makes a valid env, Gymnasium's and SB3's."""
-    from stable_baselines3.common.env_checker import check_env as sb3_check_env
+def _sb3_check_env():
+    """SB3's env checker, or a skip where SB3 is not installed (the other tests here need no extra)."""
+    checker = pytest.importorskip(
+        "stable_baselines3.common.env_checker", reason="the 'rl' extra is not installed"
+    )
+    return checker.check_env
 
+
+@pytest.mark.parametrize("vehicle", subenv.available_vehicles())
+def test_every_shipped_vehicle_passes_gymnasiums_checker(vehicle):
+    """Each vehicle file (the Froude-scaled full-scale SUBOFF too) makes a valid env."""
     env = gym.make("subenv/DivePlane-v0", vehicle=vehicle, disable_env_checker=True)
     assert env.unwrapped.base_vehicle.name == vehicle
     gym_check_env(env.unwrapped, skip_render_check=True)
+
+
+@pytest.mark.parametrize("vehicle", subenv.available_vehicles())
+def test_every_shipped_vehicle_passes_sb3s_checker(vehicle):
+    sb3_check_env = _sb3_check_env()
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         sb3_check_env(gym.make("subenv/DivePlane-v0", vehicle=vehicle), warn=True)
@@ -80,8 +91,7 @@ def test_every_shipped_vehicle_passes_the_checkers(vehicle):
 
 @pytest.mark.parametrize("env_id", ENV_IDS)
 def test_sb3_check_env_passes_without_warnings(env_id):
-    from stable_baselines3.common.env_checker import check_env as sb3_check_env
-
+    sb3_check_env = _sb3_check_env()
     env = gym.make(env_id)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
@@ -106,7 +116,7 @@ def _same(a, b) -> bool:
     if isinstance(a, dict):
         return a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
     if isinstance(a, (tuple, list)):
-        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
     if isinstance(a, np.ndarray):
         return np.array_equal(a, b)
     if isinstance(a, float) and math.isnan(a):
@@ -448,6 +458,7 @@ def test_register_envs_called_again_registers_the_same_ids_without_warnings():
 
 
 def test_render_rgb_array_through_the_env():
+    pytest.importorskip("pygame", reason="the 'render' extra is not installed")
     env = gym.make("subenv/PeriscopeDepth-v0", render_mode="rgb_array", disable_env_checker=True)
     gym_check_env(env.unwrapped)  # includes Gymnasium's render checks
     env.reset(seed=0)
@@ -461,6 +472,7 @@ def test_render_rgb_array_through_the_env():
 
 
 def test_render_human_with_a_dummy_display():
+    pytest.importorskip("pygame", reason="the 'render' extra is not installed")
     env = gym.make("subenv/Nominal-v0", render_mode="human")
     env.reset(seed=0)
     env.step(np.zeros(1, dtype=np.float32))

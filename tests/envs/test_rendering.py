@@ -14,7 +14,7 @@ import numpy as np
 import numpy.typing as npt
 import pytest
 
-pytest.importorskip("pygame")
+pytest.importorskip("pygame", reason="the 'render' extra is not installed")
 
 from gymnasium.error import DependencyNotInstalled
 

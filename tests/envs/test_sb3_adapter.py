@@ -6,7 +6,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-pytest.importorskip("stable_baselines3")
+pytest.importorskip("stable_baselines3", reason="the 'rl' extra is not installed")
 
 from stable_baselines3 import PPO, SAC
 from stable_baselines3.common.evaluation import evaluate_policy
@@ -36,7 +36,7 @@ def test_adapter_reproduces_dummy_vec_env(env_id, kwargs):
     native.seed(7)
     dummy.seed(7)
     np.testing.assert_array_equal(native.reset(), dummy.reset())
-    for a, b in zip(native.reset_infos, dummy.reset_infos):
+    for a, b in zip(native.reset_infos, dummy.reset_infos, strict=True):
         _same_info(a, b)
     rng = np.random.default_rng(0)
     ends = truncations = 0
@@ -48,9 +48,9 @@ def test_adapter_reproduces_dummy_vec_env(env_id, kwargs):
         assert rewards.dtype == rewards_d.dtype == np.float32
         np.testing.assert_allclose(rewards, rewards_d, rtol=1e-6)
         np.testing.assert_array_equal(dones, dones_d)
-        for a, b in zip(infos, infos_d):
+        for a, b in zip(infos, infos_d, strict=True):
             _same_info(a, b)
-        for a, b in zip(native.reset_infos, dummy.reset_infos):
+        for a, b in zip(native.reset_infos, dummy.reset_infos, strict=True):
             _same_info(a, b)
         ends += int(dones.sum())
         truncations += sum(info["TimeLimit.truncated"] for info in infos)

@@ -448,6 +448,7 @@ def test_bad_actions_raise_before_any_sub_environment_steps():
 
 
 def test_render_rgb_array_shows_every_sub_environment():
+    pytest.importorskip("pygame", reason="the 'render' extra is not installed")
     native = gym.make_vec("subenv/PeriscopeDepth-v0", num_envs=3, render_mode="rgb_array")
     single = gym.make("subenv/PeriscopeDepth-v0", render_mode="rgb_array")
     native.reset(seed=4)

@@ -199,7 +199,18 @@ def test_a_controller_that_calls_itself_by_another_name_is_refused(declared, tmp
     assert str(error.value) == LIAR
     out = tmp_path / "out"
     with pytest.raises(SystemExit) as exit_:
-        main(["evaluate", "--controllers", "good_p,liar", "--suite", "Nominal", "--out", str(out)])
+        main(
+            [
+                "evaluate",
+                "--controllers",
+                "good_p,liar",
+                "--suite",
+                "Nominal",
+                "--no-plots",
+                "--out",
+                str(out),
+            ]
+        )
     assert exit_.value.code == f"subenv evaluate: {LIAR}"
     assert not out.exists()
     assert make_controller("lqr").name == "lqr"  # the real one is untouched
@@ -301,6 +312,7 @@ def test_subenv_evaluate_writes_the_others_results_and_reports_each_failure(
 ) -> None:
     """``--controllers good_p,bad_nan,bad_slow,lqr``: the results of good_p and lqr are those of a run
     without the bad ones, bad_slow's Nominal episodes are kept but not ranked, and the status is 1."""
+    pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")  # (the plots are checked)
     common = ["evaluate", "--suite", "Nominal,LowSpeed", "--episodes", "2"]
     out = tmp_path / "with_bad"
     assert main([*common, "--controllers", "good_p,bad_nan,bad_slow,lqr", "--out", str(out)]) == 1
@@ -366,6 +378,7 @@ def test_subenv_evaluate_writes_the_others_results_and_reports_each_failure(
 
 
 def test_when_every_controller_fails_the_folder_says_so(declared, tmp_path: Path) -> None:
+    pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")  # (the plots are checked)
     out = tmp_path / "out"
     comparison = run_comparison(
         ["bad_raise", "bad_reset_batch"], "Nominal", episodes=2, out_dir=out, progress=False

@@ -49,7 +49,7 @@ def assert_batched_as_one_at_a_time(make: Any, scenario: str, **kwargs: Any) -> 
     reference = run_episodes(make(), scenario, SEEDS, keep_trajectories=len(SEEDS), batched=False, **kwargs)
     results = run_episodes(make(), scenario, SEEDS, keep_trajectories=len(SEEDS), **kwargs)
     assert [(r.seed, r.episode) for r in results] == [(s, i) for i, s in enumerate(SEEDS)]
-    for result, expected in zip(results, reference):
+    for result, expected in zip(results, reference, strict=True):
         assert result.trajectory is not None and expected.trajectory is not None
         assert_same(result, expected)
         assert_same(result.trajectory, expected.trajectory)
@@ -115,7 +115,7 @@ def test_a_batch_of_the_wrong_size_is_refused(name: str, suboff: Vehicle) -> Non
 
 @pytest.mark.parametrize("name", ["ppo", "sac"])
 def test_the_shipped_agents_get_the_one_at_a_time_results(name: str) -> None:
-    pytest.importorskip("stable_baselines3")
+    pytest.importorskip("stable_baselines3", reason="the 'rl' extra is not installed")
     from subenv_agents import shipped_models
     from subenv_agents.controller import AgentController
 

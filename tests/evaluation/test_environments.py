@@ -101,6 +101,7 @@ def test_the_settings_reach_every_environment_and_the_controllers_that_take_them
 
 
 def test_the_mpc_is_told_the_limits_and_runs_untold_by_name() -> None:
+    pytest.importorskip("daqp", reason="the 'mpc' extra is not installed")
     mpc = make_controller("mpc")
     evaluate([mpc], SHORT, episodes=1, progress=False, env_kwargs={"plane_rate_limit_radps": 0.05})
     assert mpc.plane_rate_limit_radps == 0.05  # type: ignore[attr-defined]
@@ -142,6 +143,7 @@ def test_the_settings_and_who_was_told_are_in_run_json(tmp_path: Path) -> None:
 def test_the_figures_replay_their_episodes_in_the_run_settings(tmp_path: Path) -> None:
     """The outcome figures replay an episode that was not kept (here episodes 1 and 2) in the settings
     of the run: in the default settings the replay would be another episode, and refused."""
+    pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")  # (the figures)
     settings = {"plane_rate_limit_radps": 0.05}
     comparison = run_comparison(
         [BangBang()], SHORT, episodes=3, out_dir=tmp_path / "run", progress=False, env_kwargs=settings

@@ -210,6 +210,7 @@ def test_none_runs_every_registered_controller(monkeypatch):
 
 
 def test_comparison_end_to_end_on_the_tiny_suite(tmp_path: Path, capsys):
+    pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")
     out = tmp_path / "evaluation"
     comparison = run_comparison([ZeroPlanes(), ThesisFeedback()], "tiny", out_dir=out, progress=True)
     assert (
@@ -268,6 +269,7 @@ def test_comparison_end_to_end_on_the_tiny_suite(tmp_path: Path, capsys):
 
 
 def test_bad_input_is_refused_before_any_episode_runs(tmp_path: Path):
+    pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")
     out = tmp_path / "exists"
     out.mkdir()
     (out / "notes.txt").write_text("mine")  # (an empty folder would be replaced: it loses nothing)

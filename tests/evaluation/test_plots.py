@@ -19,7 +19,7 @@ from subenv.evaluation.plots import (
 from subenv.evaluation.results import representative_episodes
 from subenv.evaluation.rollout import TrajectoryRecorder
 
-pytest.importorskip("matplotlib")
+pytest.importorskip("matplotlib", reason="the 'plot' extra is not installed")
 
 
 def _trajectory_of(small_run):
@@ -60,7 +60,7 @@ def test_outcome_figure_shows_one_chosen_episode_per_outcome(small_run, scenario
     occurred = {r.metrics.outcome for r in mine}
     assert set(chosen) == occurred  # every outcome that occurred, and only those
     assert len(titles) == len(chosen)
-    for title, (outcome, r) in zip(titles, chosen.items()):
+    for title, (outcome, r) in zip(titles, chosen.items(), strict=True):
         count = sum(x.metrics.outcome == outcome for x in mine)
         assert title.startswith(f"{outcome.replace('_', ' ')}: {count} of {len(mine)}\n")
         assert f"{r.controller}, seed {r.seed}" in title
@@ -73,7 +73,7 @@ def test_speed_transient_shows_the_speed_and_where_it_crosses_u_cr(small_run):
     columns = len(representative_episodes(mine)["SpeedTransient"])
     assert len(fig.axes) == 4 * columns  # depth error, pitch, planes, and the speed
     speed_axes = fig.axes[3 * columns :]
-    for ax, r in zip(speed_axes, representative_episodes(mine)["SpeedTransient"].values()):
+    for ax, r in zip(speed_axes, representative_episodes(mine)["SpeedTransient"].values(), strict=True):
         tr = get(r)
         crossing = speed_crossing_s(tr)
         assert crossing is not None and tr.time_s[0] < crossing < tr.time_s[-1]  # 2-2.6 u_cr down to 0.4-0.7

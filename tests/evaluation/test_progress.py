@@ -36,7 +36,9 @@ def test_without_a_terminal_a_line_every_five_percent(total: int) -> None:
     done = [int(LINE.match(line).group(1)) for line in lines]  # type: ignore[union-attr]
     assert done == sorted(set(done)) and done[-1] == total
     assert lines[-1].startswith(f"evaluate: {total}/{total} episodes, 100% ")
-    assert all(b - a <= max(4, total // LOG_LINES + 4) for a, b in zip([0, *done], done))  # no long silence
+    assert all(
+        b - a <= max(4, total // LOG_LINES + 4) for a, b in zip([0, *done], done, strict=False)
+    )  # no long silence
 
 
 def test_a_line_says_done_elapsed_and_time_left() -> None:

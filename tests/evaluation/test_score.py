@@ -36,7 +36,7 @@ def episode(make_result):
     n=st.integers(1, 300),
     data=st.data(),
 )
-@settings(max_examples=200, deadline=None, derandomize=True, database=None)
+@settings(max_examples=200)
 def test_more_wins_never_score_less_and_the_quality_moves_the_score_less_than_a_win(n, data) -> None:
     wins = data.draw(st.integers(0, n))
     q, q_other = data.draw(st.floats(0, 1)), data.draw(st.floats(0, 1))

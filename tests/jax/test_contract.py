@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip("jax")  # the jax extra (in dev)
+pytest.importorskip("jax", reason="the 'jax' extra is not installed")
 
 import subenv.jax
 from subenv.dynamics import _jit

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-pytest.importorskip("jax")  # the jax extra (in dev)
+pytest.importorskip("jax", reason="the 'jax' extra is not installed")
 
 import jax
 import jax.numpy as jnp

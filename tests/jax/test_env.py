@@ -6,7 +6,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-pytest.importorskip("jax")  # the jax extra (in dev)
+pytest.importorskip("jax", reason="the 'jax' extra is not installed")
 
 import jax
 import jax.numpy as jnp
@@ -349,7 +349,7 @@ def independent():
     return env, params, jax.jit(env.step), jax.jit(env.reset)(jax.random.key(0), params)[1]
 
 
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=60, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(
     shape=st.sampled_from(_SHAPES),
     dtype=st.sampled_from(_DTYPES),

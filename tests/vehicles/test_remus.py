@@ -72,8 +72,8 @@ def test_the_dimensional_coefficients_are_prestero_s_table(remus):
 
 
 def test_the_hull_is_checked_by_prestero_s_own_cross_flow_drag_and_centre_of_buoyancy(remus):
-    # His Z_ww (-131 kg/m) is the cylinder's cross-flow drag over his hull plus his fins' term: the shipped hull
-    # gives it to 1%, which checks the Myring parameters (the tail angle among them) independently.
+    # His Z_ww (-131 kg/m) is the cylinder's cross-flow drag over his hull plus his fins' term: the shipped
+    # hull gives it to 1%, which checks the Myring parameters (the tail angle among them) independently.
     computed, published = crossflow_check()
     assert computed == pytest.approx(published, rel=0.01)
     # The hull's volume centroid lies within 1 cm of his centre of buoyancy (the origin, x = 0).
@@ -89,7 +89,8 @@ def test_the_hull_is_checked_by_prestero_s_own_cross_flow_drag_and_centre_of_buo
 
 
 def test_the_critical_speed_is_eq_3_9_on_prestero_s_dimensional_numbers(remus):
-    # Riedel (1993) eq. 3.9 by hand from the table, without the file's primes: u_cr^2 = W z_GB Z_d / (Z_d M_w - Z_w M_d).
+    # Riedel (1993) eq. 3.9 by hand from the table, without the file's primes:
+    # u_cr^2 = W z_GB Z_d / (Z_d M_w - Z_w M_d).
     by_hand = math.sqrt(P.weight_N * P.z_G_m * P.Z_uuds / (P.Z_uuds * P.M_uw - P.Z_uw * P.M_uuds))
     assert critical_speed(remus) == pytest.approx(by_hand, rel=1e-12)
     three = critical_speed_three_ways(remus)
@@ -103,8 +104,8 @@ def test_the_critical_speed_is_eq_3_9_on_prestero_s_dimensional_numbers(remus):
 
 
 def test_below_the_critical_speed_the_stern_planes_reverse_in_the_environment(remus):
-    # A dive command (stern planes trailing edge down, positive) held from level flight: above u_cr the boat goes
-    # down, below it up (dive-plane reversal), on REMUS's own coefficients.
+    # A dive command (stern planes trailing edge down, positive) held from level flight: above u_cr the boat
+    # goes down, below it up (dive-plane reversal), on REMUS's own coefficients.
     ucr = critical_speed(remus)
     depth_change = {}
     for ratio in (0.6, 1.6):
@@ -174,7 +175,8 @@ def test_the_evaluation_leaves_bow_plane_controllers_out_on_a_vehicle_without_th
 
 @pytest.mark.parametrize("ratio", [0.6, 1.5, 3.0])
 def test_the_stern_only_trim_holds_depth_with_the_one_plane(remus, ratio):
-    # With a ballast offset the trim needs pitch and plane; at it both accelerations and the depth rate vanish.
+    # With a ballast offset the trim needs pitch and plane; at it both accelerations and the depth rate
+    # vanish.
     boat = remus.variant(x_GB_m=0.0005)
     u = ratio * critical_speed(remus)
     trim = depth_holding_trim(boat, u, 0.6)
@@ -193,8 +195,9 @@ def test_a_stern_only_loading_with_no_trim_is_not_winnable(remus):
 
 
 def test_the_shallowest_depth_held_is_froude_scaled_on_every_shipped_vehicle():
-    # The search starts at SUBOFF's deepest depth Froude-scaled to the vehicle (it used to start at 5 m, inside the
-    # full-scale hull): at full scale the shallowest depth is the model's x 24, within the search's tolerance.
+    # The search starts at SUBOFF's deepest depth Froude-scaled to the vehicle (it used to start at 5 m,
+    # inside the full-scale hull): at full scale the shallowest depth is the model's x 24, within the search's
+    # tolerance.
     from subenv.analysis.free_surface import min_level_flight_depth
 
     model, full = load_vehicle("suboff"), load_vehicle("suboff_fullscale")
@@ -211,7 +214,8 @@ def test_the_shallowest_depth_held_is_froude_scaled_on_every_shipped_vehicle():
 
 
 def test_the_shipped_report_is_this_code_s(remus):
-    # docs/remus100/ is `subenv analyze --vehicle remus100`: its key numbers are what the analysis computes now.
+    # docs/remus100/ is `subenv analyze --vehicle remus100`: its key numbers are what the analysis computes
+    # now.
     from pathlib import Path
 
     from subenv.analysis.hopf import hopf_points
@@ -225,6 +229,7 @@ def test_the_shipped_report_is_this_code_s(remus):
 
 
 def test_the_command_line_runs_the_comparison_on_remus_without_the_bow_plane_controllers(tmp_path, capsys):
+    pytest.importorskip("ray", reason="the 'ray' extra is not installed")  # (subenv sweep)
     import json
 
     from subenv.cli import main

@@ -32,8 +32,6 @@ SCALING_RTOL = 1e-12
 # Jacobian (step 1e-7 in SI state units, so cancellation near 1e-9 of the largest term).
 EQUILIBRIUM_RTOL = 1e-6
 # Ratios from a 0.5 m model to a 200 m boat, for a 4.26 m SUBOFF.
-REPEATABLE = settings(deadline=None, derandomize=True, database=None)
-"""Property tests draw the same examples on every run and machine (from a seed made of the test's source)."""
 RATIOS = st.floats(min_value=0.12, max_value=47.0, allow_nan=False, allow_infinity=False)
 ALLOCATIONS = (-1.0, -0.5, 0.0, 0.5, 1.0, "bow")
 
@@ -51,7 +49,7 @@ def _state_scale(ratio: float) -> np.ndarray:
 
 
 # --- the critical speed: Riedel (1993) eq. 3.9 and Ch. VI's claim ---------------------------------
-@settings(REPEATABLE, max_examples=40)
+@settings(max_examples=40)
 @given(ratio=RATIOS)
 def test_critical_speed_scales_with_sqrt_ratio_and_the_critical_froude_number_stays(suboff, ratio):
     scaled = froude_scaled(suboff, ratio)
@@ -79,7 +77,7 @@ def test_full_scale_suboff_has_the_thesis_critical_froude_numbers():
 
 
 # --- time scales: linear model and equilibria --------------------------------------------------------
-@settings(REPEATABLE, max_examples=30)
+@settings(max_examples=30)
 @given(
     ratio=RATIOS,
     speed_over_critical=st.sampled_from([0.3, 0.8, 1.2, 2.5]),
@@ -190,7 +188,7 @@ def test_each_field_scales_by_its_power_and_the_coefficients_stay(suboff):
         assert getattr(d, name) == pytest.approx(ratio**power * getattr(c, name), rel=SCALING_RTOL), name
 
 
-@settings(REPEATABLE, max_examples=50)
+@settings(max_examples=50)
 @given(ratio=RATIOS)
 def test_scaling_by_a_ratio_then_its_inverse_returns_the_vehicle(suboff, ratio):
     back = froude_scaled(froude_scaled(suboff, ratio), 1.0 / ratio, name=suboff.name)

@@ -433,9 +433,9 @@ _FOUND_OVERFLOW = int(
 )
 
 
-# (derandomize: the examples are drawn from a seed made of the test's source, the same on every run and
-# machine; an edit of the test draws others, so a failure found that way is kept below as an @example.)
-@settings(max_examples=60, deadline=None, derandomize=True, database=None)
+# (The suite's derandomized Hypothesis profile draws the examples from a seed made of the test's source: an
+# edit of the test draws others, so a failure found that way is kept below as an @example.)
+@settings(max_examples=60)
 @example(field=("rigid_body", "z_G"), value=_FOUND_OVERFLOW, scale=None)
 @given(
     field=st.sampled_from(_NUMERIC_FIELDS),
