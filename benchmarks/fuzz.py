@@ -13,7 +13,7 @@ every float in ``info`` finite (the critical speed and Froude numbers may be nan
 has no critical speed: counted apart). Then each id is run again, the same seeds and actions, on
 numba's other thread count (1 <-> 2) and in a fresh process, and the runs must give the same bits.
 
-Prints a Markdown table (the README's Reliability section) and exits 1 if any check failed.
+Prints a Markdown table (docs/reliability.md's) and exits 1 if any check failed.
 """
 
 from __future__ import annotations

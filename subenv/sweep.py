@@ -251,9 +251,18 @@ def run_sweep(
     progress : bool
         Chunks done, and the time left, on stderr.
 
-    Returns the path of ``results.parquet``. Raises ``FileExistsError`` if ``out_dir`` is a file or
-    holds another sweep (its ``sweep.json`` differs) or files that are no sweep's (no ``sweep.json``),
-    ``OutputDirError`` if it cannot be created.
+    Returns
+    -------
+    Path
+        The path of ``results.parquet``.
+
+    Raises
+    ------
+    FileExistsError
+        If ``out_dir`` is a file or holds another sweep (its ``sweep.json`` differs) or files that are
+        no sweep's (no ``sweep.json``).
+    OutputDirError
+        If ``out_dir`` cannot be created.
     """
     require("ray", "subenv sweep", "ray", "pyarrow")
     import ray

@@ -168,6 +168,25 @@ def test_every_id_has_its_page_with_its_sections_and_animation(site: Path) -> No
         assert f'href="{name}.html"' in (site / "environments" / "index.html").read_text("utf-8")
 
 
+def test_every_page_was_written_and_every_reference_resolved(site: Path) -> None:
+    """Every source page (hand-written or generated) has its HTML page, reachable from the index's
+    navigation, and none holds a reference Sphinx could not resolve."""
+    sources = [
+        p.relative_to(DOCS).with_suffix(".html")
+        for p in DOCS.rglob("*.md")
+        if not {"_build", "_ext", "remus100", "reference"} & set(p.relative_to(DOCS).parts[:-1])
+        and not p.parent.name.endswith(".tmp")
+    ]
+    assert len(sources) >= len(PAGES) + len(subenv.env_ids())
+    assert [p for p in sources if not (site / p).is_file()] == []
+    navigation = (site / "index.html").read_text("utf-8")
+    for page in sources:
+        html = (site / page).read_text("utf-8")
+        assert 'class="problematic"' not in html, page
+        if page.parent == Path("."):
+            assert f'href="{page.as_posix()}"' in navigation or page.name == "index.html", page
+
+
 def test_the_site_has_the_reproduction_report_and_the_performance_records(site: Path) -> None:
     for vehicle in ("suboff", "remus100"):
         html = (site / "reproduction" / f"{vehicle}.html").read_text("utf-8")

@@ -1,6 +1,6 @@
-"""The README's code runs as written: its Python blocks in order, as a reader would paste them into one
-session; a block that starts with ``# <name>.py`` is a file the reader saves, and the ``subenv``
-command that uses it runs in a process of its own, as a reader would type it."""
+"""The README is the front door: short, its code runs as written, its links and pictures exist, and its
+leaderboard is the benchmark page's. The own-controller example it points at (docs/guides/controller.md)
+runs in tests/test_docs.py, and its command-line route here, as a reader would type it."""
 
 from __future__ import annotations
 
@@ -11,20 +11,14 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
+import gymnasium as gym
 
-from subenv.evaluation import controller as controller_module
+import subenv
 
-README = Path(__file__).resolve().parents[1] / "README.md"
-TEXT = README.read_text("utf-8")
+ROOT = Path(__file__).resolve().parents[1]
+TEXT = (ROOT / "README.md").read_text("utf-8")
 BLOCKS = re.findall(r"```python\n(.*?)```", TEXT, flags=re.DOTALL)
-FILES = {m.group(1): block for block in BLOCKS if (m := re.match(r"# (\w+\.py)\n", block))}
-PLUGIN_COMMANDS = [
-    line
-    for block in re.findall(r"```bash\n(.*?)```", TEXT, flags=re.DOTALL)
-    for line in block.splitlines()
-    if line.startswith("subenv evaluate --plugins")
-]
+GUIDE = (ROOT / "docs" / "guides" / "controller.md").read_text("utf-8")
 
 
 def _leaderboard_row(printed: str, name: str) -> dict[str, str]:
@@ -33,41 +27,55 @@ def _leaderboard_row(printed: str, name: str) -> dict[str, str]:
     return dict(zip((c.strip() for c in header.split("|")), (c.strip() for c in row.split("|")), strict=True))
 
 
-def test_the_readme_has_its_examples() -> None:
-    assert len(BLOCKS) >= 5 and "class DepthP" in FILES.get("depth_p.py", "") and len(PLUGIN_COMMANDS) == 1
+def test_the_readme_is_read_in_two_minutes() -> None:
+    assert TEXT.count("\n") <= 200
+    # A newcomer reaches a stepping environment from the first screen: the quick start's gym.make.
+    assert TEXT.index('gym.make("subenv/') < TEXT.index("## Environments")
 
 
 def test_every_python_block_of_the_readme_runs(tmp_path, monkeypatch, capsys) -> None:
-    # (the agents' and SB3's blocks)
-    pytest.importorskip("stable_baselines3", reason="the 'rl' extra is not installed")
+    assert BLOCKS
     monkeypatch.chdir(tmp_path)
-    monkeypatch.syspath_prepend(str(tmp_path))
-    # What the file registers on import is this test's only.
-    monkeypatch.setattr(controller_module, "_REGISTRY", dict(controller_module._REGISTRY))
-    monkeypatch.delitem(sys.modules, "depth_p", raising=False)
     namespace: dict[str, object] = {"__name__": "__readme__"}
-    try:
-        for k, block in enumerate(BLOCKS):
-            if block in FILES.values():
-                (tmp_path / next(name for name, text in FILES.items() if text == block)).write_text(block)
-                continue
-            exec(compile(block, f"README.md python block {k}", "exec"), namespace)  # noqa: S102
-    finally:
-        sys.modules.pop("depth_p", None)
-    printed = capsys.readouterr().out
-    # The own-controller example's leaderboard, with its three rows.
-    assert all(f"| {name} |" in printed for name in ("depth_p", "thesis", "reversal_aware")), printed
-    # What the README says of it: it holds depth on LowSpeed and loses it on Nominal.
-    columns = _leaderboard_row(printed, "depth_p")
-    assert columns["Nominal"].startswith("0% ") and columns["LowSpeed"].startswith("100% "), columns
+    for k, block in enumerate(BLOCKS):
+        exec(compile(block, f"README.md python block {k}", "exec"), namespace)  # noqa: S102
+    assert "m/s, critical 0.578 m/s" in capsys.readouterr().out
 
 
-def test_the_readme_command_runs_your_own_controller(tmp_path) -> None:
-    """The command-line route, in a fresh process from the folder holding the file (no PYTHONPATH)."""
-    for name, text in FILES.items():
-        (tmp_path / name).write_text(text)
-    args = shlex.split(PLUGIN_COMMANDS[0])
-    assert args[0] == "subenv"
+def test_the_readme_links_and_pictures_exist() -> None:
+    targets = re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", TEXT)
+    local = [t for t in targets if not re.match(r"[a-z]+://", t)]
+    assert "docs/readme/lowspeed.gif" in local and "docs/readme/reversal.png" in local
+    assert [t for t in local if not (ROOT / t).exists()] == []
+
+
+def test_the_readme_lists_every_registered_id() -> None:
+    listed = re.findall(r"^\| `(subenv/[\w-]+)` \|", TEXT, flags=re.MULTILINE)
+    assert sorted(listed) == sorted(subenv.env_ids())
+    assert all(env_id in gym.registry for env_id in listed)
+
+
+def test_the_readme_leaderboards_are_the_top_of_the_docs_tables() -> None:
+    rows = [line for line in TEXT.splitlines() if line.startswith("| ") and "% [" in line]
+    default = [line for line in rows if not line.startswith("| hard ")]
+    table = [
+        line
+        for line in (ROOT / "docs" / "benchmark.md").read_text("utf-8").splitlines()
+        if line.startswith("| ") and "% [" in line
+    ]
+    assert len(default) >= 3 and default == table[: len(default)]
+    # The Hard track's top rows, as the reporting guide's reference results give them, in its order.
+    hard = [line for line in rows if line.startswith("| hard ")]
+    reference = (ROOT / "docs" / "guides" / "reporting.md").read_text("utf-8").splitlines()
+    assert len(hard) >= 3 and hard == [line for line in reference if line.startswith("| hard ")][: len(hard)]
+
+
+def test_the_guide_command_runs_your_own_controller(tmp_path) -> None:
+    """The command-line route of the own-controller guide, in a fresh process from the folder holding the
+    file (no PYTHONPATH), as the README sends a reader there."""
+    (tmp_path / "depth_p.py").write_text(GUIDE.split("```python\n# depth_p.py\n", 1)[1].split("```", 1)[0])
+    (command_line,) = [line for line in GUIDE.splitlines() if line.startswith("subenv evaluate --plugins")]
+    args = shlex.split(command_line)
     # The installed console script (whose path, unlike `python -m`'s, does not hold the current directory).
     script = shutil.which("subenv", path=str(Path(sys.executable).parent))
     command = [script] if script else [sys.executable, "-m", "subenv"]

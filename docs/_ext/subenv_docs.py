@@ -13,8 +13,9 @@ import re
 import shutil
 import time
 from collections.abc import Callable, Iterable
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
-from typing import Any
+from typing import Any, Final
 
 from sphinx.application import Sphinx
 from sphinx.util import logging
@@ -59,19 +60,35 @@ def generate(folder: Path, inputs: Iterable[Path], write: Callable[[Path], Any])
     logger.info(f"subenv_docs: wrote {folder.relative_to(DOCS)}/ in {time.perf_counter() - started:.0f} s")
 
 
-def _generate_all(app: Sphinx) -> None:
+def _generate(name: str) -> None:
+    """Run the generator ``name`` (a module of ``_ext/`` that writes the folder of that name)."""
     import envpages
     import performance
     import reproduction
 
     ext = DOCS / "_ext"
-    generate(DOCS / "environments", [ext / "envpages.py"], envpages.write_pages)
-    generate(DOCS / "reproduction", [ext / "reproduction.py"], reproduction.write_pages)
-    generate(
-        DOCS / "performance",
-        [ext / "performance.py", ROOT / "benchmarks" / "records"],
-        performance.write_pages,
-    )
+    if name == "environments":
+        generate(DOCS / "environments", [ext / "envpages.py"], envpages.write_pages)
+    elif name == "reproduction":
+        generate(DOCS / "reproduction", [ext / "reproduction.py"], reproduction.write_pages)
+    else:
+        generate(
+            DOCS / "performance",
+            [ext / "performance.py", ROOT / "benchmarks" / "records"],
+            performance.write_pages,
+        )
+
+
+GENERATED: Final = ("environments", "reproduction", "performance")
+"""The generated folders (git ignores them)."""
+
+
+def _generate_all(app: Sphinx) -> None:
+    # The generators are independent and CPU-bound (the animations, the reproduction's numbers and
+    # figures): one process each, so that a cold build takes the longest one's time, not their sum.
+    with ProcessPoolExecutor(max_workers=len(GENERATED)) as pool:
+        for done in [pool.submit(_generate, name) for name in GENERATED]:
+            done.result()  # (a generator's exception fails the build, with its traceback)
 
 
 _MISSING = object()

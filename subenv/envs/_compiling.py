@@ -20,11 +20,12 @@ __all__ = ["COMPILE_NOTICE", "NOTICE_DELAY_S", "compile_notice", "first_call"]
 
 NOTICE_DELAY_S: Final = 2.0
 """A first call is said to compile when it takes longer than this: loaded from numba's cache the first
-reset and step take well under a second (README, "numba compile time": 0.6 s)."""
+reset and step take well under a second (0.6 s: ``benchmarks/speed.py``'s compile table)."""
 
 COMPILE_NOTICE: Final = "subenv: compiling the dynamics (first run only, about 20 s)..."
 """16 s on the development machine's two cores, ``subenv evaluate --suite tiny`` with an empty cache
-(README, "numba compile time": 13 s for the kernels the harness calls); a loaded machine takes longer."""
+(13 s for the kernels the harness calls, ``benchmarks/speed.py``'s compile table); a loaded machine
+takes longer."""
 
 
 class _CompileNotice:

@@ -27,7 +27,7 @@ The folder appears complete or not at all, and replaces an earlier one atomicall
 (:func:`subenv.atomic.atomic_output_dir`); it holds a marker file saying it is a result of
 ``subenv evaluate``, and ``overwrite`` replaces only such a folder.
 
-A controller that fails (:class:`~subenv.evaluation.rollout.ControllerFailure`: an exception in its
+A controller that fails (:class:`~subenv.evaluation.failures.ControllerFailure`: an exception in its
 ``reset`` or ``act``, an action the environment refuses) costs no other controller its results. It
 goes on with its other scenarios; the scenarios it completed are in ``results.csv`` and the summary
 (every row there is complete, on the same seeds as everyone's), the one it failed on has no episodes.

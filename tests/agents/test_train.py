@@ -84,10 +84,14 @@ def trained(request, tmp_path_factory):  # type: ignore[no-untyped-def]
 
 
 def _readme_run_folder() -> set[str]:
-    """The names the README's run-folder list gives (``checkpoints/`` as ``checkpoints``)."""
-    text = (Path(__file__).resolve().parents[2] / "README.md").read_text("utf-8")
+    """The names the training guide's run-folder list gives (``checkpoints/`` as ``checkpoints``)."""
+    text = (Path(__file__).resolve().parents[2] / "docs" / "guides" / "training.md").read_text("utf-8")
     block = text[text.index("- **A run folder**") :].split("```text\n", 1)[1].split("```", 1)[0]
-    columns = [re.split(r" {2,}", line.strip())[0] for line in block.splitlines()]
+    lines = [line for line in block.splitlines() if line.strip()]
+    indent = min(len(line) - len(line.lstrip()) for line in lines)  # (deeper lines continue a description)
+    columns = [
+        re.split(r" {2,}", line.strip())[0] for line in lines if len(line) - len(line.lstrip()) == indent
+    ]
     names = {
         name.rstrip("/")
         for column in columns

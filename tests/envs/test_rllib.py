@@ -1,4 +1,4 @@
-"""RLlib's PPO on a subenv id, as the README's recipe (``rllib_ppo.py``) configures it: two env runners,
+"""RLlib's PPO on a subenv id, as the training guide's ``rllib_ppo.py`` configures it: two env runners,
 each stepping the native vector environment, on a local Ray instance with 2 CPUs started here.
 
 Needs the ``rllib`` extra, which holds gymnasium at 1.2.2: ``./dev test`` runs this file in its second
@@ -27,7 +27,7 @@ from ray.rllib.utils.metrics import (
 
 from subenv.envs import DivePlaneVectorEnv
 
-README = Path(__file__).resolve().parents[2] / "README.md"
+GUIDE = Path(__file__).resolve().parents[2] / "docs" / "guides" / "training.md"
 ITERATIONS = 2
 TRAIN_BATCH = 256  # env-steps per iteration: 2 runners x 2 envs x 64 steps
 EPISODE_STEPS = 32  # short episodes, so that some end within the two iterations
@@ -35,9 +35,9 @@ EPISODE_STEPS = 32  # short episodes, so that some end within the two iterations
 
 @pytest.fixture(scope="module")
 def recipe(tmp_path_factory):  # type: ignore[no-untyped-def]
-    """The README's ``rllib_ppo.py``, imported as a reader's file."""
-    block = re.search(r"```python\n(# rllib_ppo\.py\n.*?)```", README.read_text("utf-8"), flags=re.DOTALL)
-    assert block, "README.md has no rllib_ppo.py block"
+    """The training guide's ``rllib_ppo.py``, imported as a reader's file."""
+    block = re.search(r"```python\n(# rllib_ppo\.py\n.*?)```", GUIDE.read_text("utf-8"), flags=re.DOTALL)
+    assert block, "docs/guides/training.md has no rllib_ppo.py block"
     path = tmp_path_factory.mktemp("readme") / "rllib_ppo.py"
     path.write_text(block.group(1))
     spec = importlib.util.spec_from_file_location("rllib_ppo", path)
@@ -49,7 +49,7 @@ def recipe(tmp_path_factory):  # type: ignore[no-untyped-def]
 
 @pytest.fixture(scope="module")
 def local_ray(recipe):  # type: ignore[no-untyped-def]
-    # The README's set-up hook: the runners import nothing of subenv until it registers the ids.
+    # The guide's set-up hook: the runners import nothing of subenv until it registers the ids.
     hook = re.search(r'"worker_process_setup_hook": "([\w.]+)"', Path(recipe.__file__).read_text())
     assert hook and hook.group(1) == "subenv.register_envs"
     ray.init(
