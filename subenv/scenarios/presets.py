@@ -223,7 +223,7 @@ HARD_WAVES18 = PERISCOPE_DEPTH_WAVES.replace(
     ),
     # The physics its stored certificates were computed in (PeriscopeDepthWaves-v0's): a version on the
     # slender-body theory and the encounter frequency is a new id, with new certificates.
-    sea_state=dataclasses.replace(PERISCOPE_DEPTH_WAVES.sea_state, significant_height_m=0.18),
+    sea_state=dataclasses.replace(PERISCOPE_SEA, significant_height_m=0.18, encounter_frequency=False),
     version=0,
 )
 HARD_GUSTS = NEAR_CRITICAL.replace(
