@@ -20,6 +20,7 @@ import json
 import math
 import sys
 import time
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -269,6 +270,8 @@ def evaluate(args: argparse.Namespace) -> int:
     """``subenv evaluate``: 0 when every controller ran every episode; 1 when one failed (the others'
     results are written, and each failure is a line on stderr)."""
     from subenv.atomic import OutputDirError
+    from subenv.dynamics.free_surface import VALIDITY_DEPTH_RADII, VALIDITY_FROUDE_SQUARED
+    from subenv.envs import FreeSurfaceRangeWarning
     from subenv.evaluation import (
         BENCHMARK_SUITES,
         DEFAULT_SEED,
@@ -313,15 +316,30 @@ def evaluate(args: argparse.Namespace) -> int:
         "vehicle": args.vehicle,
         "env_kwargs": args.env_kwargs,
     }
-    try:
-        if several:
-            comparisons = run_benchmark(args.controllers, suites, args.episodes, out, **common)
-        else:
-            comparisons = [run_comparison(args.controllers, suites, args.episodes, out, **common)]
-    except (FileExistsError, OutputDirError) as exc:
-        raise SystemExit(f"subenv evaluate: --out: {exc}") from None
-    except ValueError as exc:
-        raise SystemExit(f"subenv evaluate: {exc}") from None
+    # Each environment warns once when an episode leaves the free-surface model's range (broaching
+    # episodes pass through it): one line for the run instead of one per environment.
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", FreeSurfaceRangeWarning)
+        try:
+            if several:
+                comparisons = run_benchmark(args.controllers, suites, args.episodes, out, **common)
+            else:
+                comparisons = [run_comparison(args.controllers, suites, args.episodes, out, **common)]
+        except (FileExistsError, OutputDirError) as exc:
+            raise SystemExit(f"subenv evaluate: --out: {exc}") from None
+        except ValueError as exc:
+            raise SystemExit(f"subenv evaluate: {exc}") from None
+    outside = [w for w in caught if issubclass(w.category, FreeSurfaceRangeWarning)]
+    for w in caught:
+        if not issubclass(w.category, FreeSurfaceRangeWarning):
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    if outside:
+        print(
+            f"(in {len(outside)} of the environments an episode left the free-surface model's range, where "
+            f"its suction is extrapolated: shallower than {VALIDITY_DEPTH_RADII:g} hull radii or u^2 / (g h) "
+            f"above {VALIDITY_FROUDE_SQUARED:g}, as a broaching boat passes; subenv.dynamics.free_surface)",
+            file=sys.stderr,
+        )
     print("\n".join(c.leaderboard for c in comparisons))
     episodes = sum(len(c.results) for c in comparisons)
     seconds = sum(c.elapsed_s for c in comparisons)

@@ -9,6 +9,7 @@ import os
 import shutil
 import stat
 import sys
+import warnings
 from importlib import resources
 from importlib.metadata import EntryPoint
 from pathlib import Path
@@ -23,6 +24,7 @@ import subenv.evaluation.comparison
 from subenv.analysis.free_surface import SurfaceCriticalSpeed
 from subenv.atomic import MARKER_FILE
 from subenv.cli import main
+from subenv.envs import FreeSurfaceRangeWarning
 from subenv.evaluation import controller
 
 
@@ -567,3 +569,16 @@ def test_evaluate_passes_env_kwargs_to_the_environments_and_records_them(tmp_pat
         "mpc": "True",
         "mpc:uninformed": "False",
     }
+
+
+def test_evaluate_says_once_that_episodes_left_the_free_surface_models_range(tmp_path: Path, capsys):
+    """The environments' warning (once per environment) is one line for the whole run, not a warning per
+    environment among the leaderboard's lines."""
+    argv = ["evaluate", "--suite", "PeriscopeDepth-v2", "--episodes", "8", "--controllers", "thesis"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", FreeSurfaceRangeWarning)  # (one that escaped would fail the run)
+        assert main([*argv, "--no-plots", "--no-progress", "--out", str(tmp_path / "e")]) == 0
+    err = capsys.readouterr().err
+    said = [line for line in err.splitlines() if "free-surface model's range" in line]
+    assert len(said) == 1 and said[0].startswith("(in 1 of the environments an episode left"), err
+    assert "Warning" not in err

@@ -15,7 +15,13 @@ from subenv.dynamics.free_surface import (
 from subenv.envs.config import DivePlaneConfig
 from subenv.scenarios.registry import get_scenario
 
-__all__ = ["SurfaceValidityWatch"]
+__all__ = ["FreeSurfaceRangeWarning", "SurfaceValidityWatch"]
+
+
+class FreeSurfaceRangeWarning(UserWarning):
+    """An episode left the range where the free-surface model holds (its suction is extrapolated there):
+    a category of its own, so that a caller can filter or count it (``subenv evaluate`` prints one line
+    for all its environments)."""
 
 
 class SurfaceValidityWatch:
@@ -62,6 +68,6 @@ class SurfaceValidityWatch:
             f"free-surface model (depth at least {self.depth_m:.3g} m, {VALIDITY_DEPTH_RADII:g} hull radii, "
             f"and u^2 / (g h) at most {VALIDITY_FROUDE_SQUARED:g}): its suction is extrapolated there "
             "(subenv.dynamics.free_surface). Shown once per environment.",
-            UserWarning,
+            FreeSurfaceRangeWarning,
             stacklevel=3,
         )
