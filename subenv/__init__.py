@@ -9,7 +9,7 @@ from subenv.envs import DivePlaneEnv, env_ids, register_envs
 from subenv.scenarios import Scenario, get_scenario, register_scenario, scenario_names
 from subenv.vehicles import Vehicle, available_vehicles, load_vehicle
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
 __all__ = [
     "DivePlaneEnv",

@@ -99,11 +99,11 @@ def test_wheel_installs_into_a_clean_venv_and_evaluates(tmp_path: Path):
         "subenv_agents/models/ppo_jax/network.npz",
         "subenv_agents/jax_ppo.py",
         "subenv/jax/env.py",
-        "subenv-0.1.0.dist-info/licenses/LICENSE",
+        "subenv-0.2.0.dist-info/licenses/LICENSE",
     ):
         assert name in names, name
     assert not any(n.startswith(("tests/", "benchmarks/", "baselines/", "agents/")) for n in names)
-    metadata = archive.read("subenv-0.1.0.dist-info/METADATA").decode()
+    metadata = archive.read("subenv-0.2.0.dist-info/METADATA").decode()
     assert "License-Expression: MIT" in metadata.splitlines()
 
     env_dir = tmp_path / "venv"
