@@ -19,10 +19,9 @@ SUBOFF = load_vehicle("suboff")
 
 
 @pytest.fixture(scope="module")
-def hopf(analysis_report):  # type: ignore[no-untyped-def]
-    """``hopf_points(SUBOFF)``'s one point, as the session's report computed it (tens of seconds to
-    compute again): ``hopf_findings`` returns it as its ``point``."""
-    return analysis_report.hopf.point
+def hopf():  # type: ignore[no-untyped-def]
+    (point,) = hopf_points(SUBOFF)
+    return point
 
 
 def test_the_open_loop_pair_crosses_the_imaginary_axis_at_the_hopf_speed(hopf) -> None:  # type: ignore[no-untyped-def]
