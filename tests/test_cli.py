@@ -541,10 +541,13 @@ def test_evaluate_passes_env_kwargs_to_the_environments_and_records_them(tmp_pat
     pytest.importorskip("daqp", reason="the 'mpc' extra is not installed")
     out = tmp_path / "out"
     settings = '{"plane_rate_limit_radps": 0.05, "max_pitch_rad": 0.4}'
+    # One scenario of the tiny suite: what is recorded is the same for each (mpc runs slowly).
     assert (
         main(
             [
                 *EVALUATE,
+                "--suite",
+                "Nominal",
                 "--controllers",
                 "thesis,mpc,mpc:uninformed",
                 "--no-plots",

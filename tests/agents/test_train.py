@@ -1,4 +1,4 @@
-"""Training runs per algorithm: a few thousand steps that save, reload and evaluate, seeded."""
+"""Training runs per algorithm: a thousand steps that save, reload and evaluate, seeded."""
 
 from __future__ import annotations
 
@@ -29,11 +29,12 @@ from subenv_agents.policy import (
 )
 from subenv_agents.train import main, train
 
-# Small enough for the default suite: a few thousand steps, small networks.
+# Small enough for the default suite: a thousand steps (one evaluation and one checkpoint, at step 1000,
+# and for SAC and TD3 500 gradient steps after learning_starts), small networks.
 _SMALL = {
-    "ppo": {"n_timesteps": 2048, "n_envs": 4, "n_steps": 256, "batch_size": 256, "n_epochs": 2},
+    "ppo": {"n_timesteps": 1024, "n_envs": 4, "n_steps": 256, "batch_size": 256, "n_epochs": 2},
     "sac": {
-        "n_timesteps": 1500,
+        "n_timesteps": 1000,
         "n_envs": 2,
         "learning_starts": 500,
         "buffer_size": 5000,
@@ -41,7 +42,7 @@ _SMALL = {
         "train_freq": 1,
     },
     "td3": {
-        "n_timesteps": 1500,
+        "n_timesteps": 1000,
         "n_envs": 2,
         "learning_starts": 500,
         "buffer_size": 5000,

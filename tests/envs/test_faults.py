@@ -93,14 +93,19 @@ def test_an_interrupted_reset_is_completed_by_the_next_reset(monkeypatch):
 
 def test_ctrl_c_during_threaded_stepping_never_corrupts_the_environment():
     """The issue's probe: a KeyboardInterrupt every 4 ms (``_thread.interrupt_main()``) while a
-    two-thread vector env of 4096 steps, resets with new seeds, and the interrupts are caught and
+    two-thread vector env of 1024 steps, resets with new seeds, and the interrupts are caught and
     stepping goes on. Every step that returns agrees with the state; an interrupted one is complete
     or refused until ``reset``; the process's heap survives (it did not: a double free).
+
+    The issue's 4096 environments made each refused round's resets (up to four, about 0.2 s each) most
+    of the suite's longest test; at 1024 a seeded reset still outlasts the 4 ms between interrupts, so
+    the same paths are taken (interrupted steps, refusals, interrupted resets), a quarter as long.
+    The two tests above pin an interrupted step and an interrupted reset deterministically.
 
     The interrupts are raised only while the environment is being called (a SIGINT handler armed
     around each call), so that none lands in this test's own bookkeeping. numba reports one that
     lands in its argument conversion as ``TypeError: can't unbox``, before the compiled code runs."""
-    n = 4096
+    n = 1024
     env = DivePlaneVectorEnv(num_envs=n, scenario="Nominal", threads=2)
     env.reset(seed=0)
     env.step(np.zeros((n, 1)))  # (compiled and loaded before the interrupts start)
@@ -141,7 +146,7 @@ def test_ctrl_c_during_threaded_stepping_never_corrupts_the_environment():
                 assert "interrupted" in str(error)
                 counts["refused"] += 1
                 for attempt in range(4):  # the reset, with new seeds, may be interrupted too: then again
-                    try:  # (a seeded reset of 4096 takes longer than 4 ms: the last try is not interrupted)
+                    try:  # (a seeded reset of 1024 takes longer than 4 ms: the last try is not interrupted)
                         call(env.reset, seed=k) if attempt < 3 else env.reset(seed=k)
                         break
                     except interrupted:

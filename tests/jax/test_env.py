@@ -501,8 +501,11 @@ def test_a_fixed_controllers_metrics_agree_statistically():
     """The thesis's controller on the same episodes of both environments (one table of seeds), their
     noise drawn independently (NumPy's generators, JAX's keys): their metrics do not differ beyond
     chance (paired tests, 1% level). The same tests tell the controller's gains at 0.8 times apart:
-    they can fail."""
-    seeds = range(10_000, 10_200)
+    they can fail.
+
+    100 episodes: the gains at 0.8 give p = 0.0006 on the peak pitch (0.003 with 200), the same gains at
+    least 0.17 (0.48 with 200)."""
+    seeds = range(10_000, 10_100)
     gym_side = _gym_metrics("subenv/Randomized-v0", seeds)
     assert len({m.outcome for m in gym_side}) >= 4  # (episodes of varied outcomes)
     same, weaker = _jax_metrics("subenv/Randomized-v0", seeds, key=1, gains=[1.0, 0.8])
