@@ -13,7 +13,8 @@ Training runs on the native vector environment (:func:`subenv.envs.sb3.make_sb3_
                                   subenv_agents.load_agent(folder))
     config.yml                    the resolved hyperparameters (algo, env_id, hyperparams)
     train.json                    seed, steps, wall time, threads, versions, curriculum advances
-    progress.csv                  SB3's training log (and tensorboard/ if TensorBoard is installed)
+    progress.csv                  SB3's training log
+    tensorboard/                  the same log as TensorBoard's event files, when TensorBoard is installed
     best_model.zip, evaluations.npz   from the evaluation callback (a separately seeded env)
     checkpoints/rl_model_<N>_steps.zip and rl_model_vecnormalize_<N>_steps.pkl
     curriculum.json               the curriculum's stage, the stage it started at and its advances
@@ -71,6 +72,9 @@ __all__ = ["DEFAULT_ENV_ID", "EVAL_SEED_OFFSET", "TrainResult", "main", "make_ve
 
 DEFAULT_ENV_ID: Final = "subenv/DivePlane-v0"
 DEFAULT_LOG_FOLDER: Final = "results/agents"
+TENSORBOARD_DIR: Final = "tensorboard"
+"""The run folder's subfolder of TensorBoard's event files (when TensorBoard is installed), so that
+``tensorboard --logdir results/agents`` lists each run under its folder's name."""
 EVAL_SEED_OFFSET: Final = 1_000_000
 """The evaluation env of a run with seed s is seeded with s + this: never the training episodes,
 nor those of the evaluation suites (``subenv.evaluation.DEFAULT_SEED`` = 10000 + i)."""
@@ -197,7 +201,7 @@ def train(
     """
     import torch
     from stable_baselines3.common.callbacks import CallbackList, CheckpointCallback, EvalCallback
-    from stable_baselines3.common.logger import configure
+    from stable_baselines3.common.logger import Logger, make_output_format
     from stable_baselines3.common.vec_env import VecNormalize
 
     from subenv_agents.curriculum import CurriculumCallback, read_stage, stage_scenarios, write_state
@@ -268,10 +272,12 @@ def train(
                 )
         if isinstance(venv, VecNormalize):
             mark_run(model, venv)  # every model and statistics file of this run carries its id
-        formats = (
-            ["csv"] + (["stdout"] if verbose else []) + (["tensorboard"] if find_spec("tensorboard") else [])
+        outputs = [make_output_format("csv", str(run_dir))] + (
+            [make_output_format("stdout", str(run_dir))] if verbose else []
         )
-        model.set_logger(configure(str(run_dir), formats))
+        if find_spec("tensorboard"):
+            outputs.append(make_output_format("tensorboard", str(run_dir / TENSORBOARD_DIR)))
+        model.set_logger(Logger(str(run_dir), outputs))
 
         n_envs = venv.num_envs
         chunk = steps_per_iteration(model)

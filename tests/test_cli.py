@@ -155,6 +155,34 @@ def test_evaluate_rejects_unknown_names(tmp_path: Path):
         main(["evaluate", "--plugins", "nopkg", "--out", str(tmp_path / "z")])
 
 
+_SCENARIO_PLUGIN = """
+from subenv.scenarios import get_scenario, register_scenario
+
+register_scenario(get_scenario("LowSpeed").replace(name="MyScenario", duration_s=20.0))
+"""
+
+
+def test_a_plugins_scenario_is_evaluated_by_name(tmp_path: Path, monkeypatch, capsys):
+    """A plugin that registers a scenario, and nothing else, makes it a suite of ``subenv evaluate``."""
+    import gymnasium as gym
+
+    from subenv.scenarios import registry
+
+    monkeypatch.setattr(registry, "_REGISTRY", dict(registry._REGISTRY))
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "my_scenario.py").write_text(_SCENARIO_PLUGIN)
+    out = tmp_path / "eval"
+    argv = ["evaluate", "--plugins", "my_scenario.py", "--suite", "MyScenario", "--controllers", "thesis"]
+    try:
+        main([*argv, "--episodes", "1", "--no-plots", "--no-progress", "--out", str(out)])
+    finally:
+        sys.modules.pop("my_scenario", None)
+        gym.registry.pop("subenv/MyScenario-v0", None)
+    assert "| controller |" in capsys.readouterr().out
+    rows = list(csv.DictReader((out / "results.csv").open()))
+    assert [(row["controller"], row["scenario"]) for row in rows] == [("thesis", "MyScenario")]
+
+
 @pytest.fixture
 def no_work(monkeypatch):
     """Make the commands' real work (rollouts, the report's numbers) fail the test if it starts."""

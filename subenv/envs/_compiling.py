@@ -1,26 +1,26 @@
-"""A one-line notice while the first environment calls of a process load or compile the physics.
+"""A one-line notice while the first environment calls of a process compile the physics.
 
 The environments' transition is compiled by numba and cached on disk: loaded from the cache, an
 environment's first reset and step take well under a second; with a cold cache (the first run after
 installing, or after editing the kernels' sources) they compile for about 20 s, during which nothing
 else would be printed. Each environment wraps its first reset and its first step in
-:func:`compile_notice`, which prints :data:`COMPILE_NOTICE` on stderr, once per process, when such a
-call outlasts :data:`NOTICE_DELAY_S`. Later calls pass by it at the cost of one attribute test.
+:func:`compile_notice`, which prints :data:`COMPILE_NOTICE` on stderr, once per process, when numba
+starts compiling within such a call. The decision is numba's own: its ``"numba:compile"`` event
+(:mod:`numba.core.event`) starts only when a dispatcher compiles a signature, never when it loads one
+from its cache, so that a first call that is merely slow (a loaded machine) says nothing. Later calls
+pass by it at the cost of one attribute test.
 """
 
 from __future__ import annotations
 
 import sys
-import threading
 from collections.abc import Callable
 from types import TracebackType
 from typing import Any, Final
 
-__all__ = ["COMPILE_NOTICE", "NOTICE_DELAY_S", "compile_notice", "first_call"]
+from numba.core import event
 
-NOTICE_DELAY_S: Final = 2.0
-"""A first call is said to compile when it takes longer than this: loaded from numba's cache the first
-reset and step take well under a second (0.6 s: ``benchmarks/speed.py``'s compile table)."""
+__all__ = ["COMPILE_NOTICE", "compile_notice", "first_call"]
 
 COMPILE_NOTICE: Final = "subenv: compiling the dynamics (first run only, about 20 s)..."
 """16 s on the development machine's two cores, ``subenv evaluate --suite tiny`` with an empty cache
@@ -28,31 +28,31 @@ COMPILE_NOTICE: Final = "subenv: compiling the dynamics (first run only, about 2
 takes longer."""
 
 
-class _CompileNotice:
-    """Arms a timer around a block; the first timer of the process that runs out prints the notice."""
+class _CompileNotice(event.Listener):
+    """Listens to numba's compilations within a block; the first one of the process prints the notice."""
 
     def __init__(self) -> None:
         self.said = False
         """The notice has been printed (it is printed once per process)."""
-        self._timer: threading.Timer | None = None
 
     def __enter__(self) -> None:
-        if not self.said and self._timer is None:
-            self._timer = threading.Timer(NOTICE_DELAY_S, self._say)
-            self._timer.daemon = True
-            self._timer.start()
+        # Registered on each entry and unregistered on each exit, even once said: nested or concurrent
+        # first calls stay balanced, and there are two per environment.
+        event.register("numba:compile", self)
 
     def __exit__(
         self, kind: type[BaseException] | None, value: BaseException | None, traceback: TracebackType | None
     ) -> None:
-        if self._timer is not None:
-            self._timer.cancel()
-            self._timer = None
+        event.unregister("numba:compile", self)
 
-    def _say(self) -> None:
+    def on_start(self, compilation: event.Event) -> None:
+        """Numba starts compiling a signature: say so, once per process."""
         if not self.said:
             self.said = True
             print(COMPILE_NOTICE, file=sys.stderr, flush=True)
+
+    def on_end(self, compilation: event.Event) -> None:
+        """Nothing to do when a compilation ends."""
 
 
 _NOTICE = _CompileNotice()
@@ -60,8 +60,8 @@ _NOTICE = _CompileNotice()
 
 def compile_notice() -> _CompileNotice:
     """The process's notice: ``with compile_notice(): <a first environment call>`` prints
-    :data:`COMPILE_NOTICE` on stderr if the block takes longer than :data:`NOTICE_DELAY_S` (once per
-    process). The environments do this themselves on their first reset and first step."""
+    :data:`COMPILE_NOTICE` on stderr if numba compiles within the block (once per process). The
+    environments do this themselves on their first reset and first step."""
     return _NOTICE
 
 

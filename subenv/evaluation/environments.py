@@ -18,7 +18,7 @@ from typing import Any, Final
 
 import gymnasium as gym
 
-from subenv.envs import DivePlaneVectorEnv
+from subenv.envs import DivePlaneVectorEnv, register_envs
 from subenv.envs.config import DEFAULT_ARGUMENTS, DivePlaneConfig
 from subenv.evaluation.controller import Controller, InformedController
 from subenv.evaluation.suites import scenario_of
@@ -58,7 +58,12 @@ def _scenario_id(scenario: str | Scenario) -> tuple[str, dict[str, Any]]:
     """The registered id of ``scenario`` and the keyword arguments that make its episodes."""
     if isinstance(scenario, Scenario):
         return "subenv/DivePlane-v0", {"scenario": scenario}
-    return get_scenario(scenario_of(scenario)).env_id, {}
+    env_id = get_scenario(scenario_of(scenario)).env_id
+    if env_id not in gym.registry:
+        # A scenario registered since ``import subenv`` (a plugin's register_scenario) has no id until
+        # register_envs gives it one: the harness does, rather than fail with gymnasium's NameNotFound.
+        register_envs()
+    return env_id, {}
 
 
 def check_env_kwargs(

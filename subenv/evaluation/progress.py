@@ -5,8 +5,8 @@
   elapsed and an estimate of the time left, so that a log shows the run is alive.
 - :func:`compile_notice` (:mod:`subenv.envs._compiling`, re-exported): the first environment calls
   of a process load the compiled physics from numba's cache, or compile it when the cache is cold (the
-  first run after installing or editing the kernels' sources); the environments then print a
-  one-line notice saying why nothing moves.
+  first run after installing or editing the kernels' sources); when numba compiles, the environments
+  print a one-line notice saying why nothing moves.
 """
 
 from __future__ import annotations
@@ -16,9 +16,9 @@ import sys
 import time
 from typing import Any, Final, TextIO
 
-from subenv.envs._compiling import COMPILE_NOTICE, NOTICE_DELAY_S, compile_notice
+from subenv.envs._compiling import COMPILE_NOTICE, compile_notice
 
-__all__ = ["COMPILE_NOTICE", "LOG_LINES", "NOTICE_DELAY_S", "Progress", "compile_notice"]
+__all__ = ["COMPILE_NOTICE", "LOG_LINES", "Progress", "compile_notice"]
 
 LOG_LINES: Final = 20
 """Without a terminal, a progress line each time another 1/20 (5%) of the episodes is done."""

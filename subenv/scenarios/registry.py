@@ -22,8 +22,9 @@ def register_scenario(scenario: Scenario, *, overwrite: bool = False) -> Scenari
     """Add a scenario to the registry (and so make it selectable by name).
 
     A scenario registered after ``import subenv`` is selectable with
-    ``DivePlaneEnv(scenario=name)``; to get a Gymnasium id for it too, call
-    :func:`subenv.envs.register_envs` afterwards.
+    ``DivePlaneEnv(scenario=name)`` and in the evaluation's suites (``subenv evaluate --plugins
+    my_scenarios.py --suite name``, the harness gives it its id); to get a Gymnasium id for
+    ``gym.make`` too, call :func:`subenv.envs.register_envs` afterwards.
     """
     if scenario.key in _REGISTRY and not overwrite:
         raise ValueError(

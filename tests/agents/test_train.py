@@ -99,7 +99,7 @@ def _readme_run_folder() -> set[str]:
         if column and not column.startswith("(")
         for name in column.split(", ")
     }
-    return names | {"tensorboard"}  # (named in progress.csv's line: made when TensorBoard is installed)
+    return names
 
 
 def test_run_folder_holds_what_the_readme_lists(trained) -> None:  # type: ignore[no-untyped-def]
@@ -117,6 +117,39 @@ def test_run_folder_holds_what_the_readme_lists(trained) -> None:  # type: ignor
     assert record["algo"] == algo and record["seed"] == 3 and record["timesteps"] == run.timesteps
     assert run.timesteps >= _SMALL[algo]["n_timesteps"]
     assert not [p for p in run.run_dir.iterdir() if p.name.startswith(".")]  # no temporary files left
+
+
+def test_tensorboard_writes_in_the_run_folders_tensorboard_folder(tmp_path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """With TensorBoard installed, its event files go to ``<run>/tensorboard/``, as the guide lists (a
+    stand-in for TensorBoard's writer: the 'rl' extra does not install it)."""
+    from stable_baselines3.common import logger as sb3_logger
+
+    import subenv_agents.train as train_module
+
+    written: list[Path] = []
+
+    class EventFiles(sb3_logger.KVWriter):  # type: ignore[misc]
+        def __init__(self, folder: str) -> None:
+            written.append(Path(folder) / "events.out.tfevents.0")
+            written[-1].write_bytes(b"")
+
+        def write(self, *args, **kwargs) -> None:  # type: ignore[no-untyped-def]
+            pass
+
+    monkeypatch.setattr(sb3_logger, "TensorBoardOutputFormat", EventFiles)
+    real_find_spec = train_module.find_spec
+    monkeypatch.setattr(train_module, "find_spec", lambda name: name == "tensorboard" or real_find_spec(name))
+    run = train(
+        _config("ppo", n_timesteps=1024),
+        seed=0,
+        run_dir=tmp_path / "run",
+        eval_freq=0,
+        save_freq=0,
+        verbose=0,
+    )
+    assert written == [run.run_dir / "tensorboard" / "events.out.tfevents.0"]
+    names = {p.name for p in run.run_dir.iterdir()}
+    assert "tensorboard" in names and names <= _readme_run_folder(), names - _readme_run_folder()
 
 
 def test_reload_predicts_what_the_trained_model_predicts(trained) -> None:  # type: ignore[no-untyped-def]

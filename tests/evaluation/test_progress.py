@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import io
 import re
-import time
 
 import gymnasium as gym
 import pytest
 
 from subenv.envs import _compiling as compiling
-from subenv.evaluation.progress import COMPILE_NOTICE, LOG_LINES, Progress
+from subenv.evaluation.progress import LOG_LINES, Progress
 
 
 class Terminal(io.StringIO):
@@ -66,18 +65,6 @@ def test_disabled_prints_nothing() -> None:
         bar.update(8)
         bar.close()
         assert stream.getvalue() == ""
-
-
-def test_the_compile_notice_shows_once_while_the_first_calls_are_slow(monkeypatch, capsys) -> None:
-    monkeypatch.setattr(compiling, "NOTICE_DELAY_S", 0.0)
-    notice = compiling._CompileNotice()
-    with notice:  # a first call that lasts until the notice is out, as a compilation outlasts the delay
-        deadline = time.monotonic() + 30.0
-        while not notice.said and time.monotonic() < deadline:
-            time.sleep(0.01)
-    with notice:  # said once: no timer now
-        assert notice._timer is None
-    assert capsys.readouterr().err == COMPILE_NOTICE + "\n"
 
 
 @pytest.mark.parametrize("vector", [False, True])
