@@ -139,6 +139,9 @@ def test_evaluate_end_to_end_on_the_tiny_suite(tmp_path: Path, capsys):
     # stderr is not a terminal here (a log file, CI): progress comes as lines, the last at 100%
     progress = [line for line in printed.err.splitlines() if line.startswith("evaluate: ")]
     assert progress[-1].startswith("evaluate: 4/4 episodes, 100% (reversal_aware on LowSpeed); ")
+    # and then what the seconds after 100% are spent on
+    lines = printed.err.splitlines()
+    assert lines[lines.index(progress[-1]) + 1] == "(scoring the 4 episodes and writing the tables and plots)"
     assert (out / "results.csv").is_file() and (out / "leaderboard.md").is_file()
     with pytest.raises(SystemExit, match="exists"):
         main(["evaluate", "--suite", "tiny", "--episodes", "1", "--out", str(out), "--no-progress"])

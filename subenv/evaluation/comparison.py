@@ -42,6 +42,7 @@ import dataclasses
 import json
 import math
 import os
+import sys
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -268,6 +269,9 @@ def _run_plans(
             failures: list[ControllerFailure] = []
             results = roll_out(plan, progress, keep_trajectories=1, on_failure=failures.append)
             elapsed = time.perf_counter() - start
+            if progress:  # (what follows the progress line's 100% takes seconds: say what it is)
+                writes = "" if folder is None else " and writing the tables" + (" and plots" if plots else "")
+                print(f"(scoring the {len(results)} episodes{writes})", file=sys.stderr, flush=True)
             where = None if out_dir is None else Path(out_dir) / (plan.suite.name if nested else "")
             comparison = report(plan, results, failures, elapsed, out_dir=where)
             if folder is not None:
