@@ -28,6 +28,7 @@ from subenv.extras import require
 from subenv.vehicles.vehicle import Vehicle
 
 __all__ = [
+    "metrics_vs_speed_figure",
     "outcomes_figure",
     "plot_metrics_vs_speed",
     "plot_outcomes",
@@ -144,8 +145,8 @@ def outcomes_figure(
 
     One column per outcome that occurred, holding the episode
     :func:`~subenv.evaluation.results.representative_episodes` chose for it; the top axes of a
-    column is titled with the outcome, controller, seed, speed ratio and how many episodes had
-    that outcome.
+    column is titled with the outcome, how many of the shown controller's episodes and how many of
+    all the episodes had it, the controller, seed and speed ratio.
     """
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
@@ -213,6 +214,8 @@ def outcomes_figure(
                 color="crimson",
             )
         count = sum(x.metrics.outcome == outcome for x in results)
+        its = [x for x in results if x.controller == r.controller]
+        its_count = sum(x.metrics.outcome == outcome for x in its)
         ratio0 = tr.speed_mps[0] / tr.critical_speed_mps
         ratio1 = r.final_speed_mps / r.critical_speed_mps
         speed = (
@@ -222,7 +225,8 @@ def outcomes_figure(
             f", ended: {_label(tr.termination_reason)}" if tr.termination_reason not in ("", outcome) else ""
         )
         ax_e.set_title(
-            f"{_label(outcome)}: {count} of {len(results)}\n{r.controller}, seed {r.seed}{ended}\n{speed}",
+            f"{_label(outcome)} (all controllers: {count} of {len(results)})\n"
+            f"{r.controller}: {its_count} of {len(its)}; seed {r.seed}{ended}\n{speed}",
             fontsize="medium",
             color=color,
         )
@@ -293,20 +297,59 @@ def _colors(names: Sequence[str]) -> dict[str, Any]:
     return {name: cmap(i % 10) for i, name in enumerate(names)}
 
 
-_DODGE: Final = 0.5
+_DODGE: Final = 0.7
 """Share of a bin's width over which the controllers' points are spread, side by side (the bin itself
 is shaded, so the spread reads as one bin, not as different speeds)."""
+
+
+def _bin_edges(rows: Sequence[Mapping[str, Any]]) -> tuple[np.ndarray, float]:
+    """The bin edges of one scenario's rows of :func:`by_speed_ratio` and the width of a bin (one speed:
+    a single band 10% wide around it)."""
+    low = min(row["ratio_low"] for row in rows)
+    high = max(row["ratio_high"] for row in rows)
+    n_bins = 1 + max(row["bin"] for row in rows)
+    if high > low:
+        return np.linspace(low, high, n_bins + 1), (high - low) / n_bins
+    width = 0.1 * low
+    return np.array([low - width / 2, low + width / 2]), width
+
+
+def _mark_critical_speed(axes: Sequence[Any], x_low: float, x_high: float) -> None:
+    """Mark u = u_cr: a dashed line where the panel's range holds it, else an arrow at the edge it lies
+    beyond: the range is the scenario's own, not stretched to reach u_cr."""
+    if x_low < 1.0 < x_high:
+        for ax in axes:
+            ax.axvline(1.0, color="k", linestyle="--", linewidth=1)
+        return
+    right = x_high <= 1.0
+    axes[0].annotate(
+        "u_cr \u2192" if right else "\u2190 u_cr",
+        (0.98 if right else 0.02, 0.5),
+        xycoords="axes fraction",
+        ha="right" if right else "left",
+        va="center",
+        fontsize="small",
+        color="0.3",
+    )
 
 
 def plot_metrics_vs_speed(
     results: Sequence[EpisodeResult], path: str | os.PathLike[str], *, bins: int | None = None
 ) -> Path:
-    """Success rate and median IAE against u / u_cr, one column per scenario, binned with intervals.
+    """Write :func:`metrics_vs_speed_figure` to ``path`` (PNG)."""
+    return save_figure(metrics_vs_speed_figure(results, bins=bins), path)
+
+
+def metrics_vs_speed_figure(results: Sequence[EpisodeResult], *, bins: int | None = None) -> Any:
+    """Success rate and median IAE against u / u_cr, one column per scenario, binned with intervals
+    (a :class:`matplotlib.figure.Figure`, not written).
 
     The bins and intervals are :func:`~subenv.evaluation.results.by_speed_ratio`'s: per scenario,
     equal-width bins of the speed ratio (final speed over the episode's own critical speed); success
-    rate with 95% Wilson intervals, median IAE with 95% bootstrap intervals. Each point sits at its
-    bin's centre, the controllers side by side within the bin; u = u_cr is marked.
+    rate with 95% Wilson intervals, median IAE with 95% bootstrap intervals. Within each bin (the bins
+    shaded alternately) the controllers stand side by side in a fixed order, each a marker with its
+    interval, joined from bin to bin by a faint line. Each panel spans its own scenario's speeds;
+    u = u_cr is a dashed line where it falls within them, else an arrow at the side it lies beyond.
     """
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
@@ -319,48 +362,46 @@ def plot_metrics_vs_speed(
     scenarios = list(dict.fromkeys(row["scenario"] for row in table))
     controllers = list(dict.fromkeys(row["controller"] for row in table))
     colors = _colors(controllers)
-    fig = Figure(figsize=(max(6.0, 2.9 * len(scenarios) + 1.5), 6.4), layout="constrained")
+    panel_width = 2.9 + 0.1 * max(0, len(controllers) - 4)  # room for the controllers side by side
+    fig = Figure(figsize=(max(6.0, panel_width * len(scenarios) + 1.5), 6.4), layout="constrained")
     axes = fig.subplots(2, len(scenarios), sharey="row", squeeze=False)
     positive = all(row["iae_median"] > 0 for row in table)
     for col, scenario in enumerate(scenarios):
         ax_s, ax_i = axes[0, col], axes[1, col]
         rows = [row for row in table if row["scenario"] == scenario]
-        low = min(row["ratio_low"] for row in rows)
-        high = max(row["ratio_high"] for row in rows)
-        n_bins = 1 + max(row["bin"] for row in rows)
-        width = (high - low) / n_bins or 0.1 * low  # one speed: a band 10% wide around it
-        edges = (
-            np.linspace(low, high, n_bins + 1) if high > low else np.array([low - width / 2, low + width / 2])
-        )
+        edges, width = _bin_edges(rows)
         for j, c in enumerate(controllers):
             mine = [row for row in rows if row["controller"] == c]
             if not mine:
                 continue
-            offset = (j - (len(controllers) - 1) / 2) * _DODGE * width / len(controllers)
+            offset = ((j + 0.5) / len(controllers) - 0.5) * _DODGE * width
             x = np.array([0.5 * (row["ratio_low"] + row["ratio_high"]) + offset for row in mine])
             for ax, key in ((ax_s, "success"), (ax_i, "iae")):
                 centre = np.array([row[f"{key}_rate" if key == "success" else "iae_median"] for row in mine])
                 lo = np.array([row[f"{key}_ci_low"] for row in mine])
                 hi = np.array([row[f"{key}_ci_high"] for row in mine])
                 yerr = np.nan_to_num(np.vstack([centre - lo, hi - centre]))  # no interval: no bar
+                ax.plot(x, centre, color=colors[c], linewidth=0.8, alpha=0.35)
                 ax.errorbar(
-                    x, centre, yerr=yerr, color=colors[c], marker="o", markersize=4, linewidth=1, capsize=2
+                    x,
+                    centre,
+                    yerr=yerr,
+                    color=colors[c],
+                    marker="o",
+                    markersize=3.5,
+                    linestyle="",
+                    elinewidth=1,
+                    capsize=0,
                 )
         episodes = max(sum(row["episodes"] for row in rows if row["controller"] == c) for c in controllers)
         ax_s.set_title(f"{scenario}\n({episodes} episodes per controller)", fontsize="medium")
-        # u = u_cr is brought into view when it is nearer the data than the data's own span.
-        x_low, x_high = edges[0] - 0.1 * width, edges[-1] + 0.1 * width
-        if 1.0 < x_low and x_low - 1.0 < high - low:
-            x_low = 0.95
-        if 1.0 > x_high and 1.0 - x_high < high - low:
-            x_high = 1.05
+        x_low, x_high = edges[0] - 0.05 * width, edges[-1] + 0.05 * width
         for ax in (ax_s, ax_i):
             for b in range(0, len(edges) - 1, 2):
                 ax.axvspan(edges[b], edges[b + 1], color="0.93", zorder=0)
-            if x_low < 1.0 < x_high:
-                ax.axvline(1.0, color="k", linestyle="--", linewidth=1)
             ax.set_xlim(x_low, x_high)
             ax.grid(alpha=0.3, axis="y")
+        _mark_critical_speed((ax_s, ax_i), x_low, x_high)
         ax_i.set_xlabel("u / u_cr")
     axes[0, 0].set_ylim(-0.05, 1.05)
     axes[0, 0].set_ylabel(f"success rate\n({100 * CONFIDENCE_LEVEL:.0f}% Wilson interval)")
@@ -369,10 +410,12 @@ def plot_metrics_vs_speed(
         axes[1, 0].set_yscale("log")
     handles = [Line2D([], [], color=colors[c], marker="o", label=c) for c in controllers]
     handles.append(Line2D([], [], color="k", linestyle="--", label="u = u_cr"))
-    fig.legend(handles=handles, loc="outside right center", fontsize="small")
+    fig.legend(
+        handles=handles, loc="outside right center", fontsize="small", title="left to right\nin each bin"
+    )
     fig.suptitle(
-        "Success and IAE against u / u_cr (final speed over the episode's own critical speed); equal-width "
-        "bins per scenario (shaded bands alternate), the controllers side by side within each bin",
+        "Success and median IAE against u / u_cr (final speed over the episode's own critical speed)\n"
+        "bins of equal width per scenario, shaded alternately; the controllers side by side in each bin",
         fontsize="medium",
     )
-    return save_figure(fig, path)
+    return fig

@@ -228,7 +228,7 @@ RUN_SCHEMA: Final[dict[str, Any]] = {
         "steady_pitch_rate_degps": {**_NUMBER, "description": "Steady: |pitch rate| at most this [deg/s]."},
         "steady_depth_change_m": {
             **_NUMBER,
-            "description": "Steady offset: depth error changing at most this [m].",
+            "description": "Steady offset: depth error drifting at most this over the window [m].",
         },
         "regulation_band_m": {
             **_NUMBER,

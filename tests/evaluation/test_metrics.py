@@ -234,6 +234,18 @@ def test_steady_offset_needs_a_settled_depth():
     assert not drifting.steady_offset and drifting.outcome == "unsettled"
 
 
+def test_a_slow_drift_is_not_a_steady_offset():
+    """sac on LowSpeed, seed 10012: 1.04 to 0.87 m over the final 60 s, still converging, was labelled
+    a steady offset (the ends 0.16 m apart, under the former 0.25 m); a zero-mean swing about a
+    settled offset (0.1 m, waves) is still one."""
+    t = _time(600.0)
+    pitch, stern = np.full_like(t, math.radians(3.0)), np.full_like(t, 0.1)
+    converging = _metrics(t, 1.04 - 0.0028 * (t - (t[-1] - HOLD_WINDOW_S)), pitch=pitch, stern=stern)
+    assert not converging.steady_offset and converging.outcome == "unsettled"
+    swinging = _metrics(t, 1.0 + 0.1 * np.sin(2 * math.pi * t / 10.0), pitch=pitch, stern=stern)
+    assert swinging.steady_offset and swinging.outcome == "steady_offset"
+
+
 def test_outcomes_are_the_documented_ones():
     t = _time(300.0)
     assert _metrics(t, np.zeros_like(t)).outcome in OUTCOMES

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from subenv.evaluation.plots import (
+    metrics_vs_speed_figure,
     outcomes_figure,
     plot_metrics_vs_speed,
     plot_outcomes,
@@ -51,6 +52,38 @@ def test_metrics_vs_speed_is_written(tmp_path: Path, randomised: bool, at_speed)
     assert [p.name for p in path.parent.iterdir()] == ["m.png"]
 
 
+def test_metrics_vs_speed_spans_each_scenario_and_sets_the_controllers_apart(at_speed):
+    """Each panel spans its own scenario's speeds (one below u_cr is not stretched to reach it, an
+    arrow points there), the controllers stand side by side in each bin in legend order, and the
+    title fits the figure with two scenarios."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.text import Text
+
+    ucr = 0.5785
+    results = [
+        dataclasses.replace(at_speed(c, ucr * ratio, ucr, ratio > 0.5), scenario=scenario)
+        for scenario, ratios in (("Slow", np.linspace(0.3, 0.8, 12)), ("Around", np.linspace(0.8, 1.3, 12)))
+        for c in ("a", "b", "c")
+        for ratio in ratios
+    ]
+    fig = metrics_vs_speed_figure(results, bins=2)
+    FigureCanvasAgg(fig).draw()
+    slow_success, around_success, slow_iae = fig.axes[0], fig.axes[1], fig.axes[2]
+    low, high = slow_success.get_xlim()
+    assert 0.3 - 0.05 <= low < 0.3 and 0.8 < high <= 0.8 + 0.05  # its bins, and no room for u_cr
+    assert [t.get_text() for t in slow_success.texts] == ["u_cr \u2192"]
+    assert not around_success.texts and 1.0 in [line.get_xdata()[0] for line in around_success.lines]
+    for ax in (slow_success, slow_iae):
+        markers = [line for line in ax.lines if line.get_marker() == "o"]
+        x = np.array([line.get_xdata() for line in markers])  # (controller, bin)
+        assert x.shape == (3, 2)
+        assert np.all(np.diff(x, axis=0) > 0)  # a, b, c left to right in each bin
+        assert np.all((x[:, 0] > 0.3) & (x[:, 0] < 0.55) & (x[:, 1] > 0.55) & (x[:, 1] < 0.8))
+    (title,) = [t for t in fig.findobj(Text) if t.get_text() == fig.get_suptitle()]
+    box = title.get_window_extent()
+    assert 0 <= box.x0 and box.x1 <= fig.bbox.width
+
+
 @pytest.mark.parametrize("scenario", ["LowSpeed", "PeriscopeDepth", "SpeedTransient"])
 def test_outcome_figure_shows_one_chosen_episode_per_outcome(small_run, scenario: str):
     mine = [r for r in small_run.results if r.scenario == scenario]
@@ -62,8 +95,13 @@ def test_outcome_figure_shows_one_chosen_episode_per_outcome(small_run, scenario
     assert len(titles) == len(chosen)
     for title, (outcome, r) in zip(titles, chosen.items(), strict=True):
         count = sum(x.metrics.outcome == outcome for x in mine)
-        assert title.startswith(f"{outcome.replace('_', ' ')}: {count} of {len(mine)}\n")
-        assert f"{r.controller}, seed {r.seed}" in title
+        its = [x for x in mine if x.controller == r.controller]
+        its_count = sum(x.metrics.outcome == outcome for x in its)
+        assert 1 <= its_count <= count
+        assert title.startswith(
+            f"{outcome.replace('_', ' ')} (all controllers: {count} of {len(mine)})\n"
+            f"{r.controller}: {its_count} of {len(its)}; seed {r.seed}"
+        )
 
 
 def test_speed_transient_shows_the_speed_and_where_it_crosses_u_cr(small_run):
