@@ -52,6 +52,10 @@ def test_every_scenario_has_an_id_and_the_headline_id_is_randomized():
         "subenv/PeriscopeDepthWaves-v0",
         "subenv/PeriscopeDepth-v2",
         "subenv/PeriscopeDepthWaves-v1",
+        "subenv/HardRateTransient-v0",
+        "subenv/HardBallastLimits-v0",
+        "subenv/HardWaves18-v0",
+        "subenv/HardGusts-v0",
     }
     assert set(ENV_IDS) == expected
     assert all(env_id in gym.registry for env_id in ENV_IDS)
