@@ -87,6 +87,7 @@ def test_the_hard_suite_is_scored_over_the_achievable_episodes() -> None:
 
 def test_the_hard_ids_make_their_settings_and_the_informed_mpc_is_told_them() -> None:
     """gym.make(id) has the limits the certificates hold for, and evaluate tells an informed controller."""
+    pytest.importorskip("daqp", reason="the 'mpc' extra is not installed")
     import gymnasium as gym
 
     env = gym.make("subenv/HardBallastLimits-v0")
@@ -125,6 +126,7 @@ def test_evaluate_runs_each_suite_named_into_its_own_leaderboard(tmp_path: Path,
 def test_the_hard_suite_runs_each_informed_controller_told_and_untold(tmp_path: Path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """With no controllers named, the Hard suite runs ``mpc`` told its limits and ``mpc:uninformed``; the
     default suite does not twin; ``subenv evaluate`` with no --suite runs both tracks."""
+    pytest.importorskip("daqp", reason="the 'mpc' extra is not installed")
     import subenv.evaluation
     from subenv.cli import main
     from subenv.evaluation.plan import resolve
