@@ -98,7 +98,7 @@ def _truncate(path: Path, fraction: float) -> None:
 
 
 def _change_statistics(folder: Path, change: Callable[[Any], object]) -> None:
-    """Load the folder's pickled statistics, change them, and pickle them back (the run id kept)."""
+    """Load the folder's pickled statistics, change them, and pickle them back."""
     path = folder / "vecnormalize.pkl"
     stats = pickle.loads(path.read_bytes())
     change(stats)
@@ -169,12 +169,9 @@ def test_a_broken_model_folder_is_named_in_one_line(tmp_path, breakage) -> None:
 
 def test_statistics_saved_without_a_run_id_load_with_a_warning(tmp_path) -> None:  # type: ignore[no-untyped-def]
     folder = _copy_of_shipped(tmp_path)
-    stats_file = folder / "vecnormalize.pkl"
-    stats = pickle.loads(stats_file.read_bytes())
-    del vars(stats)[RUN_ID_ATTRIBUTE]  # as older versions saved them
-    for key, value in (("venv", None), ("class_attributes", {}), ("returns", None)):
-        vars(stats).setdefault(key, value)  # what VecNormalize.__getstate__ removes again
-    stats_file.write_bytes(pickle.dumps(stats))
+    _change_statistics(
+        folder, lambda stats: vars(stats).pop(RUN_ID_ATTRIBUTE)
+    )  # as older versions saved them
     with pytest.warns(UserWarning, match=r"saved without a run id .*cannot be checked"):
         agent = load_agent(folder)
     assert agent.obs_mean is not None
