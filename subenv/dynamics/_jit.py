@@ -231,8 +231,16 @@ def inline_kernel(fn: FunctionT) -> FunctionT:
 def rows(value: Any, shape: tuple[int, ...]) -> Any:
     """``value`` broadcast to ``shape`` as a contiguous float64 array of one row per element
     (``shape + (k,)`` arrays: pass ``shape + (k,)`` and reshape): how the batched NumPy-facing functions
-    hand a batch to a kernel that loops over it."""
-    return np.ascontiguousarray(np.broadcast_to(np.asarray(value, dtype=float), shape)).reshape(-1)
+    hand a batch to a kernel that loops over it.
+
+    Always read-only (a view where the copy is the caller's own): numba types a read-only array apart
+    from a writable one, and a kernel given both would compile once per combination of its arguments'
+    flags (four times, 5 s each, in one ``subenv evaluate``)."""
+    out = np.ascontiguousarray(np.broadcast_to(np.asarray(value, dtype=float), shape)).reshape(-1)
+    if out.flags.writeable:
+        out = out.view()
+        out.flags.writeable = False
+    return out
 
 
 def _drop_stale_cache(fn: Callable[..., Any]) -> None:

@@ -2,7 +2,7 @@
 
 The environments' transition is compiled by numba and cached on disk: loaded from the cache, an
 environment's first reset and step take well under a second; with a cold cache (the first run after
-installing, or after editing the kernels' sources) they compile for about 20 s, during which nothing
+installing, or after editing the kernels' sources) they compile for about 30 s, during which nothing
 else would be printed. Each environment wraps its first reset and its first step in
 :func:`compile_notice`, which prints :data:`COMPILE_NOTICE` on stderr, once per process, when numba
 starts compiling within such a call. The decision is numba's own: its ``"numba:compile"`` event
@@ -22,10 +22,10 @@ from numba.core import event
 
 __all__ = ["COMPILE_NOTICE", "compile_notice", "first_call"]
 
-COMPILE_NOTICE: Final = "subenv: compiling the dynamics (first run only, about 20 s)..."
-"""16 s on the development machine's two cores, ``subenv evaluate --suite tiny`` with an empty cache
-(13 s for the kernels the harness calls, ``benchmarks/speed.py``'s compile table); a loaded machine
-takes longer."""
+COMPILE_NOTICE: Final = "subenv: compiling the dynamics (first run only, about 30 s)..."
+"""On the development machine's two cores, quiet, with an empty cache: 25 s for ``gym.make``, ``reset`` and
+``step`` of ``subenv/DivePlane-v0``; 37 s of compiling in ``subenv evaluate --suite tiny`` (48 s in all,
+against 11 s with the cache filled). A loaded machine takes longer."""
 
 
 class _CompileNotice(event.Listener):

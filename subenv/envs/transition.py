@@ -617,7 +617,7 @@ def step_blocks(
         )
 
 
-@inline_kernel
+@kernel
 def _step_block(
     state: np.ndarray,
     episode: np.ndarray,
@@ -639,7 +639,12 @@ def _step_block(
     speeds_end: FloatArray,
     members: np.ndarray,
 ) -> None:
-    """Block ``b`` of :func:`step_blocks`, in its work arrays."""
+    """Block ``b`` of :func:`step_blocks`, in its work arrays.
+
+    Called, not inlined into :func:`step_blocks`: inlined, the one function took numba 40 s of a cold
+    first step's 49 s to compile (25 s in all called), for no step rate we could measure
+    (``benchmarks/speed.py --baseline``: 0.98-1.02 of the inlined build's env-steps/s but one
+    two-thread row within its run-to-run spread)."""
     in_sea = False
     for i in range(b * LANES, minimum((b + 1) * LANES, n_rows)):
         in_sea = in_sea or (active[i] and episode[i].n_waves > 0)
