@@ -236,7 +236,10 @@ def rows(value: Any, shape: tuple[int, ...]) -> Any:
     Always read-only (a view where the copy is the caller's own): numba types a read-only array apart
     from a writable one, and a kernel given both would compile once per combination of its arguments'
     flags (four times, 5 s each, in one ``subenv evaluate``)."""
-    out = np.ascontiguousarray(np.broadcast_to(np.asarray(value, dtype=float), shape)).reshape(-1)
+    array = np.asarray(value, dtype=float)
+    if array.shape != shape:  # (broadcast_to costs microseconds: the analysis calls this millions of times)
+        array = np.broadcast_to(array, shape)
+    out = np.ascontiguousarray(array).reshape(-1)
     if out.flags.writeable:
         out = out.view()
         out.flags.writeable = False

@@ -15,7 +15,7 @@ axes, states ``(..., 4)``, inputs and :class:`ModelParams` fields broadcast agai
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any, NamedTuple
+from typing import Any, Final, NamedTuple
 
 import numpy as np
 
@@ -156,11 +156,15 @@ def stack_params(params: list[ModelParams]) -> ModelParams:
     return ModelParams(**fields, hull=params[0].hull)
 
 
+_SCALAR_TYPES: Final = frozenset({float, int, np.float64})
+
+
 def pack_params(params: ModelParams) -> FloatArray:
     """The numeric fields of ``params`` as one array, shape ``(..., len(PARAM_FIELDS))``, for
     :func:`rhs_point`."""
     fields: tuple[Any, ...] = params[: len(PARAM_FIELDS)]  # (all but hull)
-    if not any(isinstance(f, np.ndarray) for f in fields):
+    # (the types' set first: the analysis packs one vehicle's floats a million times a report)
+    if set(map(type, fields)) <= _SCALAR_TYPES or not any(isinstance(f, np.ndarray) for f in fields):
         return np.array(fields, dtype=float)
     shape = np.broadcast_shapes(*(np.shape(f) for f in fields))
     # Each field copied into its column, broadcast by the assignment (a vector environment's resets
@@ -363,12 +367,18 @@ def derivatives(
             f"state has shape {state.shape}: must have shape (..., 4) (pitch, heave, pitch rate, depth)"
         )
     prm = pack_params(params)  # (..., P): one set for all, or one per row (stack_params)
-    shape = np.broadcast_shapes(
-        state.shape[:-1], prm.shape[:-1], *(np.shape(a) for a in (speed, stern, bow, force, moment))
-    )
+    inputs = (speed, stern, bow, force, moment)
+    if state.shape == (4,) and prm.ndim == 1 and all(np.ndim(a) == 0 for a in inputs):
+        # One state (the analysis's solvers call this a million times a report): the same kernel on
+        # rows of one, made without broadcasting, a third of the general path's cost per call.
+        shape: tuple[int, ...] = ()
+        one = rows(inputs, (5,))
+        u, delta_s, delta_b, Z_ext, M_ext = one[0:1], one[1:2], one[2:3], one[3:4], one[4:5]
+    else:
+        shape = np.broadcast_shapes(state.shape[:-1], prm.shape[:-1], *(np.shape(a) for a in inputs))
+        u, delta_s, delta_b, Z_ext, M_ext = (rows(a, shape) for a in inputs)
     states = rows(state, (*shape, 4)).reshape(-1, 4)
     out = np.empty((states.shape[0], 4))
-    u, delta_s, delta_b, Z_ext, M_ext = (rows(a, shape) for a in (speed, stern, bow, force, moment))
     _derivatives_rows(
         states,
         u,

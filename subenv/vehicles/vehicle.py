@@ -146,7 +146,7 @@ class HullOffsets:
         if not (math.isfinite(area) and area > 0):  # all-zero breadths: no drag and no centroid
             raise ValueError(f"hull offsets: planform area={area!r} m^2 is invalid: must be > 0 and finite")
 
-    @property
+    @cached_property  # (the analysis's residuals read it hundreds of thousands of times; frozen)
     def area_m2(self) -> float:
         """Planform area int b(x) dx, exact for the piecewise-linear hull [m^2]."""
         x = np.asarray(self.x_m)
@@ -154,7 +154,7 @@ class HullOffsets:
             float(-np.trapezoid(self.breadth_m, x)) + 0.0
         )  # (+ 0.0: an all-zero hull has area 0.0, not -0.0)
 
-    @property
+    @cached_property
     def centroid_x_m(self) -> float:
         """Planform centroid int x b(x) dx / A, forward of the origin [m] (exact, piecewise linear)."""
         x = np.asarray(self.x_m)

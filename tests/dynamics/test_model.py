@@ -34,6 +34,26 @@ def test_batched_equals_one_at_a_time(suboff):
         np.testing.assert_allclose(batch[i], one, rtol=1e-14, atol=1e-16)
 
 
+def test_one_compiled_signature_whatever_the_inputs_flags_and_one_states_bits_are_the_batchs(suboff):
+    # numba types a read-only array apart from a writable one: derivatives hands its kernel read-only
+    # rows always (subenv.dynamics._jit.rows), so writable, read-only, scalar and batched inputs share
+    # one compiled signature (four compiled, 5 s each, in one subenv evaluate before), and the path for
+    # one state gives the bits of the batch's rows.
+    from subenv.dynamics.model import _derivatives_rows
+
+    prm = model_params(suboff)
+    states = np.array([[0.01, 0.02, 0.001, 10.0], [-0.02, 0.01, 0.003, 12.0]])
+    frozen = states.copy()
+    frozen.flags.writeable = False
+    speeds = np.array([0.4, 1.1])
+    batch = derivatives(states, speeds, 0.1, np.array([0.0, -0.05]), prm, force=np.array([3.0, 0.0]))
+    for i, state in enumerate([states[0], frozen[1]]):
+        one = derivatives(state, float(speeds[i]), 0.1, [0.0, -0.05][i], prm, force=[3.0, 0.0][i])
+        assert one.tobytes() == batch[i].tobytes()
+    derivatives(frozen, speeds, np.float64(0.1), 0.0, prm)
+    assert len(_derivatives_rows.signatures) == 1, _derivatives_rows.signatures
+
+
 def test_params_of_many_loadings_are_each_variants_bit_for_bit(suboff):
     # A vector environment's batch of resets computes its loadings' parameters as arrays: the same
     # arithmetic as one variant's (NumPy's +, -, *, / are correctly rounded, as Python's), so the same bits.
