@@ -135,6 +135,16 @@ def _components(scenario: Scenario) -> str:
     return "Each episode is drawn from one of " + ", ".join(ids) + ", then randomised as below.\n\n"
 
 
+def _gif_frame(frame: Any) -> Any:
+    """A rendered frame at :data:`ANIMATION_SIZE` in 64 colours (Pillow's fast octree: a third of median
+    cut's time, the default, at no difference we could see on these flat-coloured frames)."""
+    from PIL import Image
+
+    return frame.resize(ANIMATION_SIZE, Image.Resampling.LANCZOS).quantize(
+        colors=64, method=Image.Quantize.FASTOCTREE
+    )
+
+
 def render_animation(env_id: str, path: Path) -> None:
     """One episode (seed :data:`ANIMATION_SEED`) under :data:`ANIMATION_CONTROLLER`, as an animated GIF."""
     from PIL import Image
@@ -150,12 +160,10 @@ def render_animation(env_id: str, path: Path) -> None:
     for step in range(ANIMATION_STEPS + 1):
         if step % ANIMATION_EVERY == 0:
             frame = Image.fromarray(np.asarray(env.render()))
-            frames.append(frame.resize(ANIMATION_SIZE, Image.Resampling.LANCZOS).quantize(colors=64))
+            frames.append(_gif_frame(frame))
         obs, _, terminated, truncated, _ = env.step(controller.act(obs))
         if terminated or truncated:
-            frames.append(
-                Image.fromarray(np.asarray(env.render())).resize(ANIMATION_SIZE).quantize(colors=64)
-            )
+            frames.append(_gif_frame(Image.fromarray(np.asarray(env.render()))))
             break
     env.close()
     path.parent.mkdir(parents=True, exist_ok=True)
