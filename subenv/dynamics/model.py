@@ -368,7 +368,7 @@ def derivatives(
         )
     prm = pack_params(params)  # (..., P): one set for all, or one per row (stack_params)
     inputs = (speed, stern, bow, force, moment)
-    if state.shape == (4,) and prm.ndim == 1 and all(np.ndim(a) == 0 for a in inputs):
+    if state.shape == (4,) and prm.ndim == 1 and set(map(type, inputs)) <= _SCALAR_TYPES:
         # One state (the analysis's solvers call this a million times a report): the same kernel on
         # rows of one, made without broadcasting, a third of the general path's cost per call.
         shape: tuple[int, ...] = ()
