@@ -25,6 +25,15 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ["NUMBA_NUM_THREADS"] = str(
     max(2, int(os.environ.get("NUMBA_NUM_THREADS", "0") or 0), os.cpu_count() or 1)
 )
+# JAX's persistent compilation cache (read when jax is imported): the JAX tests compile the same programs
+# in several tests and in both workers (an id's step in tests/jax/test_env.py and test_dynamics.py, the
+# sea's twice over); XLA's cache, keyed by the program, the JAX version and the device, compiles each once
+# (tests/jax with tests/agents/test_jax_ppo.py from an empty cache: 149 s -> 120 s), and a later run on
+# the machine loads them. The results are the same programs' either way.
+os.environ.setdefault(
+    "JAX_COMPILATION_CACHE_DIR", str(Path(__file__).resolve().parents[1] / ".pytest_cache" / "jax")
+)
+os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0.5")
 
 # The property tests draw the same examples on every run and machine (from a seed made of each test's source,
 # so an edit of a test may draw others: keep a failure it found as an @example), keep no database of earlier
