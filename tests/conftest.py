@@ -29,11 +29,13 @@ os.environ["NUMBA_NUM_THREADS"] = str(
 # in several tests and in both workers (an id's step in tests/jax/test_env.py and test_dynamics.py, the
 # sea's twice over); XLA's cache, keyed by the program, the JAX version and the device, compiles each once
 # (tests/jax with tests/agents/test_jax_ppo.py from an empty cache: 149 s -> 120 s), and a later run on
-# the machine loads them. The results are the same programs' either way.
+# the machine loads them. The results are the same programs' either way. At most 256 MB, the least
+# recently used dropped (a run of the suite writes about 10 MB; each edit of the kernels, as much again).
 os.environ.setdefault(
     "JAX_COMPILATION_CACHE_DIR", str(Path(__file__).resolve().parents[1] / ".pytest_cache" / "jax")
 )
 os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0.5")
+os.environ.setdefault("JAX_COMPILATION_CACHE_MAX_SIZE", str(256 * 2**20))
 
 # The property tests draw the same examples on every run and machine (from a seed made of each test's source,
 # so an edit of a test may draw others: keep a failure it found as an @example), keep no database of earlier
