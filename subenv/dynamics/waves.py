@@ -85,6 +85,7 @@ __all__ = [
     "encounter_factor",
     "hull_wave_integrals",
     "wave_force_point",
+    "wave_term",
 ]
 
 MAX_WAVES: Final = 24
@@ -296,28 +297,42 @@ def encounter_factor(omega_radps: ArrayLike, speed_mps: ArrayLike, gravity_m_s2:
 
 
 @inline_kernel
+def wave_term(
+    t: float, distance: float, depth: float, u: float, waves: FloatArray, i: int
+) -> tuple[float, float]:
+    """Wave ``i``'s (heave force [N, up positive], pitch moment [N m, nose-up positive]) at time ``t`` [s],
+    distance travelled ``distance`` [m], depth ``depth`` [m] and speed ``u`` [m/s], first order plus the
+    second-order mean: a term of :func:`wave_force_point`'s sum. (Under :mod:`subenv.jax` ``i`` is the
+    array of every column's index: one trace computes all the terms at once.)"""
+    k = waves[_K, i]
+    psi = k * distance + waves[_OMEGA, i] * t + waves[_PHASE, i]
+    c, s = math.cos(psi), math.sin(psi)
+    decay = math.exp(-k * depth)
+    # (the forward-speed terms after the zero-speed ones: a sea without them, all 0.0, adds exactly 0.0)
+    up = decay * (waves[_F_COS, i] * c - waves[_F_SIN, i] * s + decay * waves[_F_MEAN, i]) + u * decay * (
+        waves[_F_SPEED_COS, i] * c - waves[_F_SPEED_SIN, i] * s
+    )
+    nose_up = decay * (
+        waves[_M_COS, i] * c - waves[_M_SIN, i] * s + decay * waves[_M_MEAN, i]
+    ) + u * decay * (waves[_M_SPEED_COS, i] * c - waves[_M_SPEED_SIN, i] * s)
+    return up, nose_up
+
+
+@inline_kernel
 def wave_force_point(
     t: float, distance: float, depth: float, u: float, waves: FloatArray, n: Static[int]
 ) -> tuple[float, float]:
     """The sea's heave force [N, down positive] and pitch moment [N m, nose-up positive] on the hull at
     time ``t`` [s], distance travelled ``distance`` [m], depth ``depth`` [m] and speed ``u`` [m/s]: the
-    first ``n`` waves of ``waves`` (:meth:`SeaState.components`), first order plus the second-order mean;
-    (0.0, 0.0) with ``n`` = 0. (``n`` is static for :mod:`subenv.jax`, which passes the columns of
-    ``waves``.)"""
+    first ``n`` waves of ``waves`` (:meth:`SeaState.components`), first order plus the second-order mean
+    (:func:`wave_term`, summed in the order of the columns); (0.0, 0.0) with ``n`` = 0. (``n`` is static
+    for :mod:`subenv.jax`, which passes the columns of ``waves``.)"""
     if n == 0:
         return 0.0, 0.0
     up = 0.0
     nose_up = 0.0
     for i in range(n):
-        k = waves[_K, i]
-        psi = k * distance + waves[_OMEGA, i] * t + waves[_PHASE, i]
-        c, s = math.cos(psi), math.sin(psi)
-        decay = math.exp(-k * depth)
-        # (the forward-speed terms after the zero-speed ones: a sea without them, all 0.0, adds exactly 0.0)
-        up += decay * (
-            waves[_F_COS, i] * c - waves[_F_SIN, i] * s + decay * waves[_F_MEAN, i]
-        ) + u * decay * (waves[_F_SPEED_COS, i] * c - waves[_F_SPEED_SIN, i] * s)
-        nose_up += decay * (
-            waves[_M_COS, i] * c - waves[_M_SIN, i] * s + decay * waves[_M_MEAN, i]
-        ) + u * decay * (waves[_M_SPEED_COS, i] * c - waves[_M_SPEED_SIN, i] * s)
+        wave_up, wave_nose_up = wave_term(t, distance, depth, u, waves, i)
+        up += wave_up
+        nose_up += wave_nose_up
     return -up, nose_up

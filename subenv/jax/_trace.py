@@ -27,6 +27,7 @@ import numpy as np
 
 from subenv import _validation as check
 from subenv.dynamics import free_surface as surface
+from subenv.dynamics import waves as sea
 from subenv.dynamics._jit import select
 
 __all__ = ["MATH", "NUMPY", "replacement", "traced"]
@@ -132,9 +133,23 @@ def _no_suction(
     return value, value
 
 
+def _wave_force_point(t: Any, distance: Any, depth: Any, u: Any, waves: Any, n: int) -> tuple[Any, Any]:
+    """:func:`subenv.dynamics.waves.wave_force_point` for JAX: every wave's term at once (the twin of
+    :func:`~subenv.dynamics.waves.wave_term` on the array of the columns' indices), then summed in the
+    compiled loop's order, so to the same bits. (The loop over 24 waves, unrolled by the trace in each of
+    a control period's eight stages, made a sea's step compile in 13 s instead of 2.)"""
+    if n == 0:
+        return 0.0, 0.0
+    up, nose_up = traced(sea.wave_term)(t, distance, depth, u, waves, np.arange(n))
+    total_up, total_nose_up = 0.0, 0.0
+    for i in range(n):
+        total_up, total_nose_up = total_up + up[i], total_nose_up + nose_up[i]
+    return -total_up, total_nose_up
+
+
 _SAME_AS: Final[dict[bool, dict[Any, Any]]] = {
-    True: {select: jnp.where, surface.suction_point: _suction_point},
-    False: {select: jnp.where, surface.suction_point: _no_suction},
+    True: {select: jnp.where, surface.suction_point: _suction_point, sea.wave_force_point: _wave_force_point},
+    False: {select: jnp.where, surface.suction_point: _no_suction, sea.wave_force_point: _wave_force_point},
 }
 
 
