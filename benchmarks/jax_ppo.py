@@ -37,7 +37,8 @@ the quiet rate includes the compilation the measurement leaves out.
 IQM and mean over seeds x scenarios with 95% stratified bootstrap intervals (rliable), the benchmark-v1
 score per seed and its mean with a bootstrap interval, the targets of issue 35, the times; the learning
 curves and each variant's failure outcomes, plotted (``report.md``, ``report.json``,
-``learning_curves.png``, ``failures.png``). With pairs ``<base>`` and ``<base>-curriculum`` among the
+``learning_curves.png``, ``failures.png``, and ``episodes-<variant>.png``: what the median seed does on
+BallastOffset, a typical episode of each outcome). With pairs ``<base>`` and ``<base>-curriculum`` among the
 variants, the curriculum ablation: the probability that the difficulty curriculum beats uniform resets,
 with its interval and a one-line verdict (:func:`ablations`), e.g.::
 
@@ -529,6 +530,37 @@ def plot(out: Path, runs: Mapping[str, Sequence[Mapping[str, Any]]]) -> list[Pat
     return paths
 
 
+def plot_failed_episodes(
+    out: Path, summary: Mapping[str, Any], scenario: str = "BallastOffset"
+) -> list[Path]:
+    """What each variant's median seed does on ``scenario``: its final policy (``out/models``) played again
+    on the run's evaluation episodes of that scenario, and a typical episode of each outcome plotted
+    (depth error, pitch and planes against time: :func:`subenv.evaluation.plots.plot_outcomes`), into
+    ``episodes-<variant>.png``."""
+    from subenv.evaluation import evaluate
+    from subenv.evaluation.plots import plot_outcomes
+    from subenv_agents.jax_ppo import JaxPPOController
+
+    paths = []
+    for variant, s in summary["variants"].items():
+        name = f"{variant}-seed{s['median_seed']}"
+        agent = JaxPPOController(out / "models" / name, name=name)
+        results = evaluate(
+            [agent], [scenario], s["episodes"], progress=False, keep_trajectories=s["episodes"]
+        )
+        scored = [r for r in results if r.winnable is not False]
+        wins = sum(r.metrics.success for r in scored)
+        paths.append(
+            plot_outcomes(
+                results,
+                out / f"episodes-{variant}.png",
+                title=f"{scenario}: what {name} (the median seed of {variant}) does, a typical episode of "
+                f"each outcome\n({wins} of {len(scored)} winnable episodes won)",
+            )
+        )
+    return paths
+
+
 def _rate(counts: Sequence[float], ended: np.ndarray, k: int = 10) -> np.ndarray:
     """The fraction of the episodes ended around each update that ``counts`` counts: both summed over a
     window of ``k`` updates (fewer at the ends), NaN where none ended."""
@@ -667,6 +699,7 @@ def main(argv: Sequence[str] | None = None) -> None:
         atomic_write_text(args.out / "report.json", json.dumps(summary, indent=1) + "\n")
         atomic_write_text(args.out / "report.md", text)
         plot(args.out, runs)
+        plot_failed_episodes(args.out, summary)
         print(text)
 
 
