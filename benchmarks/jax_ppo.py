@@ -251,10 +251,46 @@ def success_matrix(runs: Sequence[Mapping[str, Any]], scenarios: Sequence[str]) 
     return np.array([[r["scores"][s]["success_rate"] for s in scenarios] for r in runs])
 
 
-def summarize(runs: Mapping[str, Sequence[Mapping[str, Any]]], reps: int = 10_000) -> dict[str, Any]:
+HARD_BASELINES: Final = ("mpc", "reversal_aware")
+"""Shown beside the agents on the Hard track (``mpc`` told the environment's settings, as on the
+leaderboard)."""
+
+
+def hard_scores(out: Path, runs: Mapping[str, Sequence[Mapping[str, Any]]]) -> dict[str, dict[str, Any]]:
+    """The benchmark-v1 score on the Hard track (its suite's episodes and seeds, as the leaderboard's) of
+    every run's final policy and of :data:`HARD_BASELINES`: ``{name: pooled score record}``
+    (:func:`subenv_agents.records.score_record`), each evaluated once and kept in ``out/hard/<name>.json``."""
+    from subenv.atomic import atomic_write_text
+    from subenv.evaluation import evaluate, make_controller
+    from subenv_agents.jax_ppo import JaxPPOController
+    from subenv_agents.records import score_record
+
+    out_dir = out / "hard"
+    out_dir.mkdir(exist_ok=True)
+    names = [f"{r['variant']}-seed{r['seed']}" for rs in runs.values() for r in rs] + list(HARD_BASELINES)
+    scores = {}
+    for name in names:
+        path = out_dir / f"{name}.json"
+        if not path.exists():
+            controller = (
+                make_controller(name)
+                if name in HARD_BASELINES
+                else JaxPPOController(out / "models" / name, name=name)
+            )
+            record = score_record(evaluate([controller], "hard", progress=False, keep_trajectories=0))[name]
+            atomic_write_text(path, json.dumps(record, indent=1) + "\n")
+        scores[name] = json.loads(path.read_text())["all"]
+    return scores
+
+
+def summarize(
+    runs: Mapping[str, Sequence[Mapping[str, Any]]],
+    hard: Mapping[str, Mapping[str, Any]] | None = None,
+    reps: int = 10_000,
+) -> dict[str, Any]:
     """Per variant: rliable's IQM and mean over runs x scenarios (95% stratified bootstrap), each
-    scenario's mean over runs, the pooled score's mean over runs with a bootstrap interval, the targets
-    of issue 35, the times."""
+    scenario's mean over runs, the pooled score's mean over runs with a bootstrap interval (and the Hard
+    track's, from ``hard``: :func:`hard_scores`), the targets of issue 35, the times."""
     import warnings
 
     from rliable import library as rly
@@ -264,6 +300,12 @@ def summarize(runs: Mapping[str, Sequence[Mapping[str, Any]]], reps: int = 10_00
     scenarios = [s for s in first["scores"] if s != "all"]
     matrices = {v: success_matrix(rs, scenarios) for v, rs in runs.items()}
     pooled = {v: np.array([[r["scores"]["all"]["score"]] for r in rs]) for v, rs in runs.items()}
+    hard = hard or {}
+    hard_pooled = {
+        v: np.array([[hard[f"{v}-seed{r['seed']}"]["score"]] for r in rs])
+        for v, rs in runs.items()
+        if all(f"{v}-seed{r['seed']}" in hard for r in rs)
+    }
     rng = np.random.RandomState(0)
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", category=FutureWarning)
@@ -276,7 +318,19 @@ def summarize(runs: Mapping[str, Sequence[Mapping[str, Any]]], reps: int = 10_00
         score_point, score_ci = rly.get_interval_estimates(
             pooled, lambda x: np.array([np.mean(x)]), reps=reps, random_state=rng
         )
-    out: dict[str, Any] = {"scenarios": scenarios, "variants": {}, "ablations": ablations(matrices, reps)}
+        hard_point, hard_ci = (
+            rly.get_interval_estimates(
+                hard_pooled, lambda x: np.array([np.mean(x)]), reps=reps, random_state=rng
+            )
+            if hard_pooled
+            else ({}, {})
+        )
+    out: dict[str, Any] = {
+        "scenarios": scenarios,
+        "variants": {},
+        "ablations": ablations(matrices, reps),
+        "hard_baselines": {n: hard[n] for n in HARD_BASELINES if n in hard},
+    }
     for v, rs in runs.items():
         m = matrices[v]
         ballast = [r["scores"]["BallastOffset"] for r in rs]
@@ -284,6 +338,7 @@ def summarize(runs: Mapping[str, Sequence[Mapping[str, Any]]], reps: int = 10_00
         median_seed = int(np.argsort(mean_success)[len(mean_success) // 2])
         quiet = [r["quiet_estimate_s"] for r in rs]
         out["variants"][v] = {
+            "settings": {k: value for k, value in rs[0]["settings"].items() if k != "seed"},
             "runs": len(rs),
             "seeds": [r["seed"] for r in rs],
             "iqm": float(point[v][0]),
@@ -294,6 +349,9 @@ def summarize(runs: Mapping[str, Sequence[Mapping[str, Any]]], reps: int = 10_00
             "score": [r["scores"]["all"]["score"] for r in rs],
             "score_mean": float(score_point[v][0]),
             "score_mean_ci": [float(x) for x in score_ci[v][:, 0]],
+            "hard_score": [float(x) for x in hard_pooled[v][:, 0]] if v in hard_pooled else None,
+            "hard_score_mean": float(hard_point[v][0]) if v in hard_pooled else None,
+            "hard_score_mean_ci": [float(x) for x in hard_ci[v][:, 0]] if v in hard_pooled else None,
             "ballast_wins": [f"{b['wins']}/{b['scored']}" for b in ballast],
             "ballast_median_wins": float(np.median([b["wins"] for b in ballast])),
             "ballast_scored": sorted({b["scored"] for b in ballast}),
@@ -387,7 +445,16 @@ def _cell(values: Sequence[float]) -> str:
 def report_markdown(summary: Mapping[str, Any]) -> str:
     """The report's tables."""
     scenarios = summary["scenarios"]
-    head = ["variant", "runs", "IQM [95% CI]", "mean [95% CI]", *scenarios, "score (per seed)", "quiet min"]
+    head = [
+        "variant",
+        "runs",
+        "IQM [95% CI]",
+        "mean [95% CI]",
+        *scenarios,
+        "score (per seed)",
+        "Hard score (per seed)",
+        "quiet min",
+    ]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for v, s in summary["variants"].items():
         quiet = [max(q.values()) / 60 for q in s["quiet_estimate_s"]]
@@ -399,9 +466,19 @@ def report_markdown(summary: Mapping[str, Any]) -> str:
             *(_cell(s["per_scenario"][sc]) for sc in scenarios),
             f"{s['score_mean']:.0f} [{s['score_mean_ci'][0]:.0f}, {s['score_mean_ci'][1]:.0f}] "
             f"({', '.join(f'{x:.0f}' for x in s['score'])})",
+            "-"
+            if s["hard_score"] is None
+            else f"{s['hard_score_mean']:.0f} [{s['hard_score_mean_ci'][0]:.0f}, "
+            f"{s['hard_score_mean_ci'][1]:.0f}] ({', '.join(f'{x:.0f}' for x in s['hard_score'])})",
             f"{min(quiet):.1f}-{max(quiet):.1f}",
         ]
         lines.append("| " + " | ".join(cells) + " |")
+    baselines = [
+        f"{name} {b['score']:.1f} [{b['score_ci_low']:.1f}, {b['score_ci_high']:.1f}]"
+        for name, b in summary["hard_baselines"].items()
+    ]
+    if baselines:
+        lines += ["", "On the Hard track, the same episodes: " + ", ".join(baselines) + "."]
     targets = ["", "| variant | " + " | ".join(next(iter(summary["variants"].values()))["targets"]) + " |"]
     targets.append("|---|" + "---|" * (len(targets[1].split("|")) - 3))
     for v, s in summary["variants"].items():
@@ -444,8 +521,9 @@ def report_markdown(summary: Mapping[str, Any]) -> str:
             "stratified bootstrap intervals (rliable), each scenario's mean over seeds (the seeds' values in "
             "brackets); "
             "the benchmark-v1 score pooled over the suite, its mean over seeds with a 95% bootstrap "
-            "interval (and each seed's); the estimated training time on the quiet 2-core machine (the "
-            "larger of the two estimates, module docstring), the fastest and slowest seed.",
+            "interval (and each seed's), and the same on the Hard track (its suite's episodes); the "
+            "estimated training time on the quiet 2-core machine (the larger of the two estimates, module "
+            "docstring), the fastest and slowest seed.",
             "",
             *lines,
             *targets,
@@ -694,7 +772,7 @@ def main(argv: Sequence[str] | None = None) -> None:
         from subenv.atomic import atomic_write_text
 
         runs = read_runs(args.out, args.variants)
-        summary = summarize(runs)
+        summary = summarize(runs, hard_scores(args.out, runs))
         text = report_markdown(summary)
         atomic_write_text(args.out / "report.json", json.dumps(summary, indent=1) + "\n")
         atomic_write_text(args.out / "report.md", text)

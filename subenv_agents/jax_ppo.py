@@ -1052,6 +1052,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"MODEL_CARD.md) on the {DEFAULT_SUITE!r} suite, next to the baselines; 0: none (default: 100)",
     )
     parser.add_argument(
+        "--seed-spread",
+        type=Path,
+        default=None,
+        help="a report.json of benchmarks/jax_ppo.py report holding these settings trained with several "
+        "seeds: the card states their spread (default: none)",
+    )
+    parser.add_argument(
         "--baselines",
         default=BASELINE,
         help=f"the controllers evaluated beside it, comma-separated; '' for none (default: {BASELINE})",
@@ -1060,12 +1067,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     settings = {f.name: getattr(args, f.name) for f in dataclasses.fields(PPOConfig)}
     try:
         config = PPOConfig(**{**settings, "hidden": tuple(args.hidden)})
+        spread = None if args.seed_spread is None else seed_spread(config, args.seed_spread)
         check_output_dir(args.out, args.force, kind="jax-ppo model")
     except (ValueError, FileExistsError) as exc:
         parser.error(str(exc))
     command = shlex.join(["python", "-m", "subenv_agents.jax_ppo", *(sys.argv[1:] if argv is None else argv)])
     baselines = [name for name in args.baselines.split(",") if name]
-    train_model(config, args.out, command, args.eval_episodes, baselines, overwrite=args.force)
+    train_model(config, args.out, command, args.eval_episodes, baselines, overwrite=args.force, spread=spread)
     print(f"wrote {args.out}")
     return 0
 
@@ -1079,10 +1087,12 @@ def train_model(
     *,
     overwrite: bool = False,
     say: Callable[[str], None] | None = None,
+    spread: str | None = None,
 ) -> dict[str, Any]:
     """Train ``config``, evaluate the final policy (``eval_episodes`` per scenario of the default suite,
     next to ``baselines``; none for 0) and write the model folder ``out`` (:func:`save`, with
-    ``evaluation.json`` and ``MODEL_CARD.md``); returns the training's record (``train.json``).
+    ``evaluation.json`` and ``MODEL_CARD.md``, which ends with ``spread``: :func:`seed_spread`'s section);
+    returns the training's record (``train.json``).
 
     The record holds the wall time and the process's CPU time of the training, compilation included,
     the load averages before and after it (the machine may be shared), and what the policy did per
@@ -1135,7 +1145,7 @@ def train_model(
         )
         texts = {
             "evaluation.json": json.dumps(evaluation, indent=2) + "\n",
-            "MODEL_CARD.md": model_card(name, config, record, evaluation),
+            "MODEL_CARD.md": model_card(name, config, record, evaluation) + (spread or ""),
         }
         say(score_table(evaluation["scores"]))
     save(out, config, state.network, state.obs_stats, record, overwrite=overwrite, texts=texts)
@@ -1244,6 +1254,60 @@ Success over all episodes (95% Wilson intervals) and plane RMS (sqrt of the time
 
 {table(evaluation["suite"], list(next(iter(evaluation["suite"].values()))))}
 {target}"""
+
+
+def seed_spread(config: PPOConfig, report: str | Path) -> str:
+    """The card's section on what other seeds of ``config``'s settings gave: the variant of ``report``
+    (the ``report.json`` of ``benchmarks/jax_ppo.py report``) trained with the same settings but the
+    seed, each seed's final policy on the default suite and the Hard track. ValueError where the report
+    holds no such variant, naming the report's variants."""
+    path = Path(report)
+    try:
+        summary = json.loads(path.read_text())
+        variants = summary["variants"]
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise ValueError(
+            f"seed_spread={str(path)!r} is not a report of benchmarks/jax_ppo.py: {exc}"
+        ) from None
+    mine = json.loads(json.dumps({**dataclasses.asdict(config), "hidden": list(config.hidden)}))
+    mine.pop("seed")
+    found = [(name, v) for name, v in variants.items() if v.get("settings") == mine]
+    if not found:
+        raise ValueError(
+            f"seed_spread={str(path)!r} holds no variant with these settings but the seed: its variants are "
+            f"{list(variants)}"
+        )
+    name, v = found[0]
+    hard = v.get("hard_score") or [math.nan] * len(v["seeds"])
+    rows = [
+        f"| {seed}{' (this model)' if seed == config.seed else ''} | {score:.0f} | {h:.0f} | {wins} |"
+        for seed, score, h, wins in zip(v["seeds"], v["score"], hard, v["ballast_wins"], strict=True)
+    ]
+    from subenv.evaluation import DEFAULT_SEED
+
+    default_mean = f"{v['score_mean']:.0f} [{v['score_mean_ci'][0]:.0f}, {v['score_mean_ci'][1]:.0f}]"
+    iqm = f"{100 * v['iqm']:.1f} [{100 * v['iqm_ci'][0]:.1f}, {100 * v['iqm_ci'][1]:.1f}]"
+    hard_mean = (
+        f"{v['hard_score_mean']:.0f} [{v['hard_score_mean_ci'][0]:.0f}, {v['hard_score_mean_ci'][1]:.0f}]"
+        if v.get("hard_score_mean") is not None
+        else "-"
+    )
+    return f"""
+## Seed spread
+
+These settings trained with {v["runs"]} seeds (variant `{name}` of `benchmarks/jax_ppo.py`, its report
+`{path.name}`), each final policy evaluated on the default suite ({v["episodes"]} episodes per
+scenario, seeds {DEFAULT_SEED} + i) and on the Hard track (its suite's episodes): the benchmark-v1 score
+pooled over each suite, and BallastOffset's wins over its winnable episodes.
+
+| seed | default score | Hard score | BallastOffset wins |
+|---|---:|---:|---:|
+{chr(10).join(rows)}
+| mean [95% CI] | {default_mean} | {hard_mean} | median {v["ballast_median_wins"]:.0f} |
+
+Success over the winnable episodes of the default suite, IQM over seeds x scenarios: {iqm}
+(rliable, 95% stratified bootstrap).
+"""
 
 
 def _load_note(record: Mapping[str, Any]) -> str:

@@ -304,6 +304,53 @@ def test_the_command_refuses_an_output_folder_it_did_not_write_in_one_line(tmp_p
     )
 
 
+def _report(path, settings):
+    """A report.json of benchmarks/jax_ppo.py report with one variant of ``settings``, seeds 0 to 2."""
+    variant = {
+        "settings": settings,
+        "runs": 3,
+        "seeds": [0, 1, 2],
+        "episodes": 50,
+        "score": [968.1, 930.4, 951.0],
+        "score_mean": 949.8,
+        "score_mean_ci": [930.4, 968.1],
+        "hard_score": [446.9, 401.2, 420.0],
+        "hard_score_mean": 422.7,
+        "hard_score_mean_ci": [401.2, 446.9],
+        "ballast_wins": ["37/47", "30/47", "35/47"],
+        "ballast_median_wins": 35.0,
+        "iqm": 0.987,
+        "iqm_ci": [0.95, 1.0],
+    }
+    path.write_text(json.dumps({"variants": {"other": {"settings": {}}, "tiny": variant}}))
+    return path
+
+
+def test_the_card_states_the_seed_spread_of_its_settings_and_refuses_another_report(tmp_path):
+    mine = json.loads(json.dumps({**TINY.__dict__, "hidden": list(TINY.hidden)}))
+    mine.pop("seed")
+    report = _report(tmp_path / "report.json", mine)
+    section = jax_ppo.seed_spread(TINY, report)
+    assert "| 0 (this model) | 968 | 447 | 37/47 |" in section and "| 1 | 930 | 401 | 30/47 |" in section
+    assert "| mean [95% CI] | 950 [930, 968] | 423 [401, 447] | median 35 |" in section
+    assert "IQM over seeds x scenarios: 98.7 [95.0, 100.0]" in section
+    with pytest.raises(
+        ValueError, match=r"no variant with these settings but the seed: .*\['other', 'tiny'\]"
+    ):
+        jax_ppo.seed_spread(PPOConfig(**{**TINY.__dict__, "lr": 1e-3}), report)
+    (tmp_path / "damaged.json").write_text("{")
+    with pytest.raises(ValueError, match="damaged.json' is not a report of benchmarks/jax_ppo.py"):
+        jax_ppo.seed_spread(TINY, tmp_path / "damaged.json")
+
+
+def test_the_command_refuses_a_seed_spread_of_other_settings_before_it_trains(tmp_path, capsys):
+    report = _report(tmp_path / "report.json", {"env_id": "subenv/Nominal-v0"})
+    with pytest.raises(SystemExit) as exited:
+        main(["--out", str(tmp_path / "model"), "--seed-spread", str(report)])
+    assert exited.value.code == 2 and "holds no variant with these settings" in capsys.readouterr().err
+    assert not (tmp_path / "model").exists()
+
+
 def test_a_truncated_episode_bootstraps_from_its_final_observations_value():
     """Three steps of one environment: the first goes on, the second is truncated (the third is a new
     episode's), the third terminated. Each bootstraps from where it led: the next step's value, the
