@@ -11,6 +11,7 @@ is the check of the numerical one.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Final
 
@@ -22,7 +23,7 @@ from subenv._typing import FloatArray
 from subenv.analysis.critical import critical_speed
 from subenv.analysis.linear import check_alpha, plane_derivatives
 from subenv.dynamics.free_surface import FreeSurface, suction, validity_depth_m
-from subenv.dynamics.model import ModelParams, derivatives, model_params
+from subenv.dynamics.model import derivatives, derivatives_with, model_params
 from subenv.dynamics.waves import SeaState
 from subenv.thesis import reference_length_ratio
 from subenv.vehicles.scaling import froude_factor
@@ -177,15 +178,17 @@ def sea_mean_suction(vehicle: Vehicle, sea_state: SeaState | None, depth_m: floa
 
 def _field(
     vehicle: Vehicle,
-    params: ModelParams,
+    rhs: Callable[..., FloatArray],
     sea_state: SeaState | None,
     u: float,
     stern: float,
     bow: float,
     x: FloatArray,
 ) -> FloatArray:
+    """``rhs`` (:func:`~subenv.dynamics.derivatives_with` of the loading) at ``x`` with a sea's mean
+    suction at its depth."""
     force, moment = sea_mean_suction(vehicle, sea_state, float(x[3]))
-    return derivatives(np.asarray(x, dtype=float), u, stern, bow, params, force, moment)
+    return rhs(np.asarray(x, dtype=float), u, stern, bow, force, moment)
 
 
 def _plane_limit(vehicle: Vehicle) -> float:
@@ -244,11 +247,12 @@ def surface_trim(
     u, h = _check(vehicle, speed_mps, depth_m)
     alpha = check_alpha(alpha)
     params = model_params(vehicle, free_surface or FreeSurface())
+    rhs = derivatives_with(params)
 
     def balance(v: FloatArray) -> FloatArray:
         theta, delta = v
         x = np.array([theta, u * math.tan(theta), 0.0, h])
-        return _field(vehicle, params, sea_state, u, delta, alpha * delta, x)[1:3]
+        return _field(vehicle, rhs, sea_state, u, delta, alpha * delta, x)[1:3]
 
     # From level (the trim of a neutral boat in deep water), then from pitched starts and by
     # Levenberg-Marquardt where Powell's hybrid method stalls; the nearest trim to level is kept.
@@ -274,8 +278,8 @@ def surface_trim(
     jac = np.stack(
         [
             (
-                _field(vehicle, params, sea_state, u, delta, alpha * delta, x0 + e)
-                - _field(vehicle, params, sea_state, u, delta, alpha * delta, x0 - e)
+                _field(vehicle, rhs, sea_state, u, delta, alpha * delta, x0 + e)
+                - _field(vehicle, rhs, sea_state, u, delta, alpha * delta, x0 - e)
             )
             / (2 * _EPS)
             for e in steps

@@ -37,7 +37,7 @@ from scipy.optimize import brentq, root
 from subenv import _validation as check
 from subenv._typing import FloatArray
 from subenv.analysis.linear import check_alpha, linear_model
-from subenv.dynamics.model import derivatives, model_params
+from subenv.dynamics.model import derivatives_with, model_params
 from subenv.vehicles.vehicle import Vehicle
 
 __all__ = [
@@ -166,18 +166,18 @@ def _field(
     vehicle: Vehicle, speed_mps: float, gain: FloatArray | None, alpha: float
 ) -> Callable[[FloatArray], FloatArray]:
     """The nonlinear right-hand side in the loop's coordinates, for a batch of states (..., n)."""
-    params = model_params(vehicle)
+    derivatives = derivatives_with(model_params(vehicle))
     if gain is None:
 
         def open_loop(x: FloatArray) -> FloatArray:
             state = np.concatenate([x, np.zeros((*x.shape[:-1], 1))], axis=-1)
-            return derivatives(state, speed_mps, 0.0, 0.0, params)[..., :3]
+            return derivatives(state, speed_mps, 0.0, 0.0)[..., :3]
 
         return open_loop
 
     def closed_loop(x: FloatArray) -> FloatArray:
         delta = -(x @ gain)  # unsaturated: the small oscillations about level flight
-        return derivatives(x, speed_mps, delta, alpha * delta, params)
+        return derivatives(x, speed_mps, delta, alpha * delta)
 
     return closed_loop
 

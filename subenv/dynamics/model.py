@@ -14,7 +14,7 @@ axes, states ``(..., 4)``, inputs and :class:`ModelParams` fields broadcast agai
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any, Final, NamedTuple
 
 import numpy as np
@@ -375,14 +375,9 @@ def derivatives(
     prm = pack_params(params)  # (..., P): one set for all, or one per row (stack_params)
     inputs = (speed, stern, bow, force, moment)
     if state.shape == (4,) and prm.ndim == 1 and _all_scalars(inputs):
-        # One state (the analysis's solvers call this a million times a report): the same kernel on
-        # rows of one, made without broadcasting, a third of the general path's cost per call.
-        shape: tuple[int, ...] = ()
-        one = rows(inputs, (5,))
-        u, delta_s, delta_b, Z_ext, M_ext = one[0:1], one[1:2], one[2:3], one[3:4], one[4:5]
-    else:
-        shape = np.broadcast_shapes(state.shape[:-1], prm.shape[:-1], *(np.shape(a) for a in inputs))
-        u, delta_s, delta_b, Z_ext, M_ext = (rows(a, shape) for a in inputs)
+        return _one_state(state, inputs, rows(prm, prm.shape).reshape(1, -1), params.hull.packed)
+    shape = np.broadcast_shapes(state.shape[:-1], prm.shape[:-1], *(np.shape(a) for a in inputs))
+    u, delta_s, delta_b, Z_ext, M_ext = (rows(a, shape) for a in inputs)
     states = rows(state, (*shape, 4)).reshape(-1, 4)
     out = np.empty((states.shape[0], 4))
     _derivatives_rows(
@@ -397,6 +392,57 @@ def derivatives(
         out,
     )
     return out.reshape(*shape, 4)
+
+
+def _one_state(
+    state: FloatArray, inputs: tuple[ArrayLike, ...], prm: FloatArray, hull: FloatArray
+) -> FloatArray:
+    """:func:`derivatives` of one state (shape (4,)) with the scalar ``inputs`` (speed, stern, bow, force,
+    moment) and one packed parameter set ``prm`` (shape (1, P)): the same kernel on rows of one, made
+    without broadcasting (the analysis's solvers call this a million times a report)."""
+    one = rows(inputs, (5,))
+    out = np.empty((1, 4))
+    _derivatives_rows(
+        rows(state, (4,)).reshape(1, 4), one[0:1], one[1:2], one[2:3], one[3:4], one[4:5], prm, hull, out
+    )
+    return out.reshape(4)
+
+
+def derivatives_with(params: ModelParams) -> Callable[..., FloatArray]:
+    """:func:`derivatives` with ``params`` fixed: ``f(state, speed, stern, bow, force=0.0, moment=0.0)``,
+    the same numbers, its parameters packed once (:func:`pack_params`) rather than on every call: for a
+    solver that calls it for one state at a time (the analysis's periodic orbits and surface trims, a
+    million calls a report)."""
+    packed = pack_params(params)
+    if packed.ndim != 1:  # (a batch of parameter sets: derivatives' general path)
+
+        def batched(
+            state: FloatArray,
+            speed: ArrayLike,
+            stern: ArrayLike,
+            bow: ArrayLike,
+            force: ArrayLike = 0.0,
+            moment: ArrayLike = 0.0,
+        ) -> FloatArray:
+            return derivatives(state, speed, stern, bow, params, force, moment)
+
+        return batched
+    prm, hull = rows(packed, packed.shape).reshape(1, -1), params.hull.packed
+
+    def one_set(
+        state: FloatArray,
+        speed: ArrayLike,
+        stern: ArrayLike,
+        bow: ArrayLike,
+        force: ArrayLike = 0.0,
+        moment: ArrayLike = 0.0,
+    ) -> FloatArray:
+        inputs = (speed, stern, bow, force, moment)
+        if np.shape(state) == (4,) and _all_scalars(inputs):
+            return _one_state(state, inputs, prm, hull)
+        return derivatives(state, speed, stern, bow, params, force, moment)
+
+    return one_set
 
 
 @kernel

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from subenv.analysis import linear_model, numerical_jacobian
-from subenv.dynamics import derivatives, dual_plane_angles, model_params, stack_params
+from subenv.dynamics import derivatives, derivatives_with, dual_plane_angles, model_params, stack_params
 from subenv.dynamics.free_surface import FreeSurface
 from subenv.dynamics.model import PARAM_FIELDS, pack_params
 
@@ -52,6 +52,26 @@ def test_one_compiled_signature_whatever_the_inputs_flags_and_one_states_bits_ar
         assert one.tobytes() == batch[i].tobytes()
     derivatives(frozen, speeds, np.float64(0.1), 0.0, prm)
     assert len(_derivatives_rows.signatures) == 1, _derivatives_rows.signatures
+
+
+def test_derivatives_with_a_fixed_loading_are_derivatives_bits_for_any_input(suboff):
+    # (the analysis's solvers call it for one state at a time; batches and batched loadings go through)
+    prm = model_params(suboff, FreeSurface())
+    rhs = derivatives_with(prm)
+    state = np.array([0.01, 0.02, 0.001, 0.9])  # near the surface: the suction's branch too
+    for args in [(0.4, 0.1, -0.05), (np.float64(1.1), 0.0, 0.0, 3.0, -2.0), (0.7, 0.2, 0.0, 0.0, 1.5)]:
+        assert rhs(state, *args).tobytes() == derivatives(state, *args[:3], prm, *args[3:]).tobytes()
+    states = np.array([[0.01, 0.02, 0.001, 10.0], [-0.02, 0.01, 0.003, 0.8]])
+    speeds = np.array([0.4, 1.1])
+    assert rhs(states, speeds, 0.1, 0.0).tobytes() == derivatives(states, speeds, 0.1, 0.0, prm).tobytes()
+    assert rhs(list(state), 0.5, 0.1, 0.0).tobytes() == derivatives(state, 0.5, 0.1, 0.0, prm).tobytes()
+    many = stack_params([model_params(suboff), model_params(suboff.variant(z_GB_m=0.02))])
+    assert (
+        derivatives_with(many)(states, 0.6, 0.0, 0.0).tobytes()
+        == derivatives(states, 0.6, 0.0, 0.0, many).tobytes()
+    )
+    with pytest.raises(ValueError, match=r"state has shape \(3,\): must have shape \(\.\.\., 4\)"):
+        rhs(np.zeros(3), 0.5, 0.0, 0.0)
 
 
 def test_params_of_many_loadings_are_each_variants_bit_for_bit(suboff):
