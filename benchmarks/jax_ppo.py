@@ -129,13 +129,14 @@ def settings_of(variant: str, seed: int, overrides: Mapping[str, Any]) -> dict[s
 
 
 def reference_rate() -> dict[str, float]:
-    """The shipped ``ppo_jax`` program for :data:`REFERENCE_UPDATES` updates, timed without its
-    compilation: env-steps per second of wall time and CPU microseconds per env-step of this process."""
+    """The ``shipped`` variant's program (the memoryless PPO the JAX agent shipped first) for
+    :data:`REFERENCE_UPDATES` updates, timed without its compilation: env-steps per second of wall time and
+    CPU microseconds per env-step of this process."""
     import jax
 
-    from subenv_agents.jax_ppo import load, make_train, shipped_folder
+    from subenv_agents.jax_ppo import PPOConfig, make_train
 
-    shipped, _, _ = load(shipped_folder())
+    shipped = PPOConfig(**settings_of("shipped", 0, {}))
     config = dataclasses.replace(
         shipped, total_timesteps=REFERENCE_UPDATES * shipped.num_envs * shipped.num_steps
     )
@@ -168,8 +169,6 @@ def one(out: Path, variant: str, seed: int, overrides: Mapping[str, Any], episod
     command = shlex_join(sys.argv)
     record = train_model(config, out / "models" / name, command, episodes, baselines=(), overwrite=True)
     after = reference_rate()
-    ref_rate = (before["env_steps_per_s"] + after["env_steps_per_s"]) / 2
-    ref_cpu = (before["cpu_us_per_step"] + after["cpu_us_per_step"]) / 2
     evaluation = json.loads((out / "models" / name / "evaluation.json").read_text())
     run = {
         "variant": variant,
@@ -181,17 +180,26 @@ def one(out: Path, variant: str, seed: int, overrides: Mapping[str, Any], episod
         "wall_time_s": record["wall_time_s"],
         "cpu_time_s": record["cpu_time_s"],
         "load_average": record["load_average"],
-        "reference": {"before": before, "after": after, "quiet_env_steps_per_s": REFERENCE_QUIET_RATE},
-        "quiet_estimate_s": {
-            "by_wall_time": round(record["wall_time_s"] * ref_rate / REFERENCE_QUIET_RATE, 1),
-            "by_cpu_time": round(1e6 * record["cpu_time_s"] / ref_cpu / REFERENCE_QUIET_RATE, 1),
-        },
+        "reference": {"before": before, "after": after},
         "per_update": record["per_update"],
         "episodes": episodes,
         "scores": evaluation["scores"][name],
         "machine": f"{platform.machine()}, {os.cpu_count()} cores",
     }
     atomic_write_text(out / "runs" / f"{name}.json", json.dumps(run, indent=1) + "\n")
+
+
+def quiet_estimate(run: Mapping[str, Any]) -> dict[str, float]:
+    """A run's training time on the quiet machine [s], estimated twice from its record (the module's
+    docstring): its wall time scaled by the reference's slowdown, and its CPU time in units of the
+    reference's CPU time per env-step, both against :data:`REFERENCE_QUIET_RATE`."""
+    before, after = run["reference"]["before"], run["reference"]["after"]
+    ref_rate = (before["env_steps_per_s"] + after["env_steps_per_s"]) / 2
+    ref_cpu = (before["cpu_us_per_step"] + after["cpu_us_per_step"]) / 2
+    return {
+        "by_wall_time": round(run["wall_time_s"] * ref_rate / REFERENCE_QUIET_RATE, 1),
+        "by_cpu_time": round(1e6 * run["cpu_time_s"] / ref_cpu / REFERENCE_QUIET_RATE, 1),
+    }
 
 
 def shlex_join(argv: Sequence[str]) -> str:
@@ -336,7 +344,7 @@ def summarize(
         ballast = [r["scores"]["BallastOffset"] for r in rs]
         mean_success = m.mean(axis=1)
         median_seed = int(np.argsort(mean_success)[len(mean_success) // 2])
-        quiet = [r["quiet_estimate_s"] for r in rs]
+        quiet = [quiet_estimate(r) for r in rs]
         out["variants"][v] = {
             "settings": {k: value for k, value in rs[0]["settings"].items() if k != "seed"},
             "runs": len(rs),

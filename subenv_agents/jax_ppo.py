@@ -1296,7 +1296,7 @@ def seed_spread(config: PPOConfig, report: str | Path) -> str:
 ## Seed spread
 
 These settings trained with {v["runs"]} seeds (variant `{name}` of `benchmarks/jax_ppo.py`, its report
-`{path.name}`), each final policy evaluated on the default suite ({v["episodes"]} episodes per
+`{path.as_posix()}`), each final policy evaluated on the default suite ({v["episodes"]} episodes per
 scenario, seeds {DEFAULT_SEED} + i) and on the Hard track (its suite's episodes): the benchmark-v1 score
 pooled over each suite, and BallastOffset's wins over its winnable episodes.
 
