@@ -47,6 +47,14 @@ settings.load_profile("ci")
 _MEASURED: list[tuple[str, str]] = []
 
 
+@pytest.fixture(scope="session", autouse=True)
+def _sb3_logs_in_the_sessions_folder(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """Stable-Baselines3 makes a folder for every ``learn()`` of a model without a logger set, even one that
+    logs nothing (``tempfile``'s ``SB3-<time>``, which nothing removes: 162 in /tmp after a day's runs);
+    the tests' and their subprocesses' go to the session's temporary folder (SB3's ``SB3_LOGDIR``)."""
+    os.environ["SB3_LOGDIR"] = str(tmp_path_factory.mktemp("sb3"))
+
+
 def pytest_configure(config: pytest.Config) -> None:
     """Register the controllers as this checkout's ``pyproject.toml`` declares them.
 
