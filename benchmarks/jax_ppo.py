@@ -314,25 +314,24 @@ def summarize(
         for v, rs in runs.items()
         if all(f"{v}-seed{r['seed']}" in hard for r in rs)
     }
-    rng = np.random.RandomState(0)
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", category=FutureWarning)
-        point, ci = rly.get_interval_estimates(
-            matrices,
-            lambda x: np.array([metrics.aggregate_iqm(x), metrics.aggregate_mean(x)]),
-            reps=reps,
-            random_state=rng,
-        )
-        score_point, score_ci = rly.get_interval_estimates(
-            pooled, lambda x: np.array([np.mean(x)]), reps=reps, random_state=rng
-        )
-        hard_point, hard_ci = (
-            rly.get_interval_estimates(
-                hard_pooled, lambda x: np.array([np.mean(x)]), reps=reps, random_state=rng
-            )
-            if hard_pooled
-            else ({}, {})
-        )
+
+    def estimates(scores: Mapping[str, np.ndarray], statistic: Any) -> tuple[dict[str, Any], dict[str, Any]]:
+        """Rliable's point estimates and intervals, each variant's from a generator of its own (seeded
+        alike): a variant's numbers do not change when the report holds more or fewer variants."""
+        point: dict[str, Any] = {}
+        ci: dict[str, Any] = {}
+        for v, score in scores.items():
+            with warnings.catch_warnings():
+                warnings.filterwarnings("ignore", category=FutureWarning)
+                p, c = rly.get_interval_estimates(
+                    {v: score}, statistic, reps=reps, random_state=np.random.RandomState(0)
+                )
+            point[v], ci[v] = p[v], c[v]
+        return point, ci
+
+    point, ci = estimates(matrices, lambda x: np.array([metrics.aggregate_iqm(x), metrics.aggregate_mean(x)]))
+    score_point, score_ci = estimates(pooled, lambda x: np.array([np.mean(x)]))
+    hard_point, hard_ci = estimates(hard_pooled, lambda x: np.array([np.mean(x)]))
     out: dict[str, Any] = {
         "scenarios": scenarios,
         "variants": {},
