@@ -6,8 +6,8 @@
 
 ``speed`` (the default):
 
-1. The shipped ``ppo_jax`` settings (``subenv_agents/models/ppo_jax/config.json``) trained to each of
-   ``--timesteps`` (default 2.5M, 5M, 10M env-steps; the learning rate annealed over each budget), on
+1. The ``shipped`` variant's settings (those of the first shipped ``ppo_jax``: a memoryless policy on
+   SpeedTransient, :data:`VARIANTS`) trained to each of ``--timesteps`` (default 2.5M, 5M, 10M env-steps; the learning rate annealed over each budget), on
    this machine's default JAX device: wall time (compilation included) and the success and plane RMS
    of the final policy on the reversal scenarios (LowSpeed, NearCritical, SpeedTransient;
    ``--episodes`` each, the harness of ``subenv evaluate``, seeds 10000 + i).
@@ -659,13 +659,14 @@ def _rate(counts: Sequence[float], ended: np.ndarray, k: int = 10) -> np.ndarray
 
 # --- the speed comparison (the default) ----------------------------------------------------------
 def speed(args: argparse.Namespace) -> None:
-    """The shipped settings to three budgets next to SB3's PPO (the module's docstring, ``speed``)."""
+    """The ``shipped`` variant's settings (the memoryless PPO the JAX agent shipped first) to three budgets
+    next to SB3's PPO (the module's docstring, ``speed``)."""
     import jax
 
     from subenv.evaluation import evaluate
     from subenv_agents import shipped_models
     from subenv_agents.card import total_training_time_s
-    from subenv_agents.jax_ppo import JaxPPOController, load, make_train, shipped_folder
+    from subenv_agents.jax_ppo import JaxPPOController, PPOConfig, make_train
     from subenv_agents.records import REVERSAL_SCENARIOS, evaluation_record
 
     def jax_run(config: Any, episodes: int) -> tuple[float, dict[str, dict[str, float]]]:
@@ -703,10 +704,10 @@ def speed(args: argparse.Namespace) -> None:
             for s in REVERSAL_SCENARIOS
         )
 
-    shipped, _, _ = load(shipped_folder())
+    shipped = PPOConfig(**settings_of("shipped", 0, {}))
     print(
         f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores; jax {jax.__version__} on "
-        f"{jax.devices()[0]}; the shipped ppo_jax settings on {shipped.env_id}, "
+        f"{jax.devices()[0]}; the shipped variant's settings (a memoryless policy) on {shipped.env_id}, "
         f"{shipped.num_envs} environments\n"
     )
     header = " | ".join(f"{s}: success (plane RMS)" for s in REVERSAL_SCENARIOS)
