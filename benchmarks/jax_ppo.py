@@ -8,8 +8,9 @@
 
 1. The ``shipped`` variant's settings (those of the first shipped ``ppo_jax``: a memoryless policy on
    SpeedTransient, :data:`VARIANTS`) trained to each of ``--timesteps`` (default 2.5M, 5M, 10M
-   env-steps; the learning rate annealed over each budget), on this machine's default JAX device: wall time (compilation included) and the success and plane RMS
-   of the final policy on the reversal scenarios (LowSpeed, NearCritical, SpeedTransient;
+   env-steps; the learning rate annealed over each budget), on this machine's default JAX device: wall
+   time (compilation included) and the success and plane RMS of the final policy on the reversal
+   scenarios (LowSpeed, NearCritical, SpeedTransient;
    ``--episodes`` each, the harness of ``subenv evaluate``, seeds 10000 + i).
 2. Stable-Baselines3's PPO with the shipped ``ppo``'s hyperparameters (``python -m
    subenv_agents.train --algo ppo``, 16 environments of the native vector env, one torch thread) for
