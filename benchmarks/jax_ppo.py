@@ -27,12 +27,11 @@ episodes and the benchmark-v1 score, :func:`subenv_agents.jax_ppo.train_model`),
 Stop it at any time and run it again: finished runs are kept, an unfinished one starts again.
 
 **Timing on a shared machine.** Each run also times, in its own process before and after its training, a
-reference: two updates of the shipped ``ppo_jax`` program (its compilation cached and not timed), whose
-rate on the quiet development machine its ``train.json`` records (15M env-steps in 180 s, compilation
-included: :data:`REFERENCE_QUIET_RATE`). A run's time on the quiet machine is estimated twice: its wall
-time scaled by the reference's slowdown (reference rate now against quiet), and its CPU time in units of
-the reference's CPU time per env-step (what the load does not change as much). Both are conservative:
-the quiet rate includes the compilation the measurement leaves out.
+reference: two updates of the ``shipped`` variant's program (its compilation cached and not timed), whose
+rate on the quiet development machine is :data:`REFERENCE_QUIET_RATE`. A run's time on the quiet machine
+is estimated twice (:func:`quiet_estimate`): its wall time scaled by the reference's slowdown (reference
+rate now against quiet), and its CPU time in units of the reference's CPU time per env-step (what the
+load does not change as much).
 
 ``report`` summarises the finished runs: per variant, the success over the winnable episodes per scenario,
 IQM and mean over seeds x scenarios with 95% stratified bootstrap intervals (rliable), the benchmark-v1
@@ -115,9 +114,10 @@ def previous_advantages(rollout: Any, last_value: Any, gamma: float, lam: float)
     return adv, adv + rollout.value
 
 
-REFERENCE_QUIET_RATE: Final = 82_945
-"""Env-steps per second of the shipped ``ppo_jax``'s training on the quiet 2-core development machine, its
-compilation included (its ``train.json``: 14,942,208 env-steps in 180.1 s)."""
+REFERENCE_QUIET_RATE: Final = 126_760
+"""Env-steps per second of :func:`reference_rate`'s program on the quiet 2-core development machine, its
+compilation excluded as there: the median of four measurements in one process (2026-12-05, load 0.7:
+124,885, 124,925, 128,595 and 128,952)."""
 REFERENCE_UPDATES: Final = 2
 
 
