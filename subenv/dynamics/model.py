@@ -414,22 +414,10 @@ def derivatives_with(params: ModelParams) -> Callable[..., FloatArray]:
     solver that calls it for one state at a time (the analysis's periodic orbits and surface trims, a
     million calls a report)."""
     packed = pack_params(params)
-    if packed.ndim != 1:  # (a batch of parameter sets: derivatives' general path)
-
-        def batched(
-            state: FloatArray,
-            speed: ArrayLike,
-            stern: ArrayLike,
-            bow: ArrayLike,
-            force: ArrayLike = 0.0,
-            moment: ArrayLike = 0.0,
-        ) -> FloatArray:
-            return derivatives(state, speed, stern, bow, params, force, moment)
-
-        return batched
+    one_set = packed.ndim == 1  # (else a batch of parameter sets: derivatives' general path)
     prm, hull = rows(packed, packed.shape).reshape(1, -1), params.hull.packed
 
-    def one_set(
+    def rhs(
         state: FloatArray,
         speed: ArrayLike,
         stern: ArrayLike,
@@ -438,11 +426,11 @@ def derivatives_with(params: ModelParams) -> Callable[..., FloatArray]:
         moment: ArrayLike = 0.0,
     ) -> FloatArray:
         inputs = (speed, stern, bow, force, moment)
-        if np.shape(state) == (4,) and _all_scalars(inputs):
+        if one_set and np.shape(state) == (4,) and _all_scalars(inputs):
             return _one_state(state, inputs, prm, hull)
         return derivatives(state, speed, stern, bow, params, force, moment)
 
-    return one_set
+    return rhs
 
 
 @kernel
