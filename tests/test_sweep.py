@@ -96,7 +96,9 @@ def test_ctrl_c_when_the_chunks_are_done_leaves_the_table_and_stops_the_sweeps_r
     monkeypatch.setattr(ray, "shutdown", shutdown)
     out = tmp_path / "sweep"
     command = ["sweep", "--controllers", "thesis", "--grid", "speed_ratio=0.5,1.5", "--episodes", "2"]
-    assert main([*command, "--no-progress", "--no-plots", "--out", str(out)]) == 130
+    handler = signal.getsignal(signal.SIGINT)
+    status = main([*command, "--no-progress", "--no-plots", "--out", str(out)])
+    assert status == 130, (status, calls, handler)
     assert calls == ["init", "shutdown", "stopped"]  # the stop ran to its end, the Ctrl-C came after
     assert len(_table(out / "results.parquet")) == 2 * 2
     err = capsys.readouterr().err
