@@ -84,14 +84,23 @@ def test_ctrl_c_when_the_chunks_are_done_leaves_the_table_and_stops_the_sweeps_r
     from subenv.cli import main
 
     calls = []
-    answers = iter([False])  # the sweep's question: no Ray yet (Ray's own auto-start then sees one)
+    real, asked = ray.is_initialized, []
+
+    def is_initialized() -> bool:
+        """No Ray yet, to the sweep's question (the main thread's first); afterwards, and to other threads,
+        what is (the session's Ray). Ray's own threads, left by earlier tests in the worker, ask too: an
+        answer given to one of them had the sweep see the session's Ray, start none, and stop none."""
+        if threading.current_thread() is threading.main_thread() and not asked:
+            asked.append(True)
+            return False
+        return real()
 
     def shutdown() -> None:
         calls.append("shutdown")
         signal.raise_signal(signal.SIGINT)  # Ctrl-C while Ray stops
         calls.append("stopped")
 
-    monkeypatch.setattr(ray, "is_initialized", lambda: next(answers, True))
+    monkeypatch.setattr(ray, "is_initialized", is_initialized)
     monkeypatch.setattr(ray, "init", lambda **kwargs: calls.append("init"))
     monkeypatch.setattr(ray, "shutdown", shutdown)
     out = tmp_path / "sweep"
