@@ -61,7 +61,7 @@ import subenv.envs
 from subenv import _validation as check
 from subenv.atomic import atomic_output_dir, check_output_dir
 from subenv.envs.config import OBSERVATION_NAMES, DivePlaneConfig
-from subenv.evaluation import DEFAULT_SUITE, SingleRowMixin, check_batch
+from subenv.evaluation import DEFAULT_SEED, DEFAULT_SUITE, SingleRowMixin, check_batch
 from subenv.evaluation.metrics import DEPTH_TOLERANCE_M, HOLD_WINDOW_S
 from subenv.extras import require
 from subenv.vehicles import Vehicle
@@ -1182,8 +1182,6 @@ def evaluation_of(
 
 def model_card(name: str, config: PPOConfig, record: Mapping[str, Any], evaluation: Mapping[str, Any]) -> str:
     """The model's card: how it was trained, on what, and how it did (every number from the run)."""
-    from subenv.evaluation import DEFAULT_SEED
-
     kwargs = config.env_kwargs
     rewards = (
         "rewards scaled by the running deviation of the discounted return"
@@ -1283,8 +1281,6 @@ def seed_spread(config: PPOConfig, report: str | Path) -> str:
         f"| {seed}{' (this model)' if seed == config.seed else ''} | {score:.0f} | {h:.0f} | {wins} |"
         for seed, score, h, wins in zip(v["seeds"], v["score"], hard, v["ballast_wins"], strict=True)
     ]
-    from subenv.evaluation import DEFAULT_SEED
-
     default_mean = f"{v['score_mean']:.0f} [{v['score_mean_ci'][0]:.0f}, {v['score_mean_ci'][1]:.0f}]"
     iqm = f"{100 * v['iqm']:.1f} [{100 * v['iqm_ci'][0]:.1f}, {100 * v['iqm_ci'][1]:.1f}]"
     hard_mean = (

@@ -47,24 +47,6 @@ settings.load_profile("ci")
 _MEASURED: list[tuple[str, str]] = []
 
 
-@pytest.fixture(autouse=True)
-def _sigint_handler_restored(request: pytest.FixtureRequest) -> Any:
-    """Each test starts with the SIGINT handler the session had and leaves it so: a library one test
-    drives may install its own and keep it (Ray Tune does, for a search: subenv_agents.tune.fit puts the
-    caller's back, which tests/agents/test_tune.py checks), and a later test of Ctrl-C in the same
-    pytest-xdist worker would see its Ctrl-C swallowed (test_sweep's returned 0 instead of 130 after the
-    suite's order changed)."""
-    import signal
-    import warnings
-
-    handler = signal.getsignal(signal.SIGINT)
-    yield
-    left = signal.getsignal(signal.SIGINT)
-    if left is not handler and handler is not None:
-        signal.signal(signal.SIGINT, handler)
-        warnings.warn(f"{request.node.nodeid} left the SIGINT handler {left!r} (put back)", stacklevel=1)
-
-
 @pytest.fixture(scope="session", autouse=True)
 def _sb3_logs_in_the_sessions_folder(tmp_path_factory: pytest.TempPathFactory) -> None:
     """Stable-Baselines3 makes a folder for every ``learn()`` of a model without a logger set, even one that

@@ -80,8 +80,8 @@ def test_an_interrupted_sweep_resumes_without_running_finished_chunks_again(
 def python_sigint_handler():  # type: ignore[no-untyped-def]
     """Python's own SIGINT handler for the test, as a user's process has it, and the one before put back:
     in the suite's full runs the Ctrl-C test below found SIG_IGN in two of three fresh-clone runs, left
-    by something that ran before it in the worker but no test (conftest.py's autouse fixture names a
-    test that leaves a handler), and the ignored Ctrl-C made it return 0."""
+    by something that ran before it in the same worker (not found), and the ignored Ctrl-C made it
+    return 0."""
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     yield
     signal.signal(signal.SIGINT, previous)
