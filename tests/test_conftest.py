@@ -91,3 +91,14 @@ def test_a_file_whose_tests_use_two_shared_session_fixtures_is_refused(tmp_path:
         "tests/test_both.py uses the session fixtures ['analysis_report', 'small_run'], each computed in its "
         "own group of files" in run.stderr
     )
+
+
+def test_the_groups_started_first_are_groups_of_the_suite() -> None:
+    # (a file renamed or a fixture gone would leave its group to be scheduled by chance, without a word)
+    spec = importlib.util.spec_from_file_location("suite_conftest", TESTS / "conftest.py")
+    assert spec and spec.loader
+    conftest = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(conftest)
+    for group in conftest.LONGEST_FIRST:
+        assert group in conftest.SHARED_SESSION_FIXTURES or (ROOT / group).is_file(), group
+    assert len(set(conftest.LONGEST_FIRST)) == len(conftest.LONGEST_FIRST)
