@@ -21,7 +21,7 @@ import numpy as np
 from gymnasium.utils import seeding
 
 from subenv import _validation as check
-from subenv.analysis.critical import critical_speeds
+from subenv.analysis.critical import critical_speed, critical_speeds
 from subenv.dynamics.free_surface import NO_FREE_SURFACE, FreeSurface
 from subenv.dynamics.model import model_params, pack_params
 from subenv.dynamics.waves import MAX_WAVES, WAVE_FIELDS
@@ -345,10 +345,9 @@ def episode_fields(
     """
     ucr = loading.critical_speed_mps
     if draw.speed_relative and not np.all(np.isfinite(ucr)):
-        z_GB = np.asarray(loading.key.z_GB_m).flat[np.argmin(np.isfinite(ucr))]  # (the first without one)
         raise ValueError(
             f"scenario {config.scenario.name!r} gives speeds relative to the critical speed, but "
-            f"vehicle {config.vehicle.name!r} with z_GB={float(z_GB)!r} m has none"
+            f"vehicle {config.vehicle.name!r} has none with {_without_critical_speed(config, loading)}"
         )
     scale = ucr if draw.speed_relative else 1.0
     knots = [(t, u * scale) for t, u in draw.speed_knots]
@@ -406,6 +405,19 @@ def episode_fields(
         "distance_m": 0.0,
     }
     return episode, state
+
+
+def _without_critical_speed(config: DivePlaneConfig, loading: Loading) -> str:
+    """The first of ``loading``'s episodes without a critical speed, and why (what
+    :func:`~subenv.analysis.critical.critical_speed` says of its vehicle)."""
+    first = int(np.argmin(np.isfinite(loading.critical_speed_mps)))
+    one = {name: np.asarray(v).flat[first] if np.ndim(v) else v for name, v in loading.key.loading().items()}
+    variant = config.vehicle.variant(**one)
+    try:
+        critical_speed(variant, config.alpha)
+    except ValueError as error:
+        return f"this episode's loading (z_GB={variant.z_GB_m!r} m, alpha={config.alpha!r}): {error}"
+    return f"this episode's loading (z_GB={variant.z_GB_m!r} m, alpha={config.alpha!r})"
 
 
 def _sea(draw: EpisodeConfig, vehicle: Vehicle, knot_shape: Any) -> tuple[int, np.ndarray | None]:
