@@ -22,6 +22,7 @@ from subenv.dynamics.waves import SeaState
 from subenv.scenarios.registry import get_scenario
 from subenv.thesis import THESIS_DESIGN_SPEED_MPS
 from subenv.vehicles.scaling import froude_factor
+from subenv.vehicles.vehicle import BUOYANCY_RATIO_RANGE
 
 __all__ = ["EpisodeConfig", "Interval", "Scenario", "SpeedRamp"]
 
@@ -220,7 +221,8 @@ class Scenario:
     x_GB_sign_random : bool
         Flip the sign of the drawn x_GB with probability 1/2.
     excess_buoyancy_fraction : Interval
-        (B - W) / W; near-surface suction modelled as excess buoyancy (Ch. V.C).
+        (B - W) / W; near-surface suction modelled as excess buoyancy (Ch. V.C). Within [-0.5, 1]:
+        B / W within :data:`~subenv.vehicles.vehicle.BUOYANCY_RATIO_RANGE` for a neutral vehicle.
     crossflow_drag : Interval or None
         Hull cross-flow drag coefficient C_D; None keeps the vehicle's.
     sensor_noise : bool
@@ -304,7 +306,9 @@ class Scenario:
             check.interval("z_GB_m", self.z_GB_m, _TINY)
         check.interval("z_GB_scale", self.z_GB_scale, _TINY)
         check.interval("x_GB_m", self.x_GB_m)
-        check.interval("excess_buoyancy_fraction", self.excess_buoyancy_fraction, -1.0, 1.0)
+        # (B - W) / W within the B / W a vehicle may have, so that a neutrally buoyant one can take any draw
+        low, high = BUOYANCY_RATIO_RANGE
+        check.interval("excess_buoyancy_fraction", self.excess_buoyancy_fraction, low - 1.0, high - 1.0)
         if self.crossflow_drag is not None:
             check.interval("crossflow_drag", self.crossflow_drag, 0.0)
         if not (math.isfinite(self.disturbance_std_N) and self.disturbance_std_N >= 0):

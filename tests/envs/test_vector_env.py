@@ -283,11 +283,14 @@ def test_batch_resets_draw_exactly_what_one_reset_at_a_time_draws(scenario):
 
 
 def test_a_batch_of_resets_refuses_the_loadings_one_reset_at_a_time_refuses():
-    # Some loadings of this scenario are beyond what a submerged vehicle may have (B < W / 2): a batch,
-    # which checks its loadings as a box, refuses them as one reset at a time does, naming B / W.
-    sinking = Scenario(name="Sinking", description="too heavy", excess_buoyancy_fraction=(-0.7, -0.3))
+    # Some loadings of this scenario, on a vehicle already heavy (B / W = 0.7), are beyond what a submerged
+    # vehicle may have (B < W / 2): a batch, which checks its loadings as a box, refuses them as one reset
+    # at a time does, naming B / W. (On a neutral vehicle no scenario can draw them: the scenario's bound.)
+    suboff = subenv.load_vehicle("suboff")
+    heavy = suboff.variant(excess_buoyancy_N=-0.3 * suboff.weight_N)
+    sinking = Scenario(name="Sinking", description="too heavy", excess_buoyancy_fraction=(-0.4, -0.25))
     for n in (2, 64):  # one at a time, and a batch
-        env = DivePlaneVectorEnv(num_envs=n, scenario=sinking)
+        env = DivePlaneVectorEnv(num_envs=n, scenario=sinking, vehicle=heavy)
         with pytest.raises(
             ValueError, match=r"buoyancy_N=.* are invalid: B / W = 0\.[34].* must be in \[0\.5, 2"
         ):

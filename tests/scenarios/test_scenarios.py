@@ -156,6 +156,10 @@ def test_disturbance_force_varies_within_an_episode():
         ({"duration_s": 0.0}, r"duration_s=0\.0 is invalid: must be a finite number > 0"),
         ({"z_GB_scale": (0.0, 1.0)}, r"z_GB_scale=\(0\.0, 1\.0\) is invalid"),
         ({"disturbance_std_N": -1.0}, r"disturbance_std_N=-1\.0 is invalid"),
+        (  # (B - W) / W below -0.5: B / W below the vehicles' 0.5 (subenv.vehicles.BUOYANCY_RATIO_RANGE)
+            {"excess_buoyancy_fraction": (-0.7, -0.3)},
+            r"excess_buoyancy_fraction=\(-0\.7, -0\.3\) is invalid: .* with -0\.5 <= low <= high <= 1\.0",
+        ),
         ({"name": "lowercase"}, r"name='lowercase' is invalid: must be a CamelCase identifier"),
     ],
 )
