@@ -217,11 +217,19 @@ def _saturated_branch(
     c = vehicle.coefficients
     W, B = vehicle.weight_N, vehicle.buoyancy_N
 
+    damping = c.Z_w * u
+    if not (damping < 0 and drag >= 0):
+        raise ValueError(
+            f"Z_w={c.Z_w!r} and the cross-flow drag factor {drag!r} are invalid for the saturated branch: "
+            "need Z_w < 0 and a drag factor >= 0 (a heave force that falls as w rises)"
+        )
+
     def heave(theta: float) -> float:
-        # Eq. 4.40 solved for w: Z_w u w - C w|w| is strictly decreasing in w.
+        # Eq. 4.40 solved for w: Z_w u w - C w|w| + rest = 0, strictly decreasing in w (Z_w u < 0, C >= 0),
+        # so its one root has the sign of rest: the root of C w^2 - Z_w u w - rest = 0 (rest >= 0) or of
+        # C w^2 + Z_w u w + rest = 0 (rest < 0), written without cancellation, as for C = 0.
         rest = (W - B) * math.cos(theta) + Z_d * u * u * delta
-        bound = 1.0 + abs(rest) / max(abs(c.Z_w) * u, 1e-12)
-        return float(brentq(lambda w: c.Z_w * u * w - drag * w * abs(w) + rest, -bound, bound, xtol=1e-15))
+        return 2.0 * rest / (math.sqrt(damping * damping + 4.0 * drag * abs(rest)) - damping)
 
     def pitch_balance(theta: FloatArray) -> FloatArray:
         th = np.atleast_1d(theta)

@@ -375,7 +375,7 @@ def derivatives(
     prm = pack_params(params)  # (..., P): one set for all, or one per row (stack_params)
     inputs = (speed, stern, bow, force, moment)
     if state.shape == (4,) and prm.ndim == 1 and _all_scalars(inputs):
-        return _one_state(state, inputs, rows(prm, prm.shape).reshape(1, -1), params.hull.packed)
+        return _one_state(state, inputs, rows(prm, prm.shape), params.hull.packed)
     shape = np.broadcast_shapes(state.shape[:-1], prm.shape[:-1], *(np.shape(a) for a in inputs))
     u, delta_s, delta_b, Z_ext, M_ext = (rows(a, shape) for a in inputs)
     states = rows(state, (*shape, 4)).reshape(-1, 4)
@@ -397,15 +397,27 @@ def derivatives(
 def _one_state(
     state: FloatArray, inputs: tuple[ArrayLike, ...], prm: FloatArray, hull: FloatArray
 ) -> FloatArray:
-    """:func:`derivatives` of one state (shape (4,)) with the scalar ``inputs`` (speed, stern, bow, force,
-    moment) and one packed parameter set ``prm`` (shape (1, P)): the same kernel on rows of one, made
-    without broadcasting (the analysis's solvers call this a million times a report)."""
-    one = rows(inputs, (5,))
-    out = np.empty((1, 4))
-    _derivatives_rows(
-        rows(state, (4,)).reshape(1, 4), one[0:1], one[1:2], one[2:3], one[3:4], one[4:5], prm, hull, out
+    """:func:`derivatives` of one state (4 numbers) with the scalar ``inputs`` (speed, stern, bow, force,
+    moment) and one packed parameter set ``prm`` (shape (P,), read-only): :func:`rhs_point` called on
+    floats, without the arrays the batched path makes (the analysis's solvers call this a million times
+    a report)."""
+    pitch, heave, rate, depth = state
+    speed, stern, bow, force, moment = inputs
+    return np.array(
+        _derivatives_one(
+            float(pitch),
+            float(heave),
+            float(rate),
+            float(depth),
+            float(speed),
+            float(stern),
+            float(bow),
+            float(force),
+            float(moment),
+            prm,
+            hull,
+        )
     )
-    return out.reshape(4)
 
 
 def derivatives_with(params: ModelParams) -> Callable[..., FloatArray]:
@@ -415,7 +427,7 @@ def derivatives_with(params: ModelParams) -> Callable[..., FloatArray]:
     million calls a report)."""
     packed = pack_params(params)
     one_set = packed.ndim == 1  # (else a batch of parameter sets: derivatives' general path)
-    prm, hull = rows(packed, packed.shape).reshape(1, -1), params.hull.packed
+    prm, hull = rows(packed, packed.shape), params.hull.packed
 
     def rhs(
         state: FloatArray,
@@ -431,6 +443,26 @@ def derivatives_with(params: ModelParams) -> Callable[..., FloatArray]:
         return derivatives(state, speed, stern, bow, params, force, moment)
 
     return rhs
+
+
+@kernel
+def _derivatives_one(
+    pitch: float,
+    heave: float,
+    rate: float,
+    depth: float,
+    u: float,
+    stern: float,
+    bow: float,
+    force: float,
+    moment: float,
+    prm: FloatArray,
+    hull: FloatArray,
+) -> tuple[float, float, float, float]:
+    d_pitch, d_heave, d_rate, d_depth = rhs_point(
+        pitch, heave, rate, depth, u, stern, bow, force, moment, prm, hull
+    )
+    return d_pitch, d_heave, d_rate, d_depth
 
 
 @kernel

@@ -184,15 +184,30 @@ def test_a_model_trained_on_other_dynamics_is_refused_as_a_controller(trained):
         JaxPPOController.of(config, state.network, state.obs_stats, "other")
 
 
-MEMORY = PPOConfig(**{**TINY.__dict__, "memory": 8, "depth_integral_s": 100.0})
+# The other settings the shipped agent trains with, in one tiny training (one compiled program: 13 s from
+# an empty cache): a memory, the depth-error integral, and the difficulty curriculum on BallastOffset's
+# first 12 episodes, 2 of which cannot be won.
+MEMORY = PPOConfig(
+    **{
+        **TINY.__dict__,
+        "memory": 8,
+        "depth_integral_s": 100.0,
+        "env_id": "subenv/BallastOffset-v0",
+        "episodes": 12,
+        "num_envs": 128,
+        "total_timesteps": 2 * 128 * 16,
+        "curriculum": "difficulty",
+    }
+)
 
 
 @pytest.fixture(scope="module")
 def trained_memory():
-    """Two updates of a tiny training of a policy with a memory and the depth-error integral."""
-    train, _ = make_train(MEMORY)
+    """Two updates of a tiny training of a policy with a memory and the depth-error integral, on the
+    difficulty curriculum."""
+    train, env = make_train(MEMORY)
     state, metrics = jax.block_until_ready(jax.jit(train)(jax.random.key(1)))
-    return state, metrics
+    return state, metrics, env
 
 
 def _episode(controller, seed, steps):
@@ -212,8 +227,8 @@ def test_a_policy_with_memory_trains_and_acts_as_its_memory_and_integral_say(tra
     from subenv_agents.config import DepthIntegralConfig
     from subenv_agents.features import DepthIntegral
 
-    state, metrics = trained_memory
-    assert state.memory.shape == (32, 8) and np.all(np.isfinite(np.asarray(metrics.reward)))
+    state, metrics, _ = trained_memory
+    assert state.memory.shape == (128, 8) and np.all(np.isfinite(np.asarray(metrics.reward)))
     first = init_network(jax.random.split(jax.random.key(1), 3)[1], 9, 2, MEMORY.hidden, memory=8)
     assert not np.array_equal(np.asarray(first["gru"]["wh"]), np.asarray(state.network["gru"]["wh"]))
     folder = save(tmp_path / "model", MEMORY, state.network, state.obs_stats, {"env_steps": 1024})
@@ -238,7 +253,7 @@ def test_a_policy_with_memory_trains_and_acts_as_its_memory_and_integral_say(tra
 
 
 def test_a_policy_with_memory_keeps_each_rows_own_in_a_batch(trained_memory, tmp_path):
-    state, _ = trained_memory
+    state, _, _ = trained_memory
     controller = JaxPPOController.of(MEMORY, state.network, state.obs_stats, "memory")
     alone = [_episode(controller, seed, steps=5) for seed in (1, 2)]
     controller.reset_batch([{}, {}], None)
@@ -270,21 +285,10 @@ def test_a_model_trained_for_another_observation_space_is_refused_naming_both(tr
         load(folder)
 
 
-def test_the_difficulty_curriculum_resets_only_to_episodes_that_can_be_won():
-    config = PPOConfig(
-        **{
-            **TINY.__dict__,
-            "env_id": "subenv/BallastOffset-v0",
-            "episodes": 12,
-            "num_envs": 128,
-            "total_timesteps": 128 * 16,
-            "curriculum": "difficulty",
-        }
-    )
-    winnable = [d.winnable for d in table_difficulties(config.env_id, config.env_kwargs, range(12))]
+def test_the_difficulty_curriculum_resets_only_to_episodes_that_can_be_won(trained_memory):
+    winnable = [d.winnable for d in table_difficulties(MEMORY.env_id, MEMORY.env_kwargs, range(12))]
     assert winnable.count(False) == 2  # (of 128 uniform resets, all winnable: (10/12)^128 = 7e-11)
-    train, env = make_train(config)
-    state, _ = jax.block_until_ready(jax.jit(train)(jax.random.key(0)))
+    state, _, env = trained_memory
     table = np.asarray(env.default_params.table.episode.params)
     drawn = np.asarray(state.env_state.episode.params)
     rows = [int(np.flatnonzero(np.all(table == row, axis=1))[0]) for row in drawn]
