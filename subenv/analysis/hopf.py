@@ -170,6 +170,8 @@ def _field(
     if gain is None:
 
         def open_loop(x: FloatArray) -> FloatArray:
+            if x.ndim == 1:  # (one state: solve_ivp's calls, a million a report)
+                return derivatives((x[0], x[1], x[2], 0.0), speed_mps, 0.0, 0.0)[:3]
             state = np.concatenate([x, np.zeros((*x.shape[:-1], 1))], axis=-1)
             return derivatives(state, speed_mps, 0.0, 0.0)[..., :3]
 
