@@ -109,7 +109,7 @@ def test_wheel_installs_into_a_clean_venv_and_evaluates(tmp_path: Path):
     env_dir = tmp_path / "venv"
     venv.EnvBuilder(with_pip=True).create(env_dir)
     python, subenv = env_dir / "bin" / "python", env_dir / "bin" / "subenv"
-    _run(python, "-m", "pip", "install", "-q", "--no-compile", wheel, cwd=tmp_path)  # no extras
+    _run(python, "-m", "pip", "install", "-q", wheel, cwd=tmp_path)  # no extras (compiled, as a user gets it)
     code = (
         "import gymnasium as gym, subenv, pathlib\n"
         "assert 'site-packages' in pathlib.Path(subenv.__file__).as_posix()\n"
