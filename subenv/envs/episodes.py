@@ -415,8 +415,8 @@ def _without_critical_speed(config: DivePlaneConfig, loading: Loading) -> str:
     variant = config.vehicle.variant(**one)
     try:
         critical_speed(variant, config.alpha)
-    except ValueError as error:
-        return f"this episode's loading (z_GB={variant.z_GB_m!r} m, alpha={config.alpha!r}): {error}"
+    except ValueError as error:  # (it names the loading's z_GB and restoring moment, or the allocation)
+        return f"this episode's loading: {error}"
     return f"this episode's loading (z_GB={variant.z_GB_m!r} m, alpha={config.alpha!r})"
 
 
