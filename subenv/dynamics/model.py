@@ -399,12 +399,12 @@ def _one_state(
 ) -> FloatArray:
     """:func:`derivatives` of one state (4 numbers) with the scalar ``inputs`` (speed, stern, bow, force,
     moment) and one packed parameter set ``prm`` (shape (P,), read-only): :func:`rhs_point` called on
-    floats, without the arrays the batched path makes (the analysis's solvers call this a million times
-    a report)."""
+    floats (its own compiled entry point, numba's for Python callers), without the arrays the batched path
+    makes (the analysis's solvers call this a million times a report)."""
     pitch, heave, rate, depth = state
     speed, stern, bow, force, moment = inputs
     return np.array(
-        _derivatives_one(
+        rhs_point(
             float(pitch),
             float(heave),
             float(rate),
@@ -443,26 +443,6 @@ def derivatives_with(params: ModelParams) -> Callable[..., FloatArray]:
         return derivatives(state, speed, stern, bow, params, force, moment)
 
     return rhs
-
-
-@kernel
-def _derivatives_one(
-    pitch: float,
-    heave: float,
-    rate: float,
-    depth: float,
-    u: float,
-    stern: float,
-    bow: float,
-    force: float,
-    moment: float,
-    prm: FloatArray,
-    hull: FloatArray,
-) -> tuple[float, float, float, float]:
-    d_pitch, d_heave, d_rate, d_depth = rhs_point(
-        pitch, heave, rate, depth, u, stern, bow, force, moment, prm, hull
-    )
-    return d_pitch, d_heave, d_rate, d_depth
 
 
 @kernel
