@@ -163,8 +163,8 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
                 f"{file} uses the session fixtures {sorted(names)}, each computed in its own group of files "
                 "(tests/conftest.py): move the tests that use one of them to another file"
             )
-        item.add_marker(pytest.mark.xdist_group(min(names) if names else file))
-        groups[item.nodeid] = min(names) if names else file
+        groups[item.nodeid] = group = min(names) if names else file
+        item.add_marker(pytest.mark.xdist_group(group))
     rank = {group: k for k, group in enumerate(LONGEST_FIRST)}
     items.sort(key=lambda item: rank.get(groups[item.nodeid], len(rank)))  # (stable: the rest as collected)
     if config.getoption("--run-slow"):
