@@ -53,6 +53,7 @@ from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
 
 import subenv  # registers the environments
 from subenv.dynamics import integrate as ig
+from subenv.dynamics.waves import WAVE_FIELDS
 
 SUBENV_IDS = ("subenv/Nominal-v0", "subenv/DivePlane-v0")
 VECTOR_SIZES = (1, 64, 1024, 4096)
@@ -61,35 +62,25 @@ RESET_BATCHES = (1, 64)
 ROOT = Path(__file__).resolve().parents[1]
 
 
-@numba.njit
+@functools.cache
+def _inputs_of_the_periods(n: int) -> tuple[Any, ...]:
+    zeros = np.zeros(n)
+    # t0, dt, speed0, its slope, stern, bow, force (per state), then after prm and hull: substeps, distance,
+    # and no sea
+    return (zeros, ig.CONTROL_PERIOD_S, np.ones(n), zeros, np.full(n, 0.05), zeros, zeros), (
+        ig.SUBSTEPS,
+        zeros,
+        np.zeros((1, WAVE_FIELDS, 0)),
+    )
+
+
 def control_periods_in_blocks(x: np.ndarray, prm: np.ndarray, hull: np.ndarray, out: np.ndarray) -> None:
     """One control period (0.5 s, speed 1 m/s, stern planes 0.05 rad) of the states ``x`` (rows) with
-    the loadings ``prm`` into ``out``: the environments' block integrator, 64 states at a time, the
-    inputs filled as the transition fills them (also ``benchmarks/jax_dynamics.py``'s reference)."""
-    L = ig.LANES
-    block = np.empty(ig.LANE_ROWS * L)
-    for b in range(0, x.shape[0], L):
-        m = min(L, x.shape[0] - b)
-        for j in range(m):
-            ig.set_lane(
-                block,
-                j,
-                x[b + j, 0],
-                x[b + j, 1],
-                x[b + j, 2],
-                x[b + j, 3],
-                0.0,
-                1.0,
-                0.0,
-                0.05,
-                0.0,
-                0.0,
-                prm[b + j],
-            )
-        ig.control_period_lanes(block, m, ig.CONTROL_PERIOD_S, ig.SUBSTEPS, hull, ig.NO_WAVES)
-        for j in range(m):
-            for r in range(4):
-                out[b + j, r] = block[(ig.LANE_PITCH + r) * L + j]
+    the loadings ``prm`` into ``out``: the environments' block integrator, 64 states at a time
+    (:func:`subenv.dynamics.integrate.control_period_rows`; also ``benchmarks/jax_dynamics.py``'s
+    reference)."""
+    before, after = _inputs_of_the_periods(x.shape[0])
+    ig.control_period_rows(x, *before, prm, hull, *after, out)
 
 
 # --- timing ----------------------------------------------------------------------------------

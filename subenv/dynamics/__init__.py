@@ -3,14 +3,15 @@
 For users: :func:`derivatives` (d/dt of the state for any batch of states, inputs and loadings;
 :func:`derivatives_with` the same with the loading fixed, for a solver's one-state calls),
 :func:`model_params` (a vehicle reduced to the model's numbers; :func:`stack_params` for a batch of
-loadings), :func:`rk4` (the reference integrator), :func:`dual_plane_angles` (eq. 2.58) and
+loadings), :func:`rk4` (the reference integrator), :func:`control_period` (the environments' compiled
+integrator over one control period, for any batch of states), :func:`dual_plane_angles` (eq. 2.58) and
 :func:`crossflow_integrals` (the hull's cross-flow drag). The compiled kernels the environments run
 (:mod:`subenv.dynamics.model`, :mod:`~subenv.dynamics.hull`, :mod:`~subenv.dynamics.integrate`) are
 in the submodules.
 """
 
 from subenv.dynamics.hull import HullTable, crossflow_integrals
-from subenv.dynamics.integrate import CONTROL_PERIOD_S, SUBSTEPS, rk4
+from subenv.dynamics.integrate import CONTROL_PERIOD_S, SUBSTEPS, control_period, rk4
 from subenv.dynamics.model import (
     ModelParams,
     derivatives,
@@ -25,6 +26,7 @@ __all__ = [
     "SUBSTEPS",
     "HullTable",
     "ModelParams",
+    "control_period",
     "crossflow_integrals",
     "derivatives",
     "derivatives_with",

@@ -6,7 +6,9 @@ accuracy tests in ``tests/dynamics/test_integrator.py``, which compare against
 ``scipy.integrate.solve_ivp`` at rtol 1e-10 over 600 s trajectories.
 
 :func:`rk4` integrates any batched right-hand side ``f(t, x)``: with
-:func:`subenv.dynamics.derivatives` it is the NumPy reference. :func:`control_period_lanes` is the
+:func:`subenv.dynamics.derivatives` it is the NumPy reference. :func:`control_period` runs the
+environments' own integrator over any batch of states (compiled: :func:`control_period_rows`),
+the twin of :func:`subenv.jax.control_period`. :func:`control_period_lanes` is the
 same scheme, compiled, over one control period of :func:`subenv.dynamics.model.rhs_point` for a block of
 up to :data:`LANES` states, one per column, so that the compiler turns each stage into SIMD code
 over the block; the environments integrate every step with it, one sub-environment or many. It
@@ -22,8 +24,8 @@ from typing import Final
 
 import numpy as np
 
-from subenv._typing import FloatArray
-from subenv.dynamics._jit import inline_kernel, kernel, minimum
+from subenv._typing import ArrayLike, FloatArray
+from subenv.dynamics._jit import inline_kernel, kernel, minimum, rows
 from subenv.dynamics.free_surface import suction_point
 from subenv.dynamics.hull import (
     SOURCE_ROW,
@@ -32,7 +34,7 @@ from subenv.dynamics.hull import (
     hull_segment,
     moments_on_segment,
 )
-from subenv.dynamics.model import PARAM_FIELDS, rhs_given_drag
+from subenv.dynamics.model import PARAM_FIELDS, ModelParams, pack_params, rhs_given_drag
 from subenv.dynamics.waves import MAX_WAVES, WAVE_FIELDS, wave_force_point
 
 __all__ = [
@@ -41,7 +43,9 @@ __all__ = [
     "LANE_ROWS",
     "NO_WAVES",
     "SUBSTEPS",
+    "control_period",
     "control_period_lanes",
+    "control_period_rows",
     "distance_travelled",
     "rk4",
     "rk4_step",
@@ -317,3 +321,154 @@ def control_period_lanes(
                     + 2.0 * (block[(k2 + r) * L + j] + block[(k3 + r) * L + j])
                     + block[(k4 + r) * L + j]
                 )
+
+
+@kernel
+def control_period_rows(
+    x: FloatArray,
+    t0: FloatArray,
+    dt: float,
+    speed0: FloatArray,
+    speed_slope: FloatArray,
+    stern: FloatArray,
+    bow: FloatArray,
+    force: FloatArray,
+    prm: FloatArray,
+    hull: FloatArray,
+    substeps: int,
+    distance0: FloatArray,
+    waves: FloatArray,
+    out: FloatArray,
+) -> None:
+    """:func:`control_period_lanes` over the rows of ``x`` (shape (N, 4)), :data:`LANES` rows at a time,
+    into ``out`` (N, 4), each row with its own inputs (1-D arrays of N; ``prm`` (N, P)); ``waves`` (N,
+    WAVE_FIELDS, W) is each row's sea and every column of it is summed, or (1, WAVE_FIELDS, W) with W
+    0 for none. The columns of a block that no row fills hold NaN: they never reach a row's result."""
+    lanes = LANES
+    block = np.full(LANE_ROWS * lanes, np.nan)
+    n_waves = waves.shape[2]
+    seas = np.empty((min(lanes, waves.shape[0]), waves.shape[1], n_waves))  # (row j: lane j's sea)
+    seas[0] = waves[0]  # (one sea for all: its only row)
+    for b in range(0, x.shape[0], lanes):
+        m = min(lanes, x.shape[0] - b)
+        for j in range(m):
+            i = b + j
+            set_lane(
+                block,
+                j,
+                x[i, 0],
+                x[i, 1],
+                x[i, 2],
+                x[i, 3],
+                t0[i],
+                speed0[i],
+                speed_slope[i],
+                stern[i],
+                bow[i],
+                force[i],
+                prm[i],
+                distance0[i],
+                n_waves,
+            )
+            if waves.shape[0] > 1:
+                seas[j] = waves[i]
+        control_period_lanes(block, m, dt, substeps, hull, seas)
+        for j in range(m):
+            for r in range(4):
+                out[b + j, r] = block[(LANE_PITCH + r) * lanes + j]
+
+
+def control_period(
+    state: ArrayLike,
+    t0: ArrayLike,
+    dt: float,
+    speed0: ArrayLike,
+    speed_slope: ArrayLike,
+    stern: ArrayLike,
+    bow: ArrayLike,
+    params: ModelParams,
+    force: ArrayLike = 0.0,
+    substeps: int = SUBSTEPS,
+    waves: ArrayLike | None = None,
+    distance0: ArrayLike = 0.0,
+) -> FloatArray:
+    """The states after one control period ``dt`` [s] from time ``t0`` [s], integrated as the
+    environments integrate them: ``substeps`` RK4 steps of :func:`~subenv.dynamics.model.rhs_point`,
+    compiled, with each state's bits those of :func:`rk4` over :func:`~subenv.dynamics.derivatives`.
+
+    The twin of :func:`subenv.jax.control_period`, for a batch of states on the CPU: a rollout of the
+    model as the environments step it, e.g. a controller's prediction.
+
+    Parameters
+    ----------
+    state : array_like, shape (..., 4)
+        Pitch [rad], heave velocity [m/s], pitch rate [rad/s], depth [m].
+    t0 : array_like
+        The period's start [s] (a sea's phase depends on it).
+    dt : float
+        The period [s] (the environments': :data:`CONTROL_PERIOD_S`).
+    speed0, speed_slope : array_like
+        The forward speed ``speed0 + speed_slope (t - t0)`` [m/s] over the period.
+    stern, bow : array_like
+        Plane angles [rad], held over the period (within the plane limits: nothing here clips them).
+    params : ModelParams
+        From :func:`~subenv.dynamics.model_params` (or :func:`~subenv.dynamics.stack_params` for a batch of
+        loadings).
+    force : array_like, optional
+        External heave force [N, down positive], held over the period.
+    substeps : int, optional
+        RK4 steps per period (the environments': :data:`SUBSTEPS`).
+    waves : array_like, shape (..., WAVE_FIELDS, W), optional
+        Each state's sea (:meth:`subenv.dynamics.waves.SeaState.components`, every one of its W columns
+        summed; zeros for a calm one), or one sea for all; its force acts at every stage, at the stage's
+        time, depth and distance travelled (:func:`distance_travelled` from ``distance0`` [m] at
+        ``t0``). None: calm.
+    distance0 : array_like, optional
+        Distance travelled at ``t0`` [m] (a sea's phase).
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        The states at ``t0 + dt``; the batch shape is that of all the arguments broadcast together.
+    """
+    if not (isinstance(substeps, (int, np.integer)) and not isinstance(substeps, bool) and substeps >= 1):
+        raise ValueError(f"substeps={substeps!r} is invalid: must be an integer >= 1")
+    if not (np.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt={dt!r} is invalid: must be a finite number of seconds > 0")
+    x = np.asarray(state, dtype=float)
+    if x.shape[-1:] != (4,):
+        raise ValueError(
+            f"state has shape {x.shape}: must have shape (..., 4) (pitch, heave, pitch rate, depth)"
+        )
+    prm = pack_params(params)
+    sea = np.zeros((1, WAVE_FIELDS, 0)) if waves is None else np.asarray(waves, dtype=float)
+    if sea.ndim < 2 or sea.shape[-2] != WAVE_FIELDS or sea.shape[-1] > MAX_WAVES:
+        raise ValueError(
+            f"waves has shape {sea.shape}: must have shape (..., {WAVE_FIELDS}, W) with W <= {MAX_WAVES} "
+            "(subenv.dynamics.waves.SeaState.components)"
+        )
+    inputs = (t0, speed0, speed_slope, stern, bow, force, distance0)
+    shape = np.broadcast_shapes(x.shape[:-1], prm.shape[:-1], sea.shape[:-2], *(np.shape(a) for a in inputs))
+    n = int(np.prod(shape))
+    start, u0, slope, delta_s, delta_b, Z_ext, distance = (rows(a, shape) for a in inputs)
+    fields = sea.shape[-2:]
+    one_sea = sea.ndim == 2  # (for every state)
+    seas = rows(sea, fields if one_sea else (*shape, *fields)).reshape(1 if one_sea else n, *fields)
+    out = np.empty((n, 4))
+    control_period_rows(
+        rows(x, (*shape, 4)).reshape(n, 4),
+        start,
+        float(dt),
+        u0,
+        slope,
+        delta_s,
+        delta_b,
+        Z_ext,
+        rows(prm, (*shape, prm.shape[-1])).reshape(n, prm.shape[-1]),
+        params.hull.packed,
+        int(substeps),
+        distance,
+        seas,
+        out,
+    )
+    return out.reshape(*shape, 4)

@@ -19,7 +19,6 @@ from subenv.dynamics.free_surface import (
     suction,
 )
 from subenv.dynamics.hull import slender_points
-from subenv.dynamics.model import pack_params as pack
 from subenv.dynamics.waves import SeaState, encounter_factor, hull_wave_integrals, wave_force_point
 from subenv.scenarios.presets import PERISCOPE_SEA
 from subenv.vehicles import load_vehicle
@@ -354,19 +353,6 @@ def test_the_expected_mean_suction_falls_as_the_spectrum_weighted_exp_minus_2_k_
     assert math.exp(-2 * high) < ratio < math.exp(-2 * low)
 
 
-@numba.njit(error_model="numpy")
-def _one_period_in_a_block(x, t0, u, plane, prm, hull, waves, n_waves, distance):
-    block = np.zeros(integrate.LANE_ROWS * integrate.LANES)
-    integrate.set_lane(block, 0, x[0], x[1], x[2], x[3], t0, u, 0.0, plane, 0.0, 0.0, prm, distance, n_waves)
-    integrate.control_period_lanes(block, 1, integrate.CONTROL_PERIOD_S, integrate.SUBSTEPS, hull, waves)
-    return np.array([block[(integrate.LANE_PITCH + r) * integrate.LANES] for r in range(4)])
-
-
-@numba.njit
-def _wave_at(t, distance, depth, speed, waves, n):
-    return wave_force_point(t, distance, depth, speed, waves, n)
-
-
 def test_the_block_integrator_in_a_sea_is_rk4_over_the_one_right_hand_side_with_the_waves_as_inputs():
     # The environments' integrator evaluates the sea at every stage, at the stage's time, depth and
     # distance travelled; the NumPy reference passes the same force and moment to derivatives.
@@ -383,23 +369,12 @@ def test_the_block_integrator_in_a_sea_is_rk4_over_the_one_right_hand_side_with_
     x0, t0, u, plane, distance = np.array([0.02, 0.01, -0.003, 1.1]), 37.5, 0.6, 0.1, 22.5
 
     def f(t, state):
-        force, moment = _wave_at(t, distance + u * (t - t0), state[3], u, waves, SEA.waves)
+        force, moment = wave_force_point(t, distance + u * (t - t0), state[3], u, waves, SEA.waves)
         return derivatives(state, u, plane, 0.0, params, force, moment)
 
     reference = rk4(f, t0, x0, integrate.CONTROL_PERIOD_S, integrate.SUBSTEPS)
-    block = _one_period_in_a_block(
-        x0,
-        t0,
-        u,
-        plane,
-        np.ascontiguousarray(pack(params)),
-        params.hull.packed,
-        waves[None],
-        SEA.waves,
-        distance,
-    )
+    period = (x0, t0, integrate.CONTROL_PERIOD_S, u, 0.0, plane, 0.0, params)
+    block = integrate.control_period(*period, waves=waves[:, : SEA.waves], distance0=distance)
     np.testing.assert_allclose(block, reference, rtol=1e-12, atol=1e-15)
-    calm = _one_period_in_a_block(
-        x0, t0, u, plane, np.ascontiguousarray(pack(params)), params.hull.packed, waves[None], 0, distance
-    )
+    calm = integrate.control_period(*period, distance0=distance)
     assert np.abs(block - calm).max() > 1e-6  # and the sea moved the boat

@@ -8,15 +8,23 @@ integrator has reached (closed loop). The worst errors are printed in the "measu
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 from scipy.signal import place_poles
 
 from subenv.analysis import linear_model
-from subenv.dynamics import CONTROL_PERIOD_S, SUBSTEPS, ModelParams, derivatives, integrate, model_params, rk4
+from subenv.dynamics import (
+    CONTROL_PERIOD_S,
+    SUBSTEPS,
+    ModelParams,
+    control_period,
+    derivatives,
+    model_params,
+    rk4,
+)
 from subenv.dynamics.model import PARAM_FIELDS, pack_params
+from subenv.dynamics.waves import WAVE_FIELDS
 from subenv.units import fps_to_mps
 
 DURATION_S = 600.0
@@ -112,35 +120,6 @@ def test_rk4_matches_solve_ivp_through_a_deceleration(suboff, report):
 
 
 # --- the block integrator ----------------------------------------------------------------------
-@numba.njit(error_model="numpy")
-def _periods_in_blocks(x, t0, u0, slope, stern, bow, force, prm, hull, dt, substeps):
-    """control_period_lanes over rows of x, LANES at a time (as the environments' kernel fills a block)."""
-    L = integrate.LANES
-    block = np.full(integrate.LANE_ROWS * L, np.nan)  # (unused columns stay nan: they must not matter)
-    for b in range(0, x.shape[0], L):
-        n = min(L, x.shape[0] - b)
-        for j in range(n):
-            integrate.set_lane(
-                block,
-                j,
-                x[b + j, 0],
-                x[b + j, 1],
-                x[b + j, 2],
-                x[b + j, 3],
-                t0[b + j],
-                u0[b + j],
-                slope[b + j],
-                stern[b + j],
-                bow[b + j],
-                force[b + j],
-                prm[b + j],
-            )
-        integrate.control_period_lanes(block, n, dt, substeps, hull, integrate.NO_WAVES)
-        for j in range(n):
-            for r in range(4):
-                x[b + j, r] = block[(integrate.LANE_PITCH + r) * L + j]
-
-
 def _periods_by_the_reference(x, t0, u0, slope, stern, bow, force, prm, hull_table, dt, substeps):
     """rk4 over derivatives (the NumPy reference), one state at a time, each with its own speed ramp
     u0 + slope (t - t0), planes, force and parameters."""
@@ -186,10 +165,53 @@ def test_block_integrator_gives_the_bits_of_the_reference(suboff, n):
     surface = PARAM_FIELDS.index("rho_suction")
     prm[:, surface] = np.where(rng.random(n) < 0.5, 0.0, rng.uniform(500.0, 1500.0, n))
     x[::3, 3] = rng.uniform(0.3, 2.0, x[::3].shape[0])
-    args = (t0, u0, slope, stern, bow, force, prm)
-    one, block = x.copy(), x.copy()
+    one = x.copy()
     with np.errstate(all="ignore"):
-        _periods_by_the_reference(one, *args, params.hull, CONTROL_PERIOD_S, SUBSTEPS)
-    _periods_in_blocks(block, *args, hull, CONTROL_PERIOD_S, SUBSTEPS)
+        _periods_by_the_reference(
+            one, t0, u0, slope, stern, bow, force, prm, params.hull, CONTROL_PERIOD_S, SUBSTEPS
+        )
+    loadings = ModelParams(*prm.T, hull=params.hull)  # (a row each: stack_params' form)
+    block = control_period(x, t0, CONTROL_PERIOD_S, u0, slope, stern, bow, loadings, force, SUBSTEPS)
     np.testing.assert_array_equal(block, one)  # bit for bit (NaN where NaN)
     assert np.isfinite(one[: min(n, 3)]).all() and not np.array_equal(one, x)  # and the states moved
+
+
+def test_control_period_broadcasts_its_arguments_and_gives_each_state_the_references_bits(suboff):
+    params = model_params(suboff)
+    x = np.array([0.01, 0.02, -0.003, 10.0])
+    speeds, sterns = np.array([[1.0], [0.6]]), np.array([0.05, -0.1, 0.0])
+    got = control_period(x, 3.0, CONTROL_PERIOD_S, speeds, 0.01, sterns, 0.02, params, force=5.0)
+    assert got.shape == (2, 3, 4)  # (the arguments' shapes broadcast, then the state's 4)
+    for i, j in np.ndindex(2, 3):
+
+        def f(t, state, i=i, j=j):
+            return derivatives(state, speeds[i, 0] + 0.01 * (t - 3.0), sterns[j], 0.02, params, force=5.0)
+
+        np.testing.assert_array_equal(got[i, j], rk4(f, 3.0, x, CONTROL_PERIOD_S, SUBSTEPS))
+    assert not np.array_equal(got[0, 0], got[1, 0]) and not np.array_equal(got[0, 0], got[0, 1])
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"state": np.zeros(3)}, r"state has shape \(3,\): must have shape \(\.\.\., 4\)"),
+        ({"dt": 0.0}, r"dt=0\.0 is invalid: must be a finite number of seconds > 0"),
+        ({"dt": np.nan}, r"dt=nan is invalid"),
+        ({"substeps": 0}, r"substeps=0 is invalid: must be an integer >= 1"),
+        ({"substeps": 1.5}, r"substeps=1\.5 is invalid"),
+        ({"waves": np.zeros((3, 4))}, rf"waves has shape \(3, 4\): must have shape \(\S+, {WAVE_FIELDS}, W"),
+    ],
+)
+def test_control_period_refuses_bad_arguments_by_name(suboff, change, message):
+    arguments = {
+        "state": np.array([0.0, 0.0, 0.0, 10.0]),
+        "t0": 0.0,
+        "dt": CONTROL_PERIOD_S,
+        "speed0": 1.0,
+        "speed_slope": 0.0,
+        "stern": 0.0,
+        "bow": 0.0,
+        "params": model_params(suboff),
+    }
+    with pytest.raises(ValueError, match=message):
+        control_period(**{**arguments, **change})

@@ -11,8 +11,7 @@ import jax.numpy as jnp
 
 import subenv
 import subenv.jax as sj
-from subenv.dynamics import derivatives, integrate, model, model_params, rk4, stack_params
-from subenv.dynamics._jit import KERNEL_SOURCES, declare_kernel_sources, kernel
+from subenv.dynamics import control_period, derivatives, integrate, model, model_params, rk4, stack_params
 from subenv.dynamics.free_surface import FreeSurface
 from subenv.dynamics.model import pack_params
 from subenv.dynamics.waves import MAX_WAVES, WAVE_FIELDS, SeaState
@@ -187,46 +186,6 @@ def test_deep_water_leaves_the_suction_out_and_gives_nan_for_a_free_surface():
         jax.jit(sj.derivatives)(*args, prm, hull, free_surface=False)  # (not static: refused by name)
 
 
-# This file's kernel inlines the dynamics': its cache is dropped when they change (subenv.dynamics._jit).
-declare_kernel_sources(__file__, ("test_dynamics.py",), inlines=(KERNEL_SOURCES,))
-
-
-@kernel  # (the package's compile options and cache, dropped when a kernel's source changes)
-def _periods_in_blocks(x, t0, speed0, slope, stern, bow, force, prm, hull, distance, n_waves, seas):
-    """One control period of every row in the environments' block integrator, with each row's sea."""
-    lanes = integrate.LANES
-    block = np.empty(integrate.LANE_ROWS * lanes)
-    waves = np.zeros((lanes, seas.shape[1], seas.shape[2]))
-    out = np.empty_like(x)
-    for b in range(0, x.shape[0], lanes):
-        m = min(lanes, x.shape[0] - b)
-        for j in range(m):
-            i = b + j
-            integrate.set_lane(
-                block,
-                j,
-                x[i, 0],
-                x[i, 1],
-                x[i, 2],
-                x[i, 3],
-                t0,
-                speed0[i],
-                slope[i],
-                stern[i],
-                bow[i],
-                force[i],
-                prm[i],
-                distance[i],
-                n_waves[i],
-            )
-            waves[j] = seas[i]
-        integrate.control_period_lanes(block, m, integrate.CONTROL_PERIOD_S, integrate.SUBSTEPS, hull, waves)
-        for j in range(m):
-            for r in range(4):
-                out[b + j, r] = block[(integrate.LANE_PITCH + r) * lanes + j]
-    return out
-
-
 def test_twenty_control_periods_in_a_sea_on_jax_are_the_environments_block_integrator():
     """Waves at every stage (each state its own sea, some calm), the suction, speed ramps: JAX's control
     period against the compiled block integrator itself."""
@@ -267,8 +226,7 @@ def test_twenty_control_periods_in_a_sea_on_jax_are_the_environments_block_integ
             for _ in range(N)
         ]
     )
-    n_waves = np.full(N, sea.waves)
-    seas[: N // 4], n_waves[: N // 4] = 0.0, 0  # calm
+    seas[: N // 4] = 0.0  # calm
     assert seas.shape[1:] == (WAVE_FIELDS, MAX_WAVES)
     slope = rng.uniform(-0.01, 0.01, N)
     prm, hull = pack_params(params), params.hull.packed
@@ -295,19 +253,18 @@ def test_twenty_control_periods_in_a_sea_on_jax_are_the_environments_block_integ
     for k in range(20):
         t0 = integrate.CONTROL_PERIOD_S * k
         speed0 = inputs["speed"] + slope * t0
-        expected = _periods_in_blocks(
+        expected = control_period(
             expected,
             t0,
+            integrate.CONTROL_PERIOD_S,
             speed0,
             slope,
             inputs["stern"],
             inputs["bow"],
+            params,
             inputs["force"],
-            prm,
-            hull,
-            distance,
-            n_waves,
-            seas,
+            waves=seas,
+            distance0=distance,
         )
         got = period(got, t0, speed0, distance)
         speed1 = speed0 + slope * integrate.CONTROL_PERIOD_S
