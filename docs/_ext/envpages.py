@@ -137,10 +137,12 @@ def _components(scenario: Scenario) -> str:
 
 def _gif_frame(frame: Any) -> Any:
     """A rendered frame at :data:`ANIMATION_SIZE` in 64 colours (Pillow's fast octree: a third of median
-    cut's time, the default, at no difference we could see on these flat-coloured frames)."""
+    cut's time, the default, at no difference we could see on these flat-coloured frames). Scaled down
+    bilinearly (Pillow's filters widen with the scale, so this one smooths too): no difference we could
+    see from Lanczos at this scale, in half its time."""
     from PIL import Image
 
-    return frame.resize(ANIMATION_SIZE, Image.Resampling.LANCZOS).quantize(
+    return frame.resize(ANIMATION_SIZE, Image.Resampling.BILINEAR).quantize(
         colors=64, method=Image.Quantize.FASTOCTREE
     )
 

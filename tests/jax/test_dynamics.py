@@ -153,12 +153,16 @@ def test_the_jax_right_hand_side_batches_and_differentiates():
     params = model_params(subenv.load_vehicle("suboff"))
     prm, hull = pack_params(params), params.hull.packed
     state = jnp.array([0.01, 0.02, 0.001, 10.0])
-    one = sj.derivatives(state, 1.0, 0.1, 0.0, prm, hull)
+    # (Each under jit: one program, where op-by-op dispatch compiles each operation's own; the functions
+    # run without jit too: test_deep_water_leaves_the_suction_out_and_gives_nan_for_a_free_surface.)
+    one = jax.jit(sj.derivatives)(state, 1.0, 0.1, 0.0, prm, hull)
     assert one.shape == (4,)
-    many = jax.vmap(lambda x: sj.derivatives(x, 1.0, 0.1, 0.0, prm, hull))(jnp.stack([state, 2 * state]))
+    many = jax.jit(jax.vmap(lambda x: sj.derivatives(x, 1.0, 0.1, 0.0, prm, hull)))(
+        jnp.stack([state, 2 * state])
+    )
     np.testing.assert_array_equal(np.asarray(many[0]), np.asarray(one))
     # d(depth rate)/d(heave) = cos(theta) (Riedel 1993 eq. 2.41), through the traced code.
-    slope = jax.grad(lambda w: sj.derivatives(state.at[1].set(w), 1.0, 0.1, 0.0, prm, hull)[3])(0.02)
+    slope = jax.jit(jax.grad(lambda w: sj.derivatives(state.at[1].set(w), 1.0, 0.1, 0.0, prm, hull)[3]))(0.02)
     assert float(slope) == pytest.approx(np.cos(0.01), rel=1e-12)
 
 
