@@ -2,6 +2,7 @@
 result, NaN, infinities and signed zeros included, compiled by numba and traced by JAX. (Subnormal
 numbers are numba's alone: XLA compares them as zeros on a CPU.)"""
 
+import functools
 import itertools
 import math
 
@@ -72,6 +73,7 @@ def test_clip_and_fabs_compiled_by_numba():
     assert _bits(_fabs(-0.0)) == _bits(0.0)
 
 
+@functools.cache  # (one jitted twin each for the whole file: the property test calls it per example)
 def _jax_twins():
     jax = pytest.importorskip("jax")  # the jax extra
     import subenv.jax as sj

@@ -32,6 +32,7 @@ EXACT_PERIODS = 100
 # still end alike, their values within:
 LATER_TOLERANCE = 1e-6
 VALUE_KEYS = tr.REPORT_KEYS[: tr.REPORT_KEYS.index("reason")]
+_STEP_KEYS = ("reason", "terminated", "truncated", "reward", *VALUE_KEYS)
 
 
 def _gym_numbers(config, seed):
@@ -69,24 +70,35 @@ def _play_both(env_id, seed, kwargs=None, steps=None):
     obs, info = env.reset(seed=seed)
     state = jax.jit(jenv.reset_to)(0, params, rng.standard_normal(tr.N_OBS) if noisy else np.zeros(tr.N_OBS))
     np.testing.assert_array_equal(np.asarray(state.obs), obs)  # the reset's observation: bit for bit
-    step = jax.jit(jenv.transition)
+    jobs = np.asarray(state.obs)
+
+    @jax.jit
+    def step(state, action, normals):
+        """The transition, its info's numbers and the observation in one array (one copy to the host a
+        step, not one per number)."""
+        state, info = jenv.transition(state, action, normals)
+        numbers = jnp.stack([jnp.asarray(info[key], float) for key in _STEP_KEYS])
+        return state, jnp.concatenate([numbers, state.obs.astype(float)])
+
     perturbation, worst, n = np.zeros(env.action_space.shape), 0.0, 0
     for n in range(1, (steps or 10**6) + 1):
         perturbation = 0.9 * perturbation + 0.1 * actions.uniform(-1.0, 1.0, perturbation.shape)
         action = np.clip(_policy(obs, np) + perturbation, -1.0, 1.0)
-        jax_action = np.clip(_policy(np.asarray(state.obs), np) + perturbation, -1.0, 1.0)
+        jax_action = np.clip(_policy(jobs, np) + perturbation, -1.0, 1.0)
         normals = np.zeros(sj.N_NORMALS)
         if std > 0:
             normals[0] = rng.standard_normal()
         obs, reward, terminated, truncated, info = env.step(action)
         if noisy and info["termination_reason"] != "diverged":
             normals[1:] = rng.standard_normal(tr.N_OBS)
-        state, jinfo = step(state, jax_action, normals)
+        state, numbers = step(state, jax_action, normals)
+        numbers = np.asarray(numbers)
+        jinfo, jobs = dict(zip(_STEP_KEYS, numbers, strict=False)), numbers[len(_STEP_KEYS) :]
         assert tr.REASONS[int(jinfo["reason"])] == info["termination_reason"], (n, info["termination_reason"])
         assert (bool(jinfo["terminated"]), bool(jinfo["truncated"])) == (terminated, truncated), n
         tolerance = TOLERANCE if n <= EXACT_PERIODS else LATER_TOLERANCE
         assert _close(jinfo["reward"], reward, tolerance=tolerance), (n, float(jinfo["reward"]), reward)
-        np.testing.assert_allclose(np.asarray(state.obs), obs, rtol=1e-6, atol=1e-6)  # (float32)
+        np.testing.assert_allclose(jobs, obs, rtol=1e-6, atol=1e-6)  # (float32)
         for key in VALUE_KEYS:
             # (the depth error, a difference of depths, is as exact as the depth)
             scale = abs(info["depth_m"]) if key == "depth_error_m" else 0.0
