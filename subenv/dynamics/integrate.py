@@ -450,6 +450,8 @@ def control_period(
     inputs = (t0, speed0, speed_slope, stern, bow, force, distance0)
     shape = np.broadcast_shapes(x.shape[:-1], prm.shape[:-1], sea.shape[:-2], *(np.shape(a) for a in inputs))
     n = int(np.prod(shape))
+    if n == 0:  # (no state: the kernel's blocks assume one)
+        return np.empty((*shape, 4))
     start, u0, slope, delta_s, delta_b, Z_ext, distance = (rows(a, shape) for a in inputs)
     fields = sea.shape[-2:]
     one_sea = sea.ndim == 2  # (for every state)

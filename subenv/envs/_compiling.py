@@ -46,7 +46,13 @@ class _CompileNotice(event.Listener):
         event.unregister("numba:compile", self)
 
     def on_start(self, compilation: event.Event) -> None:
-        """Numba starts compiling a signature: say so, once per process."""
+        """Numba starts compiling a signature: say so, once per process, unless it is one of numba's own
+        functions (its typed list's, which an environment's reset builds: numba compiles them in every
+        process, in half a second; they are not the physics, which its cache keeps)."""
+        dispatcher = (compilation.data or {}).get("dispatcher")
+        module = getattr(getattr(dispatcher, "py_func", None), "__module__", None) or ""
+        if module.split(".")[0] == "numba":
+            return
         if not self.said:
             self.said = True
             print(COMPILE_NOTICE, file=sys.stderr, flush=True)

@@ -189,6 +189,9 @@ def test_control_period_broadcasts_its_arguments_and_gives_each_state_the_refere
 
         np.testing.assert_array_equal(got[i, j], rk4(f, 3.0, x, CONTROL_PERIOD_S, SUBSTEPS))
     assert not np.array_equal(got[0, 0], got[1, 0]) and not np.array_equal(got[0, 0], got[0, 1])
+    sea = np.zeros((0, WAVE_FIELDS, 3))  # (no state, each its own sea)
+    empty = control_period(np.zeros((0, 4)), 0.0, CONTROL_PERIOD_S, 1.0, 0.0, 0.0, 0.0, params, waves=sea)
+    assert empty.shape == (0, 4)
 
 
 @pytest.mark.parametrize(

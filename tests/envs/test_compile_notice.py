@@ -10,6 +10,9 @@ import time
 from pathlib import Path
 
 import numba
+import numba.core.event
+import numba.typed
+import numpy as np
 
 from subenv.envs import _compiling as compiling
 from subenv.envs._compiling import COMPILE_NOTICE
@@ -49,6 +52,46 @@ def test_compilations_outside_a_first_call_say_nothing(capsys) -> None:
     numba.njit(lambda x: x - 1.0)(1.0)
     assert not notice.said
     assert capsys.readouterr().err == ""
+
+
+def test_numbas_own_functions_say_nothing(capsys) -> None:
+    """An environment's reset builds a numba typed list of generators, whose functions numba compiles in
+    every process (its cache does not keep them): that is not the physics compiling."""
+
+    class Count(numba.core.event.Listener):
+        compiled = 0
+
+        def on_start(self, compilation: numba.core.event.Event) -> None:
+            self.compiled += 1
+
+        def on_end(self, compilation: numba.core.event.Event) -> None:
+            pass
+
+    notice, count = compiling._CompileNotice(), Count()
+    with notice, numba.core.event.install_listener("numba:compile", count):
+        numba.typed.List([np.int16(3)])  # (a type no other test puts in a typed list: it compiles)
+    assert count.compiled > 0 and not notice.said
+    assert capsys.readouterr().err == ""
+
+
+_RESET_AND_STEP = """
+import numpy as np, gymnasium as gym, subenv
+
+env = gym.make("subenv/DivePlane-v0")
+env.reset(seed=0)
+print(env.step(np.zeros(1, dtype=np.float32))[0].shape)
+"""
+
+
+def test_a_run_of_an_environment_with_its_kernels_cached_says_nothing() -> None:
+    """Two runs of an environment: the second loads every kernel from numba's cache (the first may
+    compile them: a fresh checkout) and says nothing (it said "compiling the dynamics" on every run)."""
+    runs = [
+        subprocess.run([sys.executable, "-c", _RESET_AND_STEP], capture_output=True, text=True, timeout=600)
+        for _ in range(2)
+    ]
+    assert [run.stdout for run in runs] == ["(8,)\n"] * 2, [run.stderr[-2000:] for run in runs]
+    assert COMPILE_NOTICE not in runs[1].stderr
 
 
 _CACHED_KERNEL = """
