@@ -394,7 +394,9 @@ def control_period(
 ) -> FloatArray:
     """The states after one control period ``dt`` [s] from time ``t0`` [s], integrated as the
     environments integrate them: ``substeps`` RK4 steps of :func:`~subenv.dynamics.model.rhs_point`,
-    compiled, with each state's bits those of :func:`rk4` over :func:`~subenv.dynamics.derivatives`.
+    compiled. In calm water each state gets the bits of :func:`rk4` over
+    :func:`~subenv.dynamics.derivatives`; in a sea, within 1e-12 of it with the sea's force passed to it
+    (the suction and the sea's force are added before they enter the right-hand side).
 
     The twin of :func:`subenv.jax.control_period`, for a batch of states on the CPU: a rollout of the
     model as the environments step it, e.g. a controller's prediction.
@@ -433,7 +435,11 @@ def control_period(
     """
     if not (isinstance(substeps, (int, np.integer)) and not isinstance(substeps, bool) and substeps >= 1):
         raise ValueError(f"substeps={substeps!r} is invalid: must be an integer >= 1")
-    if not (np.isfinite(dt) and dt > 0):
+    if (
+        isinstance(dt, bool)
+        or not isinstance(dt, (int, float, np.integer, np.floating))
+        or not (np.isfinite(dt) and dt > 0)
+    ):
         raise ValueError(f"dt={dt!r} is invalid: must be a finite number of seconds > 0")
     x = np.asarray(state, dtype=float)
     if x.shape[-1:] != (4,):

@@ -200,6 +200,7 @@ def test_control_period_broadcasts_its_arguments_and_gives_each_state_the_refere
         ({"state": np.zeros(3)}, r"state has shape \(3,\): must have shape \(\.\.\., 4\)"),
         ({"dt": 0.0}, r"dt=0\.0 is invalid: must be a finite number of seconds > 0"),
         ({"dt": np.nan}, r"dt=nan is invalid"),
+        ({"dt": "0.5"}, r"dt='0\.5' is invalid"),
         ({"substeps": 0}, r"substeps=0 is invalid: must be an integer >= 1"),
         ({"substeps": 1.5}, r"substeps=1\.5 is invalid"),
         ({"waves": np.zeros((3, 4))}, rf"waves has shape \(3, 4\): must have shape \(\S+, {WAVE_FIELDS}, W"),
