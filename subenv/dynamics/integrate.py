@@ -34,7 +34,7 @@ from subenv.dynamics.hull import (
     hull_segment,
     moments_on_segment,
 )
-from subenv.dynamics.model import PARAM_FIELDS, ModelParams, pack_params, rhs_given_drag
+from subenv.dynamics.model import PARAM_FIELDS, ModelParams, pack_params, rhs_given_drag, state_array
 from subenv.dynamics.waves import MAX_WAVES, WAVE_FIELDS, wave_force_point
 
 __all__ = [
@@ -441,11 +441,7 @@ def control_period(
         or not (np.isfinite(dt) and dt > 0)
     ):
         raise ValueError(f"dt={dt!r} is invalid: must be a finite number of seconds > 0")
-    x = np.asarray(state, dtype=float)
-    if x.shape[-1:] != (4,):
-        raise ValueError(
-            f"state has shape {x.shape}: must have shape (..., 4) (pitch, heave, pitch rate, depth)"
-        )
+    x = state_array(state)
     prm = pack_params(params)
     sea = np.zeros((1, WAVE_FIELDS, 0)) if waves is None else np.asarray(waves, dtype=float)
     if sea.ndim < 2 or sea.shape[-2] != WAVE_FIELDS or sea.shape[-1] > MAX_WAVES:

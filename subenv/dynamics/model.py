@@ -36,6 +36,7 @@ __all__ = [
     "rhs_given_drag",
     "rhs_point",
     "stack_params",
+    "state_array",
 ]
 
 
@@ -314,6 +315,16 @@ def rhs_given_drag(
     )
 
 
+def state_array(state: ArrayLike) -> FloatArray:
+    """``state`` as a float array of states, shape (..., 4); ValueError naming its shape if it is not."""
+    array = np.asarray(state, dtype=float)
+    if array.shape[-1:] != (4,):
+        raise ValueError(
+            f"state has shape {array.shape}: must have shape (..., 4) (pitch, heave, pitch rate, depth)"
+        )
+    return array
+
+
 def derivatives(
     state: FloatArray,
     speed: ArrayLike,
@@ -367,11 +378,7 @@ def derivatives(
     This is :func:`rhs_point` broadcast over the batch (a compiled loop over its rows); the environments
     call :func:`rhs_point` itself.
     """
-    state = np.asarray(state, dtype=float)
-    if state.shape[-1:] != (4,):
-        raise ValueError(
-            f"state has shape {state.shape}: must have shape (..., 4) (pitch, heave, pitch rate, depth)"
-        )
+    state = state_array(state)
     prm = pack_params(params)  # (..., P): one set for all, or one per row (stack_params)
     inputs = (speed, stern, bow, force, moment)
     if state.shape == (4,) and prm.ndim == 1 and _all_scalars(inputs):
