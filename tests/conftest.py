@@ -7,6 +7,7 @@ import io
 import os
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -55,6 +56,22 @@ def _sb3_logs_in_the_sessions_folder(tmp_path_factory: pytest.TempPathFactory) -
     os.environ["SB3_LOGDIR"] = str(tmp_path_factory.mktemp("sb3"))
 
 
+@pytest.fixture
+def compiled_signatures() -> Callable[[], dict[str, int]]:
+    """A function that counts the signatures each of the transition's kernels has compiled (or loaded) in
+    this process: what a test compares before and after to show that a step compiled nothing new."""
+    from numba.core.registry import CPUDispatcher
+
+    from subenv.envs import transition
+
+    def count() -> dict[str, int]:
+        return {
+            name: len(f.signatures) for name, f in vars(transition).items() if isinstance(f, CPUDispatcher)
+        }
+
+    return count
+
+
 def pytest_configure(config: pytest.Config) -> None:
     """Register the controllers as this checkout's ``pyproject.toml`` declares them.
 
@@ -83,8 +100,10 @@ def pytest_configure(config: pytest.Config) -> None:
 # first call of each in a process compiles it, 10-20 s on a quiet core for the environments' step. Each
 # pytest-xdist worker would compile those its first tests call, both workers the same ones at once, and so
 # would a test's subprocess that starts before they are cached. So a run with workers compiles them first,
-# once, before the workers start: in two processes, one half each, for two cores; every process then loads
-# them. (tests/dynamics/test_model.py and tests/test_packaging.py compile in caches of their own, on purpose.)
+# once, before the workers start, in two processes for two cores (cold, here: the steps 28 s, the model's
+# functions 8 s); every process then loads them. A copied environment's step is the same compiled step (its
+# arrays as read-only as the original's). (tests/dynamics/test_model.py and tests/test_packaging.py compile
+# in caches of their own, on purpose.)
 _WARM_UP = (
     # The environments' step as gym.make builds them, and the vector environment's on two threads.
     """
@@ -92,14 +111,11 @@ import numpy as np, gymnasium as gym, subenv
 env = gym.make("subenv/DivePlane-v0"); env.reset(seed=0); env.step(np.zeros(1, dtype=np.float32))
 vec = gym.make_vec("subenv/Nominal-v0", num_envs=4, threads=2); vec.reset(seed=0); vec.step(np.zeros((4, 1)))
 """,
-    # The step of a copied environment (its arrays come back writable: numba compiles another signature),
-    # and the batched right-hand side and hull integrals, for one state and for rows of them.
+    # The batched right-hand side and hull integrals, for one state and for rows of them.
     """
-import copy, numpy as np, gymnasium as gym, subenv
+import numpy as np, subenv
 from subenv.dynamics import crossflow_integrals, derivatives, model_params
 from subenv.dynamics.free_surface import suction
-env = copy.deepcopy(gym.make("subenv/DivePlane-v0"))
-env.reset(seed=0); env.step(np.zeros(1, dtype=np.float32))
 params, x = model_params(subenv.load_vehicle("suboff")), np.linspace(-1.0, 1.0, 7)
 derivatives(np.zeros(4), 1.0, 0.0, 0.0, params)
 derivatives(np.stack([0.1 * x, 0.05 * x, 0.01 * x, 10 + x], axis=-1), 1.2, 0.05 * x, -0.02, params)

@@ -246,6 +246,15 @@ def rows(value: Any, shape: tuple[int, ...]) -> Any:
     return out
 
 
+def read_only(*arrays: np.ndarray) -> None:
+    """Mark ``arrays`` read-only (in place). numba types a read-only array apart from a writable one, so
+    the arrays a kernel only reads are read-only wherever they are made; and again where an object that
+    holds them is copied: pickle and ``copy.deepcopy`` give writable arrays, with which a copied
+    environment's first step would compile every kernel again for the other flag (10-20 s)."""
+    for array in arrays:
+        array.flags.writeable = False
+
+
 def _drop_stale_cache(fn: Callable[..., Any]) -> None:
     """Before ``fn``'s kernel can load from numba's cache: if its cache directory's stamp is not that
     of its package's current kernel sources, delete the directory's cached kernels of these sources

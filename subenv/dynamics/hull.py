@@ -31,7 +31,7 @@ from typing import Final
 import numpy as np
 
 from subenv._typing import FloatArray
-from subenv.dynamics._jit import clip, inline_kernel, kernel, rows, select
+from subenv.dynamics._jit import clip, inline_kernel, kernel, read_only, rows, select
 
 __all__ = [
     "SLENDER_ROW",
@@ -180,7 +180,7 @@ class HullTable:
         packed[3:SOURCE_ROW, :-1] = self.offset
         packed[3:SOURCE_ROW, -1] = self.total
         packed[SOURCE_ROW:] = source_rows(self.x, self.breadth)
-        packed.flags.writeable = False
+        read_only(packed)
         return packed
 
 

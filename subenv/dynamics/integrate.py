@@ -25,7 +25,7 @@ from typing import Final
 import numpy as np
 
 from subenv._typing import ArrayLike, FloatArray
-from subenv.dynamics._jit import inline_kernel, kernel, minimum, rows
+from subenv.dynamics._jit import inline_kernel, kernel, minimum, read_only, rows
 from subenv.dynamics.free_surface import suction_point
 from subenv.dynamics.hull import (
     SOURCE_ROW,
@@ -106,7 +106,7 @@ LANE_ROWS: Final = _SLOPES + 16
 NO_WAVES: Final = np.zeros((1, WAVE_FIELDS, MAX_WAVES))
 """The ``waves`` of :func:`control_period_lanes` for blocks whose lanes have no sea (every
 ``LANE_WAVES`` 0)."""
-NO_WAVES.flags.writeable = False
+read_only(NO_WAVES)
 _RHO_SUCTION: Final = PARAM_FIELDS.index("rho_suction")
 _SUCTION_MODEL: Final = PARAM_FIELDS.index("suction_model")
 

@@ -23,6 +23,7 @@ from gymnasium import spaces
 
 from subenv import _validation as check
 from subenv.analysis.linear import check_alpha
+from subenv.dynamics._jit import read_only
 from subenv.dynamics.integrate import CONTROL_PERIOD_S, SUBSTEPS
 from subenv.dynamics.model import model_params
 from subenv.envs import transition as tr
@@ -299,7 +300,7 @@ class DivePlaneConfig:
             obs_high=high,
             noise_std=[NOISE_STD.get(name, 0.0) for name in OBSERVATION_NAMES],
         )
-        record.flags.writeable = False
+        read_only(record)
         return record
 
 

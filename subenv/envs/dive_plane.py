@@ -11,6 +11,7 @@ import numpy as np
 from numba import typed
 
 from subenv import _validation as check
+from subenv.dynamics._jit import read_only
 from subenv.envs import transition as tr
 from subenv.envs._compiling import first_call
 from subenv.envs._interrupts import interrupts_deferred
@@ -402,6 +403,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
         self._obs_row = self._obs[0]
+        read_only(self._constants, self._hull)  # (as the original's: the same compiled step)
 
     # --- the configuration and the episode ------------------------------------------------------
     @property

@@ -22,6 +22,7 @@ from gymnasium.utils import seeding
 
 from subenv import _validation as check
 from subenv.analysis.critical import critical_speed, critical_speeds
+from subenv.dynamics._jit import read_only
 from subenv.dynamics.free_surface import NO_FREE_SURFACE, FreeSurface
 from subenv.dynamics.model import model_params, pack_params
 from subenv.dynamics.waves import MAX_WAVES, WAVE_FIELDS
@@ -109,6 +110,10 @@ class Loadings:
         # The box of a batch's loadings checked so far (_check): the least and largest of each field.
         self._checked: np.ndarray | None = None
 
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        read_only(*(loading.params for loading in self._found.values()))  # (as made: see _loading)
+
     def of(self, draw: EpisodeConfig) -> Loading:
         """The loading of an episode's draw, or of a batch's (:meth:`Scenario.sample_batch
         <subenv.scenarios.Scenario.sample_batch>`): then arrays, each element what one episode's draw
@@ -190,7 +195,7 @@ class Loadings:
         base = self.base
         fields = base.loading_fields(**key.loading())
         params = pack_params(model_params(base, free_surface, fields))
-        params.flags.writeable = False
+        read_only(params)
         ucr = critical_speeds(base, self.alpha, fields)
         z_GB = fields["z_G_m"] - base.z_B_m  # (Vehicle.z_GB_m of each loading)
         froude = np.sqrt(np.where(z_GB > 0, base.gravity_m_s2 * z_GB, math.nan))

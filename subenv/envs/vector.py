@@ -14,6 +14,7 @@ from gymnasium.vector.utils import batch_space
 from numba import typed
 
 from subenv import _validation as check
+from subenv.dynamics._jit import read_only
 from subenv.envs import transition as tr
 from subenv.envs._compiling import first_call
 from subenv.envs._interrupts import interrupts_deferred
@@ -474,6 +475,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
+        read_only(self._constants, self.config.hull)  # (as the original's: the same compiled step)
         if any(g is not None for g in self._generators):
             self._bind_generators()
 

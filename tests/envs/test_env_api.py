@@ -489,7 +489,7 @@ def test_render_human_with_a_dummy_display():
 
 @pytest.mark.parametrize("env_id", ["subenv/Nominal-v0", "subenv/DivePlane-v0"])
 @pytest.mark.parametrize("how", ["pickle", "deepcopy"])
-def test_a_copy_continues_exactly_and_apart(env_id, how):
+def test_a_copy_continues_exactly_and_apart(env_id, how, compiled_signatures):
     import copy
     import pickle
 
@@ -497,13 +497,21 @@ def test_a_copy_continues_exactly_and_apart(env_id, how):
     env.reset(seed=11)
     for _ in range(5):
         env.step(np.array([0.4], dtype=np.float32))
+    compiled = compiled_signatures()
     twin = pickle.loads(pickle.dumps(env)) if how == "pickle" else copy.deepcopy(env)
+    # The arrays the kernels only read are read-only in the copy too (pickle and deepcopy make writable
+    # ones): numba types the two apart, and the copy's first step would compile the kernels again.
+    assert not twin._constants.flags.writeable and not twin._hull.flags.writeable
+    assert [k for k, loading in twin._loadings._found.items() if loading.params.flags.writeable] == []
     rng = np.random.default_rng(0)
     for _ in range(30):
         action = rng.uniform(-1, 1, size=1).astype(np.float32)
         a, b = env.step(action), twin.step(action)
         np.testing.assert_array_equal(a[0], b[0])
         assert a[1:4] == b[1:4] and a[4] == b[4]
+    twin.reset(seed=12)
+    twin.step(np.zeros(1, dtype=np.float32))
+    assert compiled_signatures() == compiled  # (the copy ran the original's compiled step and reset)
     # Apart: stepping one leaves the other where it was.
     before = twin.state
     env.step(np.array([1.0], dtype=np.float32))

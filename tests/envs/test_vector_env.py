@@ -483,16 +483,19 @@ def test_render_rgb_array_shows_every_sub_environment():
 
 
 @pytest.mark.parametrize("scenario", ["Randomized", "Nominal"])  # episodes drawn one at a time, in a batch
-def test_vector_env_pickles_and_continues_identically(scenario):
+def test_vector_env_pickles_and_continues_identically(scenario, compiled_signatures):
     import pickle
 
     env = DivePlaneVectorEnv(num_envs=4, scenario=scenario)
     env.reset(seed=1)
     env.step(np.zeros((4, 1)))
+    compiled = compiled_signatures()
     copy = pickle.loads(pickle.dumps(env))
+    assert not copy._constants.flags.writeable and not copy.config.hull.flags.writeable  # (as the original's)
     actions = np.random.default_rng(0).uniform(-1, 1, size=(4, 1))
     assert_same(copy.step(actions), env.step(actions))
     assert copy.episodes == env.episodes and None not in env.episodes
+    assert compiled_signatures() == compiled  # (the copy ran the original's compiled step)
 
 
 def test_every_id_registers_the_vector_entry_point():
