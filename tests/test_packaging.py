@@ -107,9 +107,10 @@ def test_wheel_installs_into_a_clean_venv_and_evaluates(tmp_path: Path):
     assert "License-Expression: MIT" in metadata.splitlines()
 
     env_dir = tmp_path / "venv"
-    venv.EnvBuilder(with_pip=True).create(env_dir)
+    venv.EnvBuilder(with_pip=False).create(env_dir)  # (this pip installs into it: --python; 3 s less)
     python, subenv = env_dir / "bin" / "python", env_dir / "bin" / "subenv"
-    _run(python, "-m", "pip", "install", "-q", wheel, cwd=tmp_path)  # no extras (compiled, as a user gets it)
+    # No extras (compiled, as a user gets it).
+    _run(sys.executable, "-m", "pip", "--python", python, "install", "-q", wheel, cwd=tmp_path)
     code = (
         "import gymnasium as gym, subenv, pathlib\n"
         "assert 'site-packages' in pathlib.Path(subenv.__file__).as_posix()\n"
