@@ -72,10 +72,12 @@ BASE: Final[dict[str, Any]] = {
     "env_id": "subenv/Mixed-v0",
     "env_kwargs": {"control": "independent", "effort_weight": 1.0, "depth_scale_m": 1.0},
     "total_timesteps": 20_000_000,
+    "memory": 0,
 }
 """What every variant shares unless it says otherwise: the shipped ``ppo_jax``'s environment arguments, on
 the agents' training scenario (Mixed: every base scenario, the reversal ones twice as often, mildly
-randomised)."""
+randomised), memoryless (the ``gru`` variants add the memory; ``gru`` is the shipped agent's settings,
+:class:`~subenv_agents.jax_ppo.PPOConfig`'s defaults)."""
 
 VARIANTS: Final[dict[str, dict[str, Any]]] = {
     "mlp": {},

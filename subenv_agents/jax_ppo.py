@@ -108,12 +108,17 @@ _FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 @dataclasses.dataclass(frozen=True)
 class PPOConfig:
-    """The training's settings (PureJaxRL's names, lower case)."""
+    """The training's settings (PureJaxRL's names, lower case). The defaults are the shipped ``ppo_jax``'s
+    (``subenv_agents/models/ppo_jax/config.json``): ``python -m subenv_agents.jax_ppo --out DIR`` trains
+    it again."""
 
-    env_id: str = "subenv/SpeedTransient-v0"
-    """The registered id trained on."""
-    env_kwargs: Mapping[str, Any] = dataclasses.field(default_factory=dict)
-    """:class:`~subenv.envs.DivePlaneEnv`'s arguments (``control``, ``alpha``, reward weights, ...)."""
+    env_id: str = "subenv/Mixed-v0"
+    """The registered id trained on (Mixed: every base scenario, the reversal ones twice as often)."""
+    env_kwargs: Mapping[str, Any] = dataclasses.field(
+        default_factory=lambda: {"control": "independent", "effort_weight": 1.0, "depth_scale_m": 1.0}
+    )
+    """:class:`~subenv.envs.DivePlaneEnv`'s arguments (``control``, ``alpha``, reward weights, ...); by
+    default both plane pairs, independently, with the shipped agent's reward weights."""
     total_timesteps: int = 20_000_000
     num_envs: int = 1024
     num_steps: int = 64
@@ -130,7 +135,7 @@ class PPOConfig:
     max_grad_norm: float = 0.5
     hidden: tuple[int, ...] = (64, 64)
     """Widths of the actor's and the critic's hidden layers."""
-    memory: int = 0
+    memory: int = 64
     """Width of the policy's recurrent memory (a GRU the actor and the critic share, PureJaxRL's
     ``ppo_rnn``); 0: a memoryless policy of the observation."""
     depth_integral_s: float = 0.0

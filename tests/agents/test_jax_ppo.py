@@ -49,6 +49,7 @@ TINY = PPOConfig(
     hidden=(16, 16),
     episodes=8,
     env_kwargs={"control": "independent"},
+    memory=0,
 )
 
 
@@ -154,6 +155,13 @@ def test_the_shipped_model_is_a_registered_controller_that_evaluate_runs():
     assert controller.name == "ppo_jax"
     results = evaluate([controller], ["Nominal"], episodes=2, progress=False)
     assert len(results) == 2 and all(r.controller == "ppo_jax" for r in results)
+
+
+def test_the_defaults_are_the_shipped_models_settings():
+    """``python -m subenv_agents.jax_ppo --out DIR`` trains the shipped agent's settings (its command
+    names them only because they were not yet the defaults when it was trained)."""
+    shipped, _, _ = jax_ppo.load(jax_ppo.shipped_folder())
+    assert PPOConfig() == shipped
 
 
 def test_the_shipped_models_card_is_its_record_and_its_numbers_reproduce():
