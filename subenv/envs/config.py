@@ -266,8 +266,14 @@ class DivePlaneConfig:
 
     @cached_property
     def hull(self) -> np.ndarray:
-        """The vehicle's hull table as the kernels take it (:attr:`subenv.dynamics.HullTable.packed`)."""
+        """The vehicle's hull table as the kernels take it (:attr:`subenv.dynamics.HullTable.packed`),
+        read-only."""
         return model_params(self.vehicle).hull.packed
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)  # (what pickle and deepcopy do without this method)
+        if "hull" in state:  # (computed before the copy: read-only again, as the kernels were compiled)
+            read_only(state["hull"])
 
     def constants(self, max_episode_steps: int | None = None) -> np.ndarray:
         """The transition's constants: one read-only record of

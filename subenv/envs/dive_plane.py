@@ -403,7 +403,7 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
         self._obs_row = self._obs[0]
-        read_only(self._constants, self._hull)  # (as the original's: the same compiled step)
+        read_only(self._constants)  # (as the original's: the same compiled step; the hull is the config's)
 
     # --- the configuration and the episode ------------------------------------------------------
     @property

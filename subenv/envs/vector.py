@@ -475,7 +475,7 @@ class DivePlaneVectorEnv(VectorEnv[np.ndarray, np.ndarray, np.ndarray]):
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
-        read_only(self._constants, self.config.hull)  # (as the original's: the same compiled step)
+        read_only(self._constants)  # (as the original's: the same compiled step; the hull is the config's)
         if any(g is not None for g in self._generators):
             self._bind_generators()
 

@@ -101,3 +101,17 @@ def test_a_record_is_filled_with_every_field_and_no_other() -> None:
         _record(dtype, a=1.5)
     with pytest.raises(ValueError, match=r"missing \[\], unknown \['c'\]"):
         _record(dtype, a=1.5, b=2, c=3)
+
+
+@pytest.mark.parametrize("how", ["pickle", "deepcopy"])
+def test_a_copied_configuration_is_equal_and_its_hull_read_only_as_made(how: str) -> None:
+    """The kernels take the hull table read-only; pickle and deepcopy give writable arrays, for which an
+    environment made from the copy would compile its step again."""
+    import copy
+    import pickle
+
+    config = DivePlaneConfig(scenario="Nominal")
+    assert not config.hull.flags.writeable
+    twin = pickle.loads(pickle.dumps(config)) if how == "pickle" else copy.deepcopy(config)
+    assert twin == config and not twin.hull.flags.writeable
+    np.testing.assert_array_equal(twin.hull, config.hull)
