@@ -242,7 +242,7 @@ def rows(value: Any, shape: tuple[int, ...]) -> Any:
     out = np.ascontiguousarray(array).reshape(-1)
     if out.flags.writeable:
         out = out.view()
-        out.flags.writeable = False
+        read_only(out)
     return out
 
 

@@ -24,6 +24,7 @@ from typing import Final
 
 import numpy as np
 
+from subenv import _validation as check
 from subenv._typing import ArrayLike, FloatArray
 from subenv.dynamics._jit import inline_kernel, kernel, minimum, read_only, rows
 from subenv.dynamics.free_surface import suction_point
@@ -433,14 +434,8 @@ def control_period(
     ndarray, shape (..., 4)
         The states at ``t0 + dt``; the batch shape is that of all the arguments broadcast together.
     """
-    if not (isinstance(substeps, (int, np.integer)) and not isinstance(substeps, bool) and substeps >= 1):
-        raise ValueError(f"substeps={substeps!r} is invalid: must be an integer >= 1")
-    if (
-        isinstance(dt, bool)
-        or not isinstance(dt, (int, float, np.integer, np.floating))
-        or not (np.isfinite(dt) and dt > 0)
-    ):
-        raise ValueError(f"dt={dt!r} is invalid: must be a finite number of seconds > 0")
+    check.require("substeps", substeps, check.is_integer(substeps) and substeps >= 1, "an integer >= 1")
+    check.require("dt", dt, check.is_finite(dt) and dt > 0, "a finite number of seconds > 0")
     x = state_array(state)
     prm = pack_params(params)
     sea = np.zeros((1, WAVE_FIELDS, 0)) if waves is None else np.asarray(waves, dtype=float)
