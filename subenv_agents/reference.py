@@ -1,32 +1,41 @@
-r"""Multi-seed reference results: PPO, SAC and TD3 trained with several seeds as Ray Tune trials, their
-final policies evaluated on the default suite, and summarised with rliable's statistics.
+r"""Multi-seed reference results: PPO, SAC and TD3 (Stable-Baselines3) and the JAX PPO trained with several
+seeds as Ray Tune trials, their final policies evaluated on the default suite, and summarised with rliable's
+statistics and the benchmark-v1 score.
 
 ::
 
     python -m subenv_agents.reference                       # this machine's budgets (docs/reference/)
-    python -m subenv_agents.reference --seeds 10 --timesteps ppo=7000000,sac=600000,td3=300000 \
+    python -m subenv_agents.reference --seeds 10 \
+        --timesteps ppo=7000000,sac=600000,td3=300000,ppo_jax=15000000 \
         --address auto                                      # a cluster: the configs' own budgets
 
-Each trial is :func:`subenv_agents.train.train` of one algorithm's hyperparameter file (its defaults,
+Each SB3 trial is :func:`subenv_agents.train.train` of one algorithm's hyperparameter file (its defaults,
 on ``subenv/Mixed-v0``) with one seed, validated :data:`CURVE_POINTS` times while it trains (the
-learning curve: :class:`~subenv_agents.selection.SelectionCallback`, on validation seeds), then its
-**final** policy (not the selected one: no choice made on its results) is evaluated on the default
-suite's episodes, the same as the leaderboard's. A trial's score on a scenario is its success rate over
-the winnable episodes (the leaderboard's ranking); the classical baselines and the shipped agents
+learning curve: :class:`~subenv_agents.selection.SelectionCallback`, on validation seeds). A ``ppo_jax``
+trial is :func:`subenv_agents.jax_ppo.train_model` of :class:`~subenv_agents.jax_ppo.PPOConfig`'s
+defaults (the shipped ``ppo_jax``'s settings: a GRU policy trained on ``subenv/Mixed-v0``) with one seed;
+it has no learning curve here (its training's own is in ``train.json``, and ``benchmarks/jax_ppo.py``
+plots it). Then each trial's **final** policy (not a selected one: no choice made on its results) is
+evaluated on the default suite's episodes, the same as the leaderboard's. A trial's success on a scenario
+is its success rate over the winnable episodes; its score is the leaderboard's, the benchmark-v1 score
+pooled over the suite (:mod:`subenv.evaluation.score`). The classical baselines and the shipped agents
 (labelled: each is one run, selected) are evaluated on the same episodes.
 
 Statistics follow Agarwal et al. (2021), "Deep reinforcement learning at the edge of the statistical
 precipice" (NeurIPS), with their library rliable: the interquartile mean (IQM) and mean over runs x
 scenarios with 95% stratified bootstrap confidence intervals, each scenario's mean over seeds with a
 bootstrap interval, performance profiles (the fraction of runs x scenarios above each success
-rate), and learning curves as the mean over seeds with a 95% bootstrap band.
+rate), and learning curves as the mean over seeds with a 95% bootstrap band. The score of several
+seeds is their scores' mean with a 95% bootstrap interval over the seeds (rliable's, one stratum); that
+of one run its own interval, the stratified bootstrap over its episodes (:mod:`subenv.evaluation.score`).
+The table is ordered by score, as the leaderboard is.
 
 The folder (``--out``): ``trials/<algo>-seed<k>/`` (each trial's run folder, its ``evaluation.json``
 written last), ``scores.csv`` (one row per run and scenario), ``reference.json`` (the plan, the
 estimates, the time taken), ``reference.md`` (the tables), ``learning_curves.png`` and
 ``performance_profiles.png``; every file is written whole or not at all. Run the same command again
 to resume: finished trials are kept, an unfinished one is trained again from its start. Needs the
-``ray``, ``rl`` and ``stats`` extras.
+``ray``, ``rl`` and ``stats`` extras, and ``jax-rl`` for ``ppo_jax`` trials.
 """
 
 from __future__ import annotations
@@ -40,7 +49,7 @@ import sys
 import time
 import warnings
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any, Final
 
@@ -49,14 +58,25 @@ import numpy as np
 from subenv.atomic import atomic_write_text
 from subenv.extras import MissingExtra, require
 
-__all__ = ["DEFAULT_TIMESTEPS", "Plan", "main", "run_reference", "summarize_reference"]
+__all__ = ["ALGORITHMS", "DEFAULT_TIMESTEPS", "Plan", "main", "run_reference", "summarize_reference"]
 
 ENV_ID: Final = "subenv/Mixed-v0"
-"""What every trial trains on (the shipped agents' training scenario)."""
-DEFAULT_TIMESTEPS: Final[dict[str, int]] = {"ppo": 1_500_000, "sac": 120_000, "td3": 300_000}
-"""Steps per trial on this 2-core machine, chosen so that 5 seeds of all three finish in about 90 minutes
-(measured alone, one torch thread: PPO ~5,500 steps/s, SAC ~330, TD3 ~800). TD3's is its config's;
-PPO's and SAC's are 21% and 20% of theirs (7M, 600k)."""
+"""What every SB3 trial trains on (the shipped agents' training scenario; ``ppo_jax`` trials train on
+their defaults', the same)."""
+SB3_ALGORITHMS: Final = ("ppo", "sac", "td3")
+JAX_PPO: Final = "ppo_jax"
+ALGORITHMS: Final = (*SB3_ALGORITHMS, JAX_PPO)
+"""What a plan can train: the SB3 algorithms of ``subenv_agents/hyperparams/`` and the JAX PPO."""
+DEFAULT_TIMESTEPS: Final[dict[str, int]] = {
+    "ppo": 1_500_000,
+    "sac": 120_000,
+    "td3": 300_000,
+    JAX_PPO: 15_000_000,
+}
+"""Steps per trial on this 2-core machine. The SB3 budgets were chosen so that 5 seeds of the three finish
+in about 90 minutes (measured alone, one torch thread: PPO ~5,500 steps/s, SAC ~330, TD3 ~800); TD3's is
+its config's, PPO's and SAC's are 21% and 20% of theirs (7M, 600k). ``ppo_jax``'s is the shipped agent's
+(its defaults': 6-11 minutes a seed on the quiet machine, both cores), which adds about 40 minutes."""
 CURVE_POINTS: Final = 10
 """Validations per trial while it trains (the learning curve's points)."""
 CURVE_EPISODES: Final = 10
@@ -85,7 +105,10 @@ class Plan:
     env_id : str
         The training environment.
     overrides : mapping
-        Hyperparameters set for every trial over its file's (``-params`` style keys); none by default.
+        Hyperparameters set for every SB3 trial over its file's (``-params`` style keys); none by default.
+    jax_overrides : mapping
+        :class:`~subenv_agents.jax_ppo.PPOConfig` fields set for every ``ppo_jax`` trial over its defaults
+        (not ``total_timesteps`` or ``seed``: the plan's); none by default.
     """
 
     timesteps: Mapping[str, int] = field(default_factory=lambda: dict(DEFAULT_TIMESTEPS))
@@ -96,16 +119,22 @@ class Plan:
     reps: int = 10_000
     env_id: str = ENV_ID
     overrides: Mapping[str, Any] = field(default_factory=dict)
+    jax_overrides: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if not self.timesteps:
             raise ValueError("timesteps={} is invalid: name at least one algorithm, e.g. {'ppo': 100000}")
         for algo, steps in self.timesteps.items():
-            if algo not in ("ppo", "sac", "td3"):
+            if algo not in ALGORITHMS:
                 raise ValueError(
-                    f"timesteps[{algo!r}] is invalid: the algorithm must be one of ['ppo', 'sac', 'td3']"
+                    f"timesteps[{algo!r}] is invalid: the algorithm must be one of {list(ALGORITHMS)}"
                 )
             _require_int(f"timesteps[{algo!r}]", steps, 1)
+        for name in ("total_timesteps", "seed"):
+            if name in self.jax_overrides:
+                raise ValueError(
+                    f"jax_overrides[{name!r}] is invalid: the plan sets it (timesteps['ppo_jax'], the seeds)"
+                )
         for name, low in (
             ("seeds", 1),
             ("episodes", 1),
@@ -126,7 +155,11 @@ class Plan:
 
 
 def _as_dict(plan: Plan) -> dict[str, Any]:
-    return asdict(plan) | {"timesteps": dict(plan.timesteps), "overrides": dict(plan.overrides)}
+    return asdict(plan) | {
+        "timesteps": dict(plan.timesteps),
+        "overrides": dict(plan.overrides),
+        "jax_overrides": dict(plan.jax_overrides),
+    }
 
 
 def _require_int(name: str, value: Any, low: int) -> None:
@@ -144,40 +177,82 @@ def _trial(config: dict[str, Any], *, plan: dict[str, Any], trials_dir: str) -> 
     trial = config["trial"]
     run_dir = Path(trials_dir) / trial["name"]
     shutil.rmtree(run_dir, ignore_errors=True)  # an unfinished earlier attempt: trained again from its start
-    agent_config = load_config(
-        trial["algo"], plan["env_id"], overrides={**plan["overrides"], "n_timesteps": trial["timesteps"]}
-    )
-    select_freq = max(trial["timesteps"] // plan["curve_points"], 1)
-    result = train(
-        agent_config,
-        seed=trial["seed"],
-        run_dir=run_dir,
-        eval_freq=0,
-        save_freq=0,
-        verbose=0,
-        progress=False,
-        select_freq=select_freq,
-        select_episodes=plan["curve_episodes"],
-    )
-    record = {**trial, "timesteps_trained": result.timesteps, "train_time_s": round(result.wall_time_s, 1)}
+    if trial["algo"] == JAX_PPO:
+        timesteps, wall_time_s = _train_jax_ppo(trial, plan["jax_overrides"], run_dir)
+    else:
+        agent_config = load_config(
+            trial["algo"], plan["env_id"], overrides={**plan["overrides"], "n_timesteps": trial["timesteps"]}
+        )
+        select_freq = max(trial["timesteps"] // plan["curve_points"], 1)
+        result = train(
+            agent_config,
+            seed=trial["seed"],
+            run_dir=run_dir,
+            eval_freq=0,
+            save_freq=0,
+            verbose=0,
+            progress=False,
+            select_freq=select_freq,
+            select_episodes=plan["curve_episodes"],
+        )
+        timesteps, wall_time_s = result.timesteps, result.wall_time_s
+    record = {**trial, "timesteps_trained": timesteps, "train_time_s": round(wall_time_s, 1)}
     record = _evaluated(record, run_dir, plan["episodes"])
-    tune.report({"mean_score": float(np.mean([s["score"] for s in record["scenarios"].values()]))})
+    tune.report({"score": record["benchmark"]["all"]["score"]})
 
 
-def _evaluated(record: dict[str, Any], run_dir: Path, episodes: int) -> dict[str, Any]:
-    """``record`` with its final policy's scores on the default suite (as it is now), written to
-    ``<run_dir>/evaluation.json``."""
-    from subenv.evaluation import DEFAULT_SUITE, evaluate
+def _jax_config(timesteps: int, seed: int, overrides: Mapping[str, Any]) -> Any:
+    """The ``ppo_jax`` trial's settings: :class:`~subenv_agents.jax_ppo.PPOConfig`'s defaults, ``overrides``,
+    the plan's steps and seed (a bad field or value: ValueError naming it)."""
+    from subenv_agents.jax_ppo import PPOConfig
+
+    known = {f.name for f in fields(PPOConfig)}
+    for name in overrides:
+        if name not in known:
+            raise ValueError(f"jax_overrides[{name!r}] is invalid: PPOConfig has no such field")
+    return PPOConfig(**{**overrides, "total_timesteps": timesteps, "seed": seed})
+
+
+def _train_jax_ppo(
+    trial: Mapping[str, Any], overrides: Mapping[str, Any], run_dir: Path
+) -> tuple[int, float]:
+    """Train one ``ppo_jax`` trial into ``run_dir`` (a model folder, complete or absent): its steps and
+    wall time."""
+    from subenv_agents.jax_ppo import train_model
+
+    config = _jax_config(trial["timesteps"], trial["seed"], overrides)
+    record = train_model(
+        config, run_dir, f"subenv_agents.reference trial {trial['name']}", 0, (), say=lambda line: None
+    )
+    return int(record["env_steps"]), float(record["wall_time_s"])
+
+
+def _final_policy(algo: str, run_dir: Path, name: str) -> Any:
+    """The controller of a trial's final policy."""
+    if algo == JAX_PPO:
+        from subenv_agents.jax_ppo import JaxPPOController
+
+        return JaxPPOController(run_dir, name=name)
     from subenv_agents.controller import AgentController
     from subenv_agents.policy import load_agent
 
+    return AgentController(load_agent(run_dir), name=name)
+
+
+def _evaluated(record: dict[str, Any], run_dir: Path, episodes: int) -> dict[str, Any]:
+    """``record`` with its final policy's success and benchmark-v1 scores on the default suite (as it is
+    now), written to ``<run_dir>/evaluation.json``."""
+    from subenv.evaluation import DEFAULT_SUITE, evaluate
+    from subenv_agents.records import score_record
+
     start = time.perf_counter()
-    agent = AgentController(load_agent(run_dir), name=record["name"])  # the final policy
+    agent = _final_policy(record["algo"], run_dir, record["name"])
     results = evaluate([agent], DEFAULT_SUITE, episodes, progress=False, keep_trajectories=0)
     record = {
         **record,
         "evaluation_time_s": round(time.perf_counter() - start, 1),
         "scenarios": _scenario_scores(results),
+        "benchmark": score_record(results)[record["name"]],
     }
     atomic_write_text(run_dir / TRIAL_RESULT, json.dumps(record, indent=2) + "\n")
     return record
@@ -218,16 +293,19 @@ def run_reference(
     require("ray", "the multi-seed reference results", "ray", "pandas")
     require("rl", "the multi-seed reference results", "stable_baselines3")
     require("stats", "the multi-seed reference results", "rliable")
+    if JAX_PPO in plan.timesteps:
+        require("jax-rl", "the multi-seed reference results' ppo_jax trials", "jax", "optax")
     from ray import tune
 
     from subenv_agents.config import load_config
     from subenv_agents.tune import fit
 
     _require_int("max_concurrent", max_concurrent, 1)
-    for algo, steps in plan.timesteps.items():
-        load_config(
-            algo, plan.env_id, overrides={**plan.overrides, "n_timesteps": steps}
-        )  # (unknown id or bad config: now)
+    for algo, steps in plan.timesteps.items():  # (unknown id or bad config: now)
+        if algo == JAX_PPO:
+            _jax_config(steps, 0, plan.jax_overrides)
+        else:
+            load_config(algo, plan.env_id, overrides={**plan.overrides, "n_timesteps": steps})
     out = Path(out_dir).resolve()
     trials_dir = out / "trials"
     trials_dir.mkdir(parents=True, exist_ok=True)
@@ -302,6 +380,8 @@ def summarize_reference(
 
     from subenv.evaluation import DEFAULT_SUITE, evaluate, get_suite
     from subenv.evaluation.rollout import resolve_controllers
+    from subenv.evaluation.score import POOLED
+    from subenv_agents.records import score_record
 
     out = Path(out_dir)
     records = []
@@ -318,30 +398,48 @@ def summarize_reference(
         if (
             list(record["scenarios"]) != scenarios
             or record["scenarios"][scenarios[0]]["episodes"] != plan.episodes
+            or "benchmark" not in record
         ):
-            # The default suite changed since the trial was evaluated (or the plan's episodes): its final
-            # policy is evaluated again on the suite as it is, the training kept.
+            # The default suite changed since the trial was evaluated (or the plan's episodes, or the record
+            # predates the score): its final policy is evaluated again on the suite as it is, the training
+            # kept.
             records[k] = _evaluated(record, out / "trials" / record["name"], plan.episodes)
     controllers = resolve_controllers(list(baselines) if baselines is not None else None)
     results = evaluate(controllers, DEFAULT_SUITE, plan.episodes, progress=False, keep_trajectories=0)
     fixed = {c.name: _scenario_scores([r for r in results if r.controller == c.name]) for c in controllers}
+    fixed_benchmark = score_record(results)
     shipped = _shipped_names()
 
     rows: list[dict[str, Any]] = []
+    benchmark: dict[str, list[Mapping[str, Any]]] = {}  # name -> each run's pooled benchmark-v1 score
     for rec in records:
+        name = rec["algo"].upper()
         rows += [
             {
-                "name": rec["algo"].upper(),
+                "name": name,
                 "kind": "multi-seed",
                 "seed": rec["seed"],
                 "scenario": s,
                 **rec["scenarios"][s],
+                **_benchmark_columns(rec["benchmark"][s]),
             }
             for s in scenarios
         ]
+        benchmark.setdefault(name, []).append(rec["benchmark"][POOLED])
     for name, per in fixed.items():
         kind = "shipped agent (selected)" if name in shipped else "baseline"
-        rows += [{"name": name, "kind": kind, "seed": "", "scenario": s, **per[s]} for s in scenarios]
+        rows += [
+            {
+                "name": name,
+                "kind": kind,
+                "seed": "",
+                "scenario": s,
+                **per[s],
+                **_benchmark_columns(fixed_benchmark[name][s]),
+            }
+            for s in scenarios
+        ]
+        benchmark[name] = [fixed_benchmark[name][POOLED]]
 
     names = list(dict.fromkeys(r["name"] for r in rows))
     kinds = {r["name"]: r["kind"] for r in rows}
@@ -366,6 +464,7 @@ def summarize_reference(
     taus = np.linspace(0.0, 1.0, 41)
     profiles, profile_ci = rly.create_performance_profile(score, taus, reps=min(plan.reps, 2000))
     curves = _learning_curves(out, plan, records, rng)
+    scores_v1 = _benchmark_scores(benchmark, plan.reps, rng)
 
     summary = {
         "plan": _as_dict(plan),
@@ -374,6 +473,7 @@ def summarize_reference(
         "confidence": CONFIDENCE,
         "runs": {n: int(score[n].shape[0]) for n in names},
         "kinds": kinds,
+        "benchmark_score": scores_v1,
         "aggregate": {
             n: {
                 "iqm": float(aggregate[n][0]),
@@ -414,6 +514,37 @@ def _estimates(
         )
 
 
+def _benchmark_columns(entry: Mapping[str, Any]) -> dict[str, Any]:
+    """A run's benchmark-v1 columns on one scenario (0-1000): the mean quality of its won episodes and
+    its score."""
+    return {"quality": entry["quality"], "benchmark_score": entry["score"]}
+
+
+def _benchmark_scores(
+    benchmark: Mapping[str, Sequence[Mapping[str, Any]]], reps: int, rng: np.random.RandomState
+) -> dict[str, dict[str, Any]]:
+    """Each name's benchmark-v1 score pooled over the suite: one run's with its interval over the episodes
+    (:mod:`subenv.evaluation.score`'s stratified bootstrap); several runs' mean with a 95% bootstrap
+    interval over the runs (rliable's, the runs one stratum)."""
+    from rliable import metrics
+
+    out: dict[str, dict[str, Any]] = {}
+    for name, entries in benchmark.items():
+        runs = [float(e["score"]) for e in entries]
+        if len(runs) == 1:
+            interval = [float(entries[0]["score_ci_low"]), float(entries[0]["score_ci_high"])]
+            out[name] = {"score": runs[0], "ci": interval, "runs": runs, "interval_over": "episodes"}
+            continue
+        point, ci = _estimates({name: np.array(runs)[:, None]}, metrics.aggregate_mean, reps, rng)
+        out[name] = {
+            "score": float(point[name]),
+            "ci": [float(v) for v in np.ravel(ci[name])],
+            "runs": runs,
+            "interval_over": "seeds",
+        }
+    return out
+
+
 def _shipped_names() -> set[str]:
     try:
         from subenv_agents.shipped import shipped_models
@@ -427,7 +558,7 @@ def _learning_curves(
 ) -> dict[str, dict[str, list[float]]]:
     """Per algorithm: the validation success at each point (mean over seeds) with a bootstrap band."""
     curves = {}
-    for algo in plan.timesteps:
+    for algo in [a for a in plan.timesteps if a != JAX_PPO]:  # (ppo_jax trials make no selection.json)
         histories = [
             json.loads((out / "trials" / r["name"] / "selection.json").read_text())["history"]
             for r in records
@@ -463,11 +594,15 @@ def _interval(point: float, low: float, high: float, runs: int) -> str:
 
 
 def reference_markdown(summary: Mapping[str, Any]) -> str:
-    """The reference table: IQM and mean over runs x scenarios, and each scenario's mean over runs, in
-    percent with 95% stratified bootstrap intervals (none for a single run)."""
+    """The reference table, best score first: the benchmark-v1 score with its 95% interval, then the
+    success's IQM and mean over runs x scenarios, and each scenario's mean over runs, in percent with 95%
+    stratified bootstrap intervals (none for a single run)."""
     scenarios, runs, kinds = summary["scenarios"], summary["runs"], summary["kinds"]
-    order = sorted(summary["aggregate"], key=lambda n: -summary["aggregate"][n]["iqm"])
-    head = ["controller", "runs", "IQM", "mean", *scenarios]
+    scores = summary["benchmark_score"]
+    order = sorted(
+        summary["aggregate"], key=lambda n: (-scores[n]["score"], -summary["aggregate"][n]["iqm"], n)
+    )
+    head = ["controller", "runs", "score [95% CI]", "IQM", "mean", *scenarios]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for n in order:
         agg = summary["aggregate"][n]
@@ -476,9 +611,11 @@ def reference_markdown(summary: Mapping[str, Any]) -> str:
             if kinds[n] == "baseline"
             else (f"{n} (shipped, selected)" if kinds[n].startswith("shipped") else f"**{n}**")
         )
+        low, high = scores[n]["ci"]
         cells = [
             label,
             str(runs[n]),
+            f"{scores[n]['score']:.1f} [{low:.1f}, {high:.1f}]",
             _interval(agg["iqm"], *agg["iqm_ci"], runs[n]),
             _interval(agg["mean"], *agg["mean_ci"], runs[n]),
         ]
@@ -486,13 +623,18 @@ def reference_markdown(summary: Mapping[str, Any]) -> str:
         lines.append("| " + " | ".join(cells) + " |")
     plan = summary["plan"]
     steps = ", ".join(f"{a.upper()} {n:,}" for a, n in plan["timesteps"].items())
+    jax_env = plan.get("jax_overrides", {}).get("env_id", ENV_ID)  # (PPOConfig's default is ENV_ID)
+    if JAX_PPO in plan["timesteps"] and jax_env != plan["env_id"]:
+        steps += f" (PPO_JAX on {jax_env})"
     return "\n".join(
         [
             (
-                f"Success over the winnable episodes [%], {plan['episodes']} episodes per scenario of the "
-                f"default suite; multi-seed rows: final policies after {steps} steps on {plan['env_id']}, "
-                "IQM and mean over runs x scenarios and each scenario's mean over seeds with 95% stratified "
-                f"bootstrap intervals (rliable, {plan['reps']:,} resamples)."
+                f"{plan['episodes']} episodes per scenario of the default suite; multi-seed rows: final "
+                f"policies after {steps} steps on {plan['env_id']}. Score: the benchmark-v1 score "
+                "(0-1000) pooled over the suite, of several seeds their mean with a 95% bootstrap interval "
+                "over the seeds, of one run its interval over the episodes. Then success over the winnable "
+                "episodes [%]: IQM and mean over runs x scenarios and each scenario's mean over seeds with "
+                f"95% stratified bootstrap intervals (rliable, {plan['reps']:,} resamples)."
             ),
             "",
             *lines,

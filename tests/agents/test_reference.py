@@ -1,5 +1,7 @@
 """The multi-seed reference results (subenv_agents.reference) on a local Ray instance, with a tiny budget:
-PPO with two seeds of one iteration each, two evaluation episodes per scenario."""
+PPO with two seeds of one iteration each, two evaluation episodes per scenario; beside them two ppo_jax
+trials whose model folders are made here untrained (training one is the slow test's), evaluated by the
+reference as its trials are."""
 
 from __future__ import annotations
 
@@ -13,13 +15,17 @@ import pytest
 pytest.importorskip("stable_baselines3", reason="the 'rl' extra is not installed")
 pytest.importorskip("ray.tune", reason="the 'ray' extra is not installed")
 pytest.importorskip("rliable", reason="the 'stats' extra is not installed")
+pytest.importorskip("optax", reason="the 'jax-rl' extra is not installed")
 
+import jax
 from rliable import metrics
 
 from subenv.evaluation import DEFAULT_SUITE, evaluate, get_suite
+from subenv_agents import jax_ppo
 from subenv_agents.controller import AgentController
 from subenv_agents.policy import load_agent
-from subenv_agents.reference import Plan, run_reference
+from subenv_agents.records import score_record
+from subenv_agents.reference import Plan, _evaluated, run_reference
 
 _SMALL = {
     "n_envs": 2,
@@ -29,18 +35,51 @@ _SMALL = {
     "depth_integral": False,
     "policy_kwargs": {"net_arch": [16, 16]},
 }
+_JAX_SMALL = {
+    "env_id": "subenv/Nominal-v0",
+    "num_envs": 32,
+    "num_steps": 16,
+    "num_minibatches": 4,
+    "update_epochs": 2,
+    "hidden": (16, 16),
+    "episodes": 8,
+    "memory": 0,
+}
 PLAN = Plan(
-    timesteps={"ppo": 256}, seeds=2, episodes=2, curve_points=2, curve_episodes=1, reps=200, overrides=_SMALL
+    timesteps={"ppo": 256, "ppo_jax": 2 * 32 * 16},
+    seeds=2,
+    episodes=2,
+    curve_points=2,
+    curve_episodes=1,
+    reps=200,
+    overrides=_SMALL,
+    jax_overrides=_JAX_SMALL,
 )
+
+
+def _finished_jax_trials(out, plan: Plan) -> None:  # type: ignore[no-untyped-def]
+    """The plan's ppo_jax trials as finished ones: untrained networks in model folders, evaluated."""
+    for trial in plan.trials():
+        if trial["algo"] == "ppo_jax":
+            config = jax_ppo.PPOConfig(
+                **{**plan.jax_overrides, "total_timesteps": trial["timesteps"], "seed": trial["seed"]}
+            )
+            network = jax_ppo.init_network(jax.random.key(trial["seed"]), 8, 2, config.hidden)
+            run_dir = jax_ppo.save(
+                out / "trials" / trial["name"], config, network, jax_ppo.RunningStats.empty((8,)), {}
+            )
+            _evaluated({**trial, "timesteps_trained": 0, "train_time_s": 0.0}, run_dir, plan.episodes)
 
 
 def test_a_tiny_reference_run_gives_rliable_estimates_of_what_it_evaluated_and_resumes(
     local_ray, tmp_path
 ) -> None:  # type: ignore[no-untyped-def]
     out = tmp_path / "reference"
+    _finished_jax_trials(out, PLAN)
     summary = run_reference(out, PLAN, progress=False, baselines=["thesis"])
     scenarios = list(get_suite(DEFAULT_SUITE).scenarios)
-    assert summary["scenarios"] == scenarios and summary["runs"] == {"PPO": 2, "thesis": 1}
+    assert summary["scenarios"] == scenarios
+    assert summary["runs"] == {"PPO": 2, "PPO_JAX": 2, "thesis": 1}
 
     # A trial's scores are its final policy's on the default suite's episodes: evaluated again here.
     trial = json.loads((out / "trials" / "ppo-seed1" / "evaluation.json").read_text())
@@ -55,11 +94,35 @@ def test_a_tiny_reference_run_gives_rliable_estimates_of_what_it_evaluated_and_r
         rows = [r for r in again if r.scenario == s and r.winnable is not False]
         assert trial["scenarios"][s]["winnable"] == len(rows)
         assert trial["scenarios"][s]["winnable_successes"] == sum(r.metrics.success for r in rows)
+    assert trial["benchmark"]["all"]["score"] == score_record(again)["again"]["all"]["score"]
+
+    # The score column: several seeds' mean with an interval over the seeds, one run's own interval.
+    for name in ("PPO", "PPO_JAX"):
+        runs = [
+            json.loads((out / "trials" / f"{name.lower()}-seed{k}" / "evaluation.json").read_text())[
+                "benchmark"
+            ]["all"]["score"]
+            for k in range(2)
+        ]
+        mine = summary["benchmark_score"][name]
+        assert mine["runs"] == runs and math.isclose(mine["score"], float(np.mean(runs)))
+        assert min(runs) <= mine["ci"][0] <= mine["score"] <= mine["ci"][1] <= max(runs)
+    thesis = score_record(evaluate(["thesis"], DEFAULT_SUITE, 2, progress=False, keep_trajectories=0))
+    assert summary["benchmark_score"]["thesis"]["runs"] == [thesis["thesis"]["all"]["score"]]
+    assert summary["benchmark_score"]["thesis"]["ci"] == [
+        thesis["thesis"]["all"]["score_ci_low"],
+        thesis["thesis"]["all"]["score_ci_high"],
+    ]
+    lines = (out / "reference.md").read_text().splitlines()
+    table = [line.split(" | ") for line in lines if line.startswith("| ")][1:]  # (not the header)
+    shown = {cells[0].strip("| *"): float(cells[2].split(" [")[0]) for cells in table}  # (best first)
+    assert shown == {n: round(s["score"], 1) for n, s in summary["benchmark_score"].items()}
+    assert list(shown.values()) == sorted(shown.values(), reverse=True)
 
     # The table's statistics are rliable's of the scores in scores.csv (runs x scenarios).
     with open(out / "scores.csv", newline="") as f:
         rows = list(csv.DictReader(f))
-    assert len(rows) == 3 * len(scenarios)
+    assert len(rows) == 5 * len(scenarios)
     ppo = np.array(
         [
             [
@@ -91,6 +154,8 @@ def test_a_tiny_reference_run_gives_rliable_estimates_of_what_it_evaluated_and_r
     assert curve["timesteps"] == [h["timestep"] for h in history[0]]
     assert np.allclose(curve["mean"], np.mean([[h["success_rate"] for h in hs] for hs in history], axis=0))
     assert "| **PPO** | 2 |" in (out / "reference.md").read_text()
+    assert "| **PPO_JAX** | 2 |" in (out / "reference.md").read_text()
+    assert list(summary["learning_curves"]) == ["PPO"]  # (ppo_jax trials have no validation curve)
     for figure in ("learning_curves.png", "performance_profiles.png"):
         assert (out / figure).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
@@ -120,6 +185,7 @@ def test_a_tiny_reference_run_gives_rliable_estimates_of_what_it_evaluated_and_r
         ({"timesteps": {"ppo": 0}}, r"timesteps\['ppo'\]=0 is invalid: must be an integer >= 1"),
         ({"seeds": 0}, r"seeds=0 is invalid: must be an integer >= 1"),
         ({"reps": 10}, r"reps=10 is invalid: must be an integer >= 100"),
+        ({"jax_overrides": {"seed": 3}}, r"jax_overrides\['seed'\] is invalid: the plan sets it"),
     ],
 )
 def test_a_bad_plan_is_refused(kwargs, match) -> None:  # type: ignore[no-untyped-def]
@@ -133,6 +199,35 @@ def test_a_bad_hyperparameter_is_refused_before_anything_runs(tmp_path) -> None:
             tmp_path / "bad", Plan(timesteps={"ppo": 256}, overrides={"learning_rat": 1e-3}), progress=False
         )
     assert not (tmp_path / "bad").exists()
+
+
+def test_a_bad_jax_setting_is_refused_before_anything_runs(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    for overrides, match in (({"learning_rate": 1e-3}, "learning_rate"), ({"num_envs": 0}, "num_envs")):
+        with pytest.raises(ValueError, match=match):
+            run_reference(
+                tmp_path / "bad", Plan(timesteps={"ppo_jax": 1024}, jax_overrides=overrides), progress=False
+            )
+        assert not (tmp_path / "bad").exists()
+
+
+@pytest.mark.slow
+def test_a_ppo_jax_trial_trains_its_model_folder_and_evaluates_its_final_policy(local_ray, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    out = tmp_path / "reference"
+    plan = Plan(timesteps={"ppo_jax": 2 * 32 * 16}, seeds=1, episodes=1, reps=200, jax_overrides=_JAX_SMALL)
+    summary = run_reference(out, plan, progress=False, baselines=["thesis"])
+    config, _, _ = jax_ppo.load(out / "trials" / "ppo_jax-seed0")
+    assert config.total_timesteps == 2 * 32 * 16 and config.seed == 0 and config.env_id == "subenv/Nominal-v0"
+    trial = json.loads((out / "trials" / "ppo_jax-seed0" / "evaluation.json").read_text())
+    assert trial["timesteps_trained"] == 2 * 32 * 16
+    again = evaluate(
+        [jax_ppo.JaxPPOController(out / "trials" / "ppo_jax-seed0", name="again")],
+        DEFAULT_SUITE,
+        1,
+        progress=False,
+        keep_trajectories=0,
+    )
+    assert trial["benchmark"]["all"]["score"] == score_record(again)["again"]["all"]["score"]
+    assert summary["benchmark_score"]["PPO_JAX"]["runs"] == [trial["benchmark"]["all"]["score"]]
 
 
 def test_without_an_extra_the_command_says_which_in_one_line_and_makes_nothing(monkeypatch, tmp_path) -> None:  # type: ignore[no-untyped-def]
