@@ -950,6 +950,11 @@ def _control(
     return memory, value, mean
 
 
+_compiled_control = jax.jit(_control, static_argnums=0)
+""":func:`_control` compiled once per integral, network shape and batch size, for every controller alike
+(each controller compiling its own took a second per model evaluated)."""
+
+
 class JaxPPOController(SingleRowMixin):
     """A model folder of :func:`save` as a controller of :mod:`subenv.evaluation`: the policy's mean
     action (:func:`policy_step`, the function training sampled around), clipped to [-1, 1], with each
@@ -979,7 +984,7 @@ class JaxPPOController(SingleRowMixin):
         self.name = name
         self.control = self.config.env_kwargs.get("control", "dual")
         self.alpha = float(self.config.env_kwargs.get("alpha", 0.0))
-        self._act = jax.jit(functools.partial(_control, Integral.of(config)))
+        self._integral_config = Integral.of(config)
         self._episodes = 0
         self._memory = jnp.zeros((0, config.memory), jnp.float32)
         self._integral = jnp.zeros(0)
@@ -996,13 +1001,14 @@ class JaxPPOController(SingleRowMixin):
         """The policy's mean actions of a batch of observations (one row per episode), clipped to [-1, 1]
         (float32)."""
         obs = check_batch(observations, self._episodes)
-        self._memory, self._integral, mean = self._act(
+        self._memory, self._integral, mean = _compiled_control(
+            self._integral_config,
             self._network,
             self._stats,
             self._memory,
             self._integral,
-            jnp.asarray(self._first),
-            jnp.asarray(obs, dtype=jnp.float32),
+            np.bool_(self._first),  # (NumPy values: jit takes them as they are, faster than jnp.asarray)
+            np.asarray(obs, dtype=np.float32),
         )
         self._first = False
         return np.clip(np.asarray(mean), -1.0, 1.0).astype(np.float32)
