@@ -650,7 +650,9 @@ def _step_block(
         in_sea = in_sea or (active[i] and episode[i].n_waves > 0)
     # (the seas' rows only where a lane has one: a block of them is larger than the rest of the step's memory)
     waves = np.zeros((LANES if in_sea else 1, WAVE_FIELDS, MAX_WAVES))
-    n = 0
+    # int64 from the start: from a literal 0 numba's type inference first compiled the free surface's
+    # kernel for n = Literal[int](0), then again for int64 (a second compile in every cold process)
+    n = np.int64(0)
     for i in range(b * LANES, minimum((b + 1) * LANES, n_rows)):
         if active[i]:
             s, e = state[i], episode[i]
