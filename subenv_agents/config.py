@@ -36,6 +36,7 @@ from typing import Any, Final
 __all__ = [
     "ALGORITHMS",
     "HYPERPARAMS_DIR",
+    "DEFAULT_LOG_FOLDER",
     "AgentConfig",
     "CurriculumConfig",
     "DepthBandBonusConfig",
@@ -44,6 +45,7 @@ __all__ = [
     "algorithm_class",
     "load_config",
     "model_kwargs",
+    "next_run_dir",
     "parse_overrides",
     "read_yaml_file",
 ]
@@ -53,6 +55,20 @@ HYPERPARAMS_DIR: Final = Path(__file__).parent / "hyperparams"
 
 ALGORITHMS: Final = ("ppo", "sac", "td3")
 """The Stable-Baselines3 algorithms ``subenv_agents.train`` trains."""
+
+DEFAULT_LOG_FOLDER: Final = "results/agents"
+"""Where the training commands put a run folder not named (rl-zoo's ``logs/``)."""
+
+
+def next_run_dir(log_folder: str | Path, algo: str, env_id: str) -> Path:
+    """``<log_folder>/<algo>/<env>_<k>``, k the first number whose folder does not exist (rl-zoo's
+    layout; ``env`` the id with ``/`` as ``-``)."""
+    folder, name = Path(log_folder) / algo, env_id.replace("/", "-")
+    k = 1
+    while (folder / f"{name}_{k}").exists():
+        k += 1
+    return folder / f"{name}_{k}"
+
 
 DEFAULT_KEY: Final = "default"
 

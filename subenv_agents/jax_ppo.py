@@ -25,8 +25,10 @@ accelerator that is the fast path; on a CPU it runs too (``benchmarks/jax_ppo.py
   observation is already the next episode's), a terminated one from zero (:func:`advantages`).
 - Optimisation is optax's (global-norm clipping, Adam with a linearly annealed step).
 
-``python -m subenv_agents.jax_ppo --out DIR`` trains and writes a model folder (:func:`save`):
-``network.npz``, ``config.json`` and ``train.json``, complete or absent (:mod:`subenv.atomic`).
+``python -m subenv_agents.jax_ppo`` trains the shipped agent's settings (:class:`PPOConfig`'s defaults)
+and writes a model folder (:func:`save`), by default ``results/agents/ppo_jax/<env>_<k>`` (``--out``
+names another): ``network.npz``, ``config.json`` and ``train.json``, complete or absent
+(:mod:`subenv.atomic`).
 :func:`load` checks a folder whole (a damaged or inconsistent file is refused, by its name and the
 field).
 :class:`JaxPPOController` loads one as a controller of :mod:`subenv.evaluation`; the shipped one,
@@ -65,7 +67,7 @@ from subenv.evaluation import DEFAULT_SEED, DEFAULT_SUITE, SingleRowMixin, check
 from subenv.evaluation.metrics import DEPTH_TOLERANCE_M, HOLD_WINDOW_S
 from subenv.extras import require
 from subenv.vehicles import Vehicle
-from subenv_agents.config import DepthIntegralConfig
+from subenv_agents.config import DEFAULT_LOG_FOLDER, DepthIntegralConfig, next_run_dir
 from subenv_agents.difficulty import CURRICULA, curriculum_weights, table_difficulties
 from subenv_agents.records import (
     BASELINE,
@@ -1030,7 +1032,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m subenv_agents.jax_ppo", description=__doc__.split("\n\n")[0]
     )
-    parser.add_argument("--out", required=True, help="the model folder to write (complete or absent)")
+    parser.add_argument(
+        "--out",
+        default=None,
+        help="the model folder to write, complete or absent (default: "
+        f"{DEFAULT_LOG_FOLDER}/ppo_jax/<env>_<k>, k the first number free)",
+    )
     parser.add_argument("--force", action="store_true", help="replace a model folder this command wrote")
     defaults = PPOConfig()
     for field in dataclasses.fields(PPOConfig):
@@ -1079,13 +1086,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         config = PPOConfig(**{**settings, "hidden": tuple(args.hidden)})
         spread = None if args.seed_spread is None else seed_spread(config, args.seed_spread)
-        check_output_dir(args.out, args.force, kind="jax-ppo model")
+        out = (
+            args.out
+            if args.out is not None
+            else str(next_run_dir(DEFAULT_LOG_FOLDER, "ppo_jax", config.env_id))
+        )
+        check_output_dir(out, args.force, kind="jax-ppo model")
     except (ValueError, FileExistsError) as exc:
         parser.error(str(exc))
     command = shlex.join(["python", "-m", "subenv_agents.jax_ppo", *(sys.argv[1:] if argv is None else argv)])
     baselines = [name for name in args.baselines.split(",") if name]
-    train_model(config, args.out, command, args.eval_episodes, baselines, overwrite=args.force, spread=spread)
-    print(f"wrote {args.out}")
+    train_model(config, out, command, args.eval_episodes, baselines, overwrite=args.force, spread=spread)
+    print(f"wrote {out}")
     return 0
 
 

@@ -6,20 +6,20 @@ statistics and the benchmark-v1 score.
 
     python -m subenv_agents.reference                       # this machine's budgets (docs/reference/)
     python -m subenv_agents.reference --seeds 10 \
-        --timesteps ppo=7000000,sac=600000,td3=300000,ppo_jax=15000000 \
+        --timesteps ppo=7000000,sac=600000,td3=300000,ppo_jax=20000000 \
         --address auto                                      # a cluster: the configs' own budgets
 
-Each SB3 trial is :func:`subenv_agents.train.train` of one algorithm's hyperparameter file (its defaults,
-on ``subenv/Mixed-v0``) with one seed, validated :data:`CURVE_POINTS` times while it trains (the
-learning curve: :class:`~subenv_agents.selection.SelectionCallback`, on validation seeds). A ``ppo_jax``
-trial is :func:`subenv_agents.jax_ppo.train_model` of :class:`~subenv_agents.jax_ppo.PPOConfig`'s
-defaults (the shipped ``ppo_jax``'s settings: a GRU policy trained on ``subenv/Mixed-v0``) with one seed;
-it has no learning curve here (its training's own is in ``train.json``, and ``benchmarks/jax_ppo.py``
-plots it). Then each trial's **final** policy (not a selected one: no choice made on its results) is
-evaluated on the default suite's episodes, the same as the leaderboard's. A trial's success on a scenario
-is its success rate over the winnable episodes; its score is the leaderboard's, the benchmark-v1 score
-pooled over the suite (:mod:`subenv.evaluation.score`). The classical baselines and the shipped agents
-(labelled: each is one run, selected) are evaluated on the same episodes.
+Each SB3 trial is :func:`subenv_agents.train.train` of one algorithm's hyperparameter file (its defaults, on
+``subenv/Mixed-v0``) with one seed, validated :data:`CURVE_POINTS` times while it trains (the learning
+curve: :class:`~subenv_agents.selection.SelectionCallback`, on validation seeds). A ``ppo_jax`` trial is
+:func:`subenv_agents.jax_ppo.train_model` of :class:`~subenv_agents.jax_ppo.PPOConfig`'s defaults (the
+shipped ``ppo_jax``'s settings: a GRU policy trained on ``subenv/Mixed-v0`` for 20M steps) with one seed; it
+has no learning curve here (its training's own is in ``train.json``, and ``benchmarks/jax_ppo.py`` plots
+it). Then each trial's **final** policy (not a selected one: no choice made on its results) is evaluated on
+the default suite's episodes, the same as the leaderboard's. A trial's success on a scenario is its success
+rate over the winnable episodes; its score is the leaderboard's, the benchmark-v1 score pooled over the
+suite (:mod:`subenv.evaluation.score`). The classical baselines and the shipped agents (labelled: each is
+one run, selected) are evaluated on the same episodes.
 
 Statistics follow Agarwal et al. (2021), "Deep reinforcement learning at the edge of the statistical
 precipice" (NeurIPS), with their library rliable: the interquartile mean (IQM) and mean over runs x
@@ -71,12 +71,13 @@ DEFAULT_TIMESTEPS: Final[dict[str, int]] = {
     "ppo": 1_500_000,
     "sac": 120_000,
     "td3": 300_000,
-    JAX_PPO: 15_000_000,
+    JAX_PPO: 20_000_000,
 }
 """Steps per trial on this 2-core machine. The SB3 budgets were chosen so that 5 seeds of the three finish
 in about 90 minutes (measured alone, one torch thread: PPO ~5,500 steps/s, SAC ~330, TD3 ~800); TD3's is
 its config's, PPO's and SAC's are 21% and 20% of theirs (7M, 600k). ``ppo_jax``'s is the shipped agent's
-(its defaults': 6-11 minutes a seed on the quiet machine, both cores), which adds about 40 minutes."""
+(:class:`~subenv_agents.jax_ppo.PPOConfig`'s default: 7-11 minutes a seed on the quiet machine, both
+cores), which adds about 45 minutes."""
 CURVE_POINTS: Final = 10
 """Validations per trial while it trains (the learning curve's points)."""
 CURVE_EPISODES: Final = 10

@@ -48,10 +48,12 @@ import yaml
 from subenv.evaluation.results import atomic_write_text
 from subenv_agents.config import (
     ALGORITHMS,
+    DEFAULT_LOG_FOLDER,
     AgentConfig,
     algorithm_class,
     load_config,
     model_kwargs,
+    next_run_dir,
     parse_overrides,
 )
 from subenv_agents.policy import (
@@ -71,7 +73,6 @@ from subenv_agents.policy import (
 __all__ = ["DEFAULT_ENV_ID", "EVAL_SEED_OFFSET", "TrainResult", "main", "make_vec_env", "train"]
 
 DEFAULT_ENV_ID: Final = "subenv/DivePlane-v0"
-DEFAULT_LOG_FOLDER: Final = "results/agents"
 TENSORBOARD_DIR: Final = "tensorboard"
 """The run folder's subfolder of TensorBoard's event files (when TensorBoard is installed), so that
 ``tensorboard --logdir results/agents`` lists each run under its folder's name."""
@@ -219,7 +220,7 @@ def train(
             raise ValueError(f"{name}={value!r} is invalid: must be an integer >= 0")
     if threads is not None:
         torch.set_num_threads(threads)
-    run_dir = Path(run_dir) if run_dir is not None else _next_run_dir(Path(log_folder), config)
+    run_dir = Path(run_dir) if run_dir is not None else next_run_dir(log_folder, config.algo, config.env_id)
     # An empty folder loses nothing: a run may fill it (as every output folder of subenv may).
     existed = run_dir.is_dir() and not run_dir.is_symlink() and not any(run_dir.iterdir())
     if run_dir.exists() and not existed:
@@ -391,15 +392,6 @@ def _hyperparameters_checked(config: AgentConfig) -> Iterator[None]:
         ) from exc
 
 
-def _next_run_dir(log_folder: Path, config: AgentConfig) -> Path:
-    name = config.env_id.replace("/", "-")
-    folder = log_folder / config.algo
-    k = 1
-    while (folder / f"{name}_{k}").exists():
-        k += 1
-    return folder / f"{name}_{k}"
-
-
 def _quote(arg: str) -> str:
     import shlex
 
@@ -413,7 +405,9 @@ def main(argv: list[str] | None = None) -> int:
         prog="python -m subenv_agents.train",
         description="Train a Stable-Baselines3 agent (PPO, SAC, TD3) on a subenv environment.",
     )
-    parser.add_argument("--algo", required=True, choices=ALGORITHMS, help="the algorithm")
+    parser.add_argument(
+        "--algo", default="ppo", choices=ALGORITHMS, help="the algorithm (default: %(default)s)"
+    )
     parser.add_argument("--env", default=DEFAULT_ENV_ID, help="environment id (default: %(default)s)")
     parser.add_argument(
         "-n",

@@ -316,6 +316,18 @@ def test_the_command_refuses_an_output_folder_it_did_not_write_in_one_line(tmp_p
     )
 
 
+def test_the_command_writes_into_the_next_free_run_folder_by_default(tmp_path, monkeypatch, capsys):
+    """Without --out: results/agents/ppo_jax/<env>_<k> (subenv train's layout), k the first free."""
+    written = []
+    monkeypatch.setattr(jax_ppo, "train_model", lambda config, out, *a, **k: written.append((config, out)))
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "results" / "agents" / "ppo_jax" / "subenv-Mixed-v0_1").mkdir(parents=True)
+    assert main(["--total-timesteps", "1024", "--num-envs", "16"]) == 0
+    assert written[0][1] == str(Path("results", "agents", "ppo_jax", "subenv-Mixed-v0_2"))
+    assert written[0][0] == PPOConfig(total_timesteps=1024, num_envs=16)  # (the defaults otherwise)
+    assert capsys.readouterr().out.strip() == f"wrote {written[0][1]}"
+
+
 def _report(path, settings):
     """A report.json of benchmarks/jax_ppo.py report with one variant of ``settings``, seeds 0 to 2."""
     variant = {

@@ -201,6 +201,12 @@ def test_a_bad_hyperparameter_is_refused_before_anything_runs(tmp_path) -> None:
     assert not (tmp_path / "bad").exists()
 
 
+def test_the_default_plan_trains_the_jax_ppo_as_the_shipped_agent_was_trained() -> None:
+    shipped, _, _ = jax_ppo.load(jax_ppo.shipped_folder())
+    assert Plan().timesteps["ppo_jax"] == jax_ppo.PPOConfig().total_timesteps == shipped.total_timesteps
+    assert Plan().jax_overrides == {}
+
+
 def test_a_bad_jax_setting_is_refused_before_anything_runs(tmp_path) -> None:  # type: ignore[no-untyped-def]
     for overrides, match in (({"learning_rate": 1e-3}, "learning_rate"), ({"num_envs": 0}, "num_envs")):
         with pytest.raises(ValueError, match=match):

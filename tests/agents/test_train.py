@@ -360,6 +360,13 @@ def test_command_line_trains_and_rejects_bad_input(tmp_path, capsys) -> None:  #
     assert load_agent(tmp_path / "cli").config.n_envs == 2
     with pytest.raises(SystemExit, match="exists"):
         main(args)  # the run folder exists: nothing is overwritten
+    # Without --algo and --run-dir (rl-zoo's defaults): PPO, into <log folder>/ppo/<env>_<k>, k the first
+    # free.
+    plain = [a for a in args if a not in ("--algo", "ppo", "--run-dir", str(tmp_path / "cli"))]
+    (tmp_path / "logs" / "ppo" / "subenv-LowSpeed-v0_1").mkdir(parents=True)
+    assert main([*plain, "-f", str(tmp_path / "logs")]) == 0
+    assert f"run folder {tmp_path / 'logs' / 'ppo' / 'subenv-LowSpeed-v0_2'}/" in capsys.readouterr().out
+    assert load_agent(tmp_path / "logs" / "ppo" / "subenv-LowSpeed-v0_2").config.algo == "ppo"
     with pytest.raises(SystemExit, match="unknown hyperparameter"):
         main(["--algo", "ppo", "--env", _ENV_ID, "-params", "n_step:3", "--run-dir", str(tmp_path / "x")])
     with pytest.raises(SystemExit, match="is not registered"):
