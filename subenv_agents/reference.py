@@ -547,11 +547,11 @@ def _benchmark_scores(
 
 
 def _shipped_names() -> set[str]:
-    try:
-        from subenv_agents.shipped import shipped_models
-    except ImportError:
-        return set()
-    return set(shipped_models())
+    """The shipped agents' controller names: the folders of ``subenv_agents/models/`` (SB3's and
+    ``ppo_jax``)."""
+    from subenv_agents import MODELS_DIR
+
+    return {p.name for p in MODELS_DIR.iterdir() if p.is_dir()} if MODELS_DIR.is_dir() else set()
 
 
 def _learning_curves(

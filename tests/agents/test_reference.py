@@ -80,6 +80,7 @@ def test_a_tiny_reference_run_gives_rliable_estimates_of_what_it_evaluated_and_r
     scenarios = list(get_suite(DEFAULT_SUITE).scenarios)
     assert summary["scenarios"] == scenarios
     assert summary["runs"] == {"PPO": 2, "PPO_JAX": 2, "thesis": 1}
+    assert summary["kinds"] == {"PPO": "multi-seed", "PPO_JAX": "multi-seed", "thesis": "baseline"}
 
     # A trial's scores are its final policy's on the default suite's episodes: evaluated again here.
     trial = json.loads((out / "trials" / "ppo-seed1" / "evaluation.json").read_text())
@@ -115,7 +116,7 @@ def test_a_tiny_reference_run_gives_rliable_estimates_of_what_it_evaluated_and_r
     ]
     lines = (out / "reference.md").read_text().splitlines()
     table = [line.split(" | ") for line in lines if line.startswith("| ")][1:]  # (not the header)
-    shown = {cells[0].strip("| *"): float(cells[2].split(" [")[0]) for cells in table}  # (best first)
+    shown = {cells[0].strip("| *").split(" (")[0]: float(cells[2].split(" [")[0]) for cells in table}
     assert shown == {n: round(s["score"], 1) for n, s in summary["benchmark_score"].items()}
     assert list(shown.values()) == sorted(shown.values(), reverse=True)
 
@@ -199,6 +200,14 @@ def test_a_bad_hyperparameter_is_refused_before_anything_runs(tmp_path) -> None:
             tmp_path / "bad", Plan(timesteps={"ppo": 256}, overrides={"learning_rat": 1e-3}), progress=False
         )
     assert not (tmp_path / "bad").exists()
+
+
+def test_every_shipped_agent_is_labelled_as_one() -> None:
+    """The rows of the shipped agents, SB3's and the JAX PPO's, say they are one selected run."""
+    from subenv_agents import shipped_models
+    from subenv_agents.reference import _shipped_names
+
+    assert _shipped_names() == {*shipped_models(), "ppo_jax"} and {"ppo", "sac"} <= _shipped_names()
 
 
 def test_the_default_plan_trains_the_jax_ppo_as_the_shipped_agent_was_trained() -> None:
