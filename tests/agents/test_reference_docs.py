@@ -49,4 +49,12 @@ def test_the_reference_statistics_are_those_of_the_scores() -> None:
         for j, s in enumerate(scenarios):
             assert math.isclose(summary["per_scenario"][s][name][0], float(score[:, j].mean()), abs_tol=1e-12)
     multi = [n for n, kind in summary["kinds"].items() if kind == "multi-seed"]
-    assert sorted(multi) == ["PPO", "SAC", "TD3"] and all(summary["runs"][n] >= 5 for n in multi)
+    assert sorted(multi) == ["PPO", "PPO_JAX", "SAC", "TD3"] and all(summary["runs"][n] >= 5 for n in multi)
+    # The score: several seeds' mean with an interval inside their range; one run's own, with its interval.
+    for name, score in summary["benchmark_score"].items():
+        assert len(score["runs"]) == summary["runs"][name]
+        assert math.isclose(score["score"], float(np.mean(score["runs"])), abs_tol=1e-9)
+        low, high = score["ci"]
+        assert low <= score["score"] <= high
+        if len(score["runs"]) > 1:
+            assert min(score["runs"]) <= low and high <= max(score["runs"])
