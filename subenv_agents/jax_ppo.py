@@ -954,7 +954,7 @@ def _control(
 
 _compiled_control = jax.jit(_control, static_argnums=0)
 """:func:`_control` compiled once per integral, network shape and batch size, for every controller alike
-(each controller compiling its own took a second per model evaluated)."""
+(not once per controller)."""
 
 
 class JaxPPOController(SingleRowMixin):

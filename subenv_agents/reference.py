@@ -57,13 +57,13 @@ import numpy as np
 
 from subenv.atomic import atomic_write_text
 from subenv.extras import MissingExtra, require
+from subenv_agents.config import ALGORITHMS as SB3_ALGORITHMS
 
 __all__ = ["ALGORITHMS", "DEFAULT_TIMESTEPS", "Plan", "main", "run_reference", "summarize_reference"]
 
 ENV_ID: Final = "subenv/Mixed-v0"
 """What every SB3 trial trains on (the shipped agents' training scenario; ``ppo_jax`` trials train on
 their defaults', the same)."""
-SB3_ALGORITHMS: Final = ("ppo", "sac", "td3")
 JAX_PPO: Final = "ppo_jax"
 ALGORITHMS: Final = (*SB3_ALGORITHMS, JAX_PPO)
 """What a plan can train: the SB3 algorithms of ``subenv_agents/hyperparams/`` and the JAX PPO."""

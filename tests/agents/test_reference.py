@@ -26,7 +26,7 @@ from subenv_agents import jax_ppo
 from subenv_agents.controller import AgentController
 from subenv_agents.policy import load_agent
 from subenv_agents.records import score_record
-from subenv_agents.reference import Plan, _evaluated, run_reference
+from subenv_agents.reference import Plan, _evaluated, _jax_config, run_reference
 
 _SMALL = {
     "n_envs": 2,
@@ -63,7 +63,7 @@ def _finished_jax_trials(out, plan: Plan) -> None:  # type: ignore[no-untyped-de
     evaluated as the reference evaluates its trials; the others its copies (the same network, the same
     evaluation: made once, for the suite's time)."""
     first, *others = [t for t in plan.trials() if t["algo"] == "ppo_jax"]
-    config = jax_ppo.PPOConfig(**{**plan.jax_overrides, "total_timesteps": first["timesteps"], "seed": 0})
+    config = _jax_config(first["timesteps"], 0, plan.jax_overrides)
     network = jax_ppo.init_network(jax.random.key(0), 8, 2, config.hidden)
     run_dir = jax_ppo.save(
         out / "trials" / first["name"], config, network, jax_ppo.RunningStats.empty((8,)), {}
