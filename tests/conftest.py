@@ -100,10 +100,10 @@ def pytest_configure(config: pytest.Config) -> None:
 # first call of each in a process compiles it, 10-20 s on a quiet core for the environments' step. Each
 # pytest-xdist worker would compile those its first tests call, both workers the same ones at once, and so
 # would a test's subprocess that starts before they are cached. So a run with workers compiles them first,
-# once, before the workers start, in two processes for two cores (cold, here: the steps 28 s, the model's
-# functions 8 s); every process then loads them. A copied environment's step is the same compiled step (its
-# arrays as read-only as the original's). (tests/dynamics/test_model.py and tests/test_packaging.py compile
-# in caches of their own, on purpose.)
+# once, before the workers start, in two processes for two cores (cold, here: the steps 25 s; the model's
+# functions 8 s, then the two kernels below, 13 s); every process then loads them. A copied environment's
+# step is the same compiled step (its arrays as read-only as the original's). (tests/dynamics/test_model.py
+# and tests/test_packaging.py compile in caches of their own, on purpose.)
 _WARM_UP = (
     # The environments' step as gym.make builds them, and the vector environment's on two threads.
     """
@@ -111,16 +111,26 @@ import numpy as np, gymnasium as gym, subenv
 env = gym.make("subenv/DivePlane-v0"); env.reset(seed=0); env.step(np.zeros(1, dtype=np.float32))
 vec = gym.make_vec("subenv/Nominal-v0", num_envs=4, threads=2); vec.reset(seed=0); vec.step(np.zeros((4, 1)))
 """,
-    # The batched right-hand side and hull integrals, for one state and for rows of them.
+    # The batched right-hand side and hull integrals, for one state and for rows of them; then the kernels
+    # that no environment calls, which the other program leaves this one the time for: the public block
+    # integrator, and the MPC's condensing where its extra is installed (7 s and 6 s cold).
     """
-import numpy as np, subenv
-from subenv.dynamics import crossflow_integrals, derivatives, model_params
+import importlib.util, numpy as np, subenv
+from subenv.dynamics import CONTROL_PERIOD_S, control_period, crossflow_integrals, derivatives, model_params
 from subenv.dynamics.free_surface import suction
 params, x = model_params(subenv.load_vehicle("suboff")), np.linspace(-1.0, 1.0, 7)
 derivatives(np.zeros(4), 1.0, 0.0, 0.0, params)
 derivatives(np.stack([0.1 * x, 0.05 * x, 0.01 * x, 10 + x], axis=-1), 1.2, 0.05 * x, -0.02, params)
 crossflow_integrals(params.hull, 0.05 * x, 0.01 * x)
 suction(params.hull, 0.1 * x, 1.0 + 0.2 * x, 1.0, 1000.0)
+control_period(np.zeros((2, 4)), 0.0, CONTROL_PERIOD_S, 1.0, 0.0, 0.0, 0.0, params)
+if importlib.util.find_spec("daqp"):
+    from subenv.envs.dive_plane import OBSERVATION_NAMES
+    from subenv.evaluation import make_controller
+    mpc, obs = make_controller("mpc"), np.zeros((1, len(OBSERVATION_NAMES)), dtype=np.float32)
+    obs[0, OBSERVATION_NAMES.index("speed_mps")] = 1.0
+    mpc.reset_batch([{}], subenv.load_vehicle("suboff"))
+    mpc.act_batch(obs)
 """,
 )
 
