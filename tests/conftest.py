@@ -115,21 +115,22 @@ vec = gym.make_vec("subenv/Nominal-v0", num_envs=4, threads=2); vec.reset(seed=0
     # that no environment calls, which the other program leaves this one the time for: the public block
     # integrator, and the MPC's condensing where its extra is installed (7 s and 6 s cold).
     """
-import importlib.util, numpy as np, subenv
+import numpy as np, subenv
 from subenv.dynamics import CONTROL_PERIOD_S, control_period, crossflow_integrals, derivatives, model_params
 from subenv.dynamics.free_surface import suction
-params, x = model_params(subenv.load_vehicle("suboff")), np.linspace(-1.0, 1.0, 7)
+from subenv.envs.dive_plane import OBSERVATION_NAMES
+from subenv.evaluation import controller_names, make_controller
+vehicle, x = subenv.load_vehicle("suboff"), np.linspace(-1.0, 1.0, 7)
+params = model_params(vehicle)
 derivatives(np.zeros(4), 1.0, 0.0, 0.0, params)
 derivatives(np.stack([0.1 * x, 0.05 * x, 0.01 * x, 10 + x], axis=-1), 1.2, 0.05 * x, -0.02, params)
 crossflow_integrals(params.hull, 0.05 * x, 0.01 * x)
 suction(params.hull, 0.1 * x, 1.0 + 0.2 * x, 1.0, 1000.0)
 control_period(np.zeros((2, 4)), 0.0, CONTROL_PERIOD_S, 1.0, 0.0, 0.0, 0.0, params)
-if importlib.util.find_spec("daqp"):
-    from subenv.envs.dive_plane import OBSERVATION_NAMES
-    from subenv.evaluation import make_controller
+if "mpc" in controller_names():  # (registered where its extra is installed)
     mpc, obs = make_controller("mpc"), np.zeros((1, len(OBSERVATION_NAMES)), dtype=np.float32)
     obs[0, OBSERVATION_NAMES.index("speed_mps")] = 1.0
-    mpc.reset_batch([{}], subenv.load_vehicle("suboff"))
+    mpc.reset_batch([{}], vehicle)
     mpc.act_batch(obs)
 """,
 )
