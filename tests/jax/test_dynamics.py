@@ -12,6 +12,7 @@ import jax.numpy as jnp
 import subenv
 import subenv.jax as sj
 from subenv.dynamics import control_period, derivatives, integrate, model, model_params, rk4, stack_params
+from subenv.dynamics import hull as hull_table
 from subenv.dynamics.free_surface import FreeSurface
 from subenv.dynamics.model import pack_params
 from subenv.dynamics.waves import MAX_WAVES, WAVE_FIELDS, SeaState
@@ -147,6 +148,25 @@ def test_the_jax_functions_run_the_kernels_own_code():
     assert rhs_point.__code__ is model.rhs_point.py_func.__code__
     assert sj.traced(model.rhs_given_drag).__code__ is model.rhs_given_drag.py_func.__code__
     assert sj.traced(model.rhs_point) is rhs_point  # (one twin per kernel)
+
+
+@pytest.mark.parametrize("vehicle_name", ["suboff", "remus100"])
+def test_the_hull_segment_on_jax_is_the_compiled_loops_count(vehicle_name):
+    """The hull's segment search is replaced on JAX by a count over the row of stations
+    (subenv.jax._trace): the same integer as the compiled loop's at, between, just aft of and beyond
+    every station, for NaN and the infinities. (Not for subnormal numbers, which XLA compares as zeros on
+    a CPU: a station at 0.0 is not told from -5e-324, as for subenv.dynamics._jit.maximum.)"""
+    hull = model_params(subenv.load_vehicle(vehicle_name)).hull.packed
+    x = hull[0]
+    aft = np.where(x == 0.0, -1e-300, np.nextafter(x, -np.inf))  # (the next number aft, or a normal one)
+    points = np.concatenate([x, 0.5 * (x[:-1] + x[1:]), aft, [x[0] - 1.0, x[-1] + 1.0, 0.0, -0.0]])
+    points = np.concatenate([points, [np.nan, np.inf, -np.inf]])
+    twin = sj.traced(hull_table.hull_segment)
+    assert twin is not hull_table.hull_segment.py_func  # (replaced, not traced)
+    got = np.asarray(jax.jit(jax.vmap(lambda s: twin(s, jnp.asarray(hull))))(jnp.asarray(points)))
+    expected = np.array([hull_table.hull_segment(float(s), hull) for s in points])
+    np.testing.assert_array_equal(got, expected)
+    assert set(expected) == set(range(x.size - 1))  # (every segment, and the ends clipped)
 
 
 def test_the_jax_right_hand_side_batches_and_differentiates():
