@@ -186,6 +186,26 @@ def test_the_jax_right_hand_side_batches_and_differentiates():
     assert float(slope) == pytest.approx(np.cos(0.01), rel=1e-12)
 
 
+def test_a_control_period_differentiates_through_its_loop_of_steps():
+    """Reverse mode (jax.grad's) through the control period's RK4 steps, which run in a loop of XLA's (its
+    bounds static, as reverse mode needs): the Jacobian of the state after a period, against central
+    differences of the compiled integrator."""
+    params = model_params(subenv.load_vehicle("suboff"))
+    prm, hull = pack_params(params), params.hull.packed
+    state = np.array([0.01, 0.02, 0.001, 10.0])
+    args = (0.0, 0.5, 1.0, 0.002, 0.1, -0.05)  # t0, dt, speed0, speed_slope, stern, bow
+    jacobian = jax.jit(jax.jacrev(lambda x: sj.control_period(x, *args, prm, hull)))(jnp.asarray(state))
+
+    def after(x):  # (the compiled integrator's batch of one state)
+        return control_period(x, *args, params).reshape(4)
+
+    eps = 1e-6
+    differences = np.column_stack(
+        [(after(state + step) - after(state - step)) / (2 * eps) for step in eps * np.eye(4)]
+    )
+    np.testing.assert_allclose(np.asarray(jacobian), differences, rtol=1e-6, atol=1e-8)
+
+
 def test_deep_water_leaves_the_suction_out_and_gives_nan_for_a_free_surface():
     """``free_surface`` is static: False leaves the suction out of the program, under jit as without, and
     a loading that has one gets NaN, never the deep-water derivatives (before, under jit, a traced ``prm``
