@@ -137,8 +137,8 @@ def _no_suction(
 def _wave_force_point(t: Any, distance: Any, depth: Any, u: Any, waves: Any, n: int) -> tuple[Any, Any]:
     """:func:`subenv.dynamics.waves.wave_force_point` for JAX: every wave's term at once (the twin of
     :func:`~subenv.dynamics.waves.wave_term` on the array of the columns' indices), then summed in the
-    compiled loop's order. (The loop over 24 waves, unrolled by the trace in each of a control period's
-    eight stages, made a sea's jit and 300 steps take 8.6-9.9 s instead of 3.8-4.5 s; the terms'
+    compiled loop's order. (The loop over 24 waves, unrolled by the trace in each stage of a control period's
+    steps (eight stages then), made a sea's jit and 300 steps take 8.6-9.9 s instead of 3.8-4.5 s; the terms'
     rounding differs from the unrolled trace's, within the JAX environment's agreement with numba.)"""
     if n == 0:
         return 0.0, 0.0
@@ -152,7 +152,7 @@ def _wave_force_point(t: Any, distance: Any, depth: Any, u: Any, waves: Any, n: 
 def _hull_segment(s: Any, hull: Any) -> Any:
     """:func:`subenv.dynamics.hull.hull_segment` for JAX: the same count of the inner stations at or aft of
     ``s``, as one comparison of the row of stations, summed. (The loop over the stations, unrolled by the
-    trace at each of a control period's eight stages, was 920 of the 5,210 operations of Nominal-v0's
+    trace at each stage of a control period (eight then), was 920 of the 5,210 operations of Nominal-v0's
     step.) An integer: the same number as the compiled loop's, NaN and infinities included, but for a
     subnormal ``s`` or station, which XLA compares as zero on a CPU (as for
     :func:`~subenv.dynamics._jit.maximum`)."""
