@@ -42,6 +42,7 @@ __all__ = [
     "CONTROL_PERIOD_S",
     "LANES",
     "LANE_ROWS",
+    "Loop",
     "NO_WAVES",
     "SUBSTEPS",
     "control_period",
@@ -73,12 +74,25 @@ def rk4_step(f: Rhs, t: float, x: FloatArray, dt: float) -> FloatArray:
     return x + (dt / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
 
 
-def rk4(f: Rhs, t: float, x: FloatArray, dt: float, substeps: int) -> FloatArray:
-    """Integrate from t to t + dt with ``substeps`` equal RK4 steps."""
-    h = dt / substeps
-    for i in range(substeps):
-        x = rk4_step(f, t + i * h, x, h)
+Loop = Callable[[int, int, Callable[[int, FloatArray], FloatArray], FloatArray], FloatArray]
+"""A loop with ``jax.lax.fori_loop``'s contract: ``loop(lower, upper, body, x)`` applies ``x = body(i, x)``
+for i = lower .. upper - 1 and returns x (:func:`rk4`'s ``loop``)."""
+
+
+def _python_loop(
+    lower: int, upper: int, body: Callable[[int, FloatArray], FloatArray], x: FloatArray
+) -> FloatArray:
+    """:data:`Loop` in Python."""
+    for i in range(lower, upper):
+        x = body(i, x)
     return x
+
+
+def rk4(f: Rhs, t: float, x: FloatArray, dt: float, substeps: int, loop: Loop = _python_loop) -> FloatArray:
+    """Integrate from t to t + dt with ``substeps`` equal RK4 steps, looped by ``loop`` (JAX passes
+    ``jax.lax.fori_loop``: its program holds one step, not ``substeps`` of them)."""
+    h = dt / substeps
+    return loop(0, substeps, lambda i, x: rk4_step(f, t + i * h, x, h), x)
 
 
 LANES: Final = 64

@@ -100,15 +100,13 @@ def control_period(
         heave, pitch = wave_force(t, distance, x[..., 3], speed, waves)
         return derivatives(x, speed, stern, bow, prm, hull, force + heave, pitch, free_surface=free_surface)
 
-    # rk4's steps, each the reference's rk4_step (NumPy's and JAX's alike), in a loop of XLA's: the
-    # program holds the right-hand side once per stage, not once per stage and step. The environments'
-    # step, traced, lowered and compiled, 3 runs each: PeriscopeDepthWaves-v1 6.6-7.1 s unrolled,
-    # 3.7-4.2 s so; PeriscopeDepth-v2 5.1-5.4 -> 3.3-3.6 s; Nominal-v0 2.6-3.0 -> 2.3-2.7 s. It steps
-    # as fast or faster (benchmarks/jax_env.py).
-    h = dt / substeps
-    return jax.lax.fori_loop(
-        0, substeps, lambda i, x: integrate.rk4_step(rhs, t0 + i * h, x, h), jnp.asarray(state)
-    )
+    # The reference's rk4 (NumPy's and JAX's alike), its steps in a loop of XLA's: the program holds the
+    # right-hand side once per stage, not once per stage and step. The environments' step, traced,
+    # lowered and compiled, 3 runs each: PeriscopeDepthWaves-v1 6.6-7.1 s unrolled, 3.7-4.2 s so;
+    # PeriscopeDepth-v2 5.1-5.4 -> 3.3-3.6 s; Nominal-v0 2.6-3.0 -> 2.3-2.7 s. It steps as fast or
+    # faster (benchmarks/jax_env.py).
+    x0: Any = jnp.asarray(state)
+    return integrate.rk4(rhs, t0, x0, dt, substeps, loop=jax.lax.fori_loop)
 
 
 def _wave_force(waves: Any) -> Any:
