@@ -64,7 +64,7 @@ from typing import Any, Final
 # subenv and subenv_agents are this checkout's (not an installed copy's): run from any directory.
 REPO = Path(__file__).resolve().parents[1]
 if str(REPO) not in sys.path:
-    sys.path.insert(0, str(REPO))  # noqa: E402 (the imports below need it)
+    sys.path.insert(0, str(REPO))
 
 import numpy as np  # noqa: E402
 

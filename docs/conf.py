@@ -27,7 +27,7 @@ import subenv  # noqa: E402  (after the path: the checkout's own package, not an
 
 project = "subenv"
 author = "the subenv developers"
-copyright = "2026, the subenv developers"  # noqa: A001  (Sphinx's name for it)
+copyright = "2026, the subenv developers"  # (Sphinx's name for it)
 release = version = subenv.__version__
 
 extensions = [

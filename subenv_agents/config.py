@@ -35,8 +35,8 @@ from typing import Any, Final
 
 __all__ = [
     "ALGORITHMS",
-    "HYPERPARAMS_DIR",
     "DEFAULT_LOG_FOLDER",
+    "HYPERPARAMS_DIR",
     "AgentConfig",
     "CurriculumConfig",
     "DepthBandBonusConfig",

@@ -42,6 +42,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import functools
+import itertools
 import json
 import math
 import os
@@ -854,7 +855,7 @@ def _array_shapes(
     maps = []
     for part, out in (("actor", act_dim), ("critic", 1)):
         sizes = (obs_dim + m, *config.hidden, out)
-        for i, (n_in, n_out) in enumerate(zip(sizes[:-1], sizes[1:], strict=True)):
+        for i, (n_in, n_out) in enumerate(itertools.pairwise(sizes)):
             shapes[f"{part}/{i}/w"], shapes[f"{part}/{i}/b"] = (n_in, n_out), (n_out,)
             maps.append(([f"{part}/{i}/w"], [f"{part}/{i}/b"], _OBS_CLIP if i == 0 else 1.0))
     if m:

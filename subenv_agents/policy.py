@@ -334,7 +334,7 @@ def _read_statistics(path: Path) -> Any:
 
     try:
         with path.open("rb") as f:
-            stats = pickle.load(f)  # noqa: S301 - our own VecNormalize file, as SB3's VecNormalize.load does
+            stats = pickle.load(f)  # (our own VecNormalize file, as SB3's VecNormalize.load does)
     except Exception as exc:  # a truncated or foreign pickle fails with any of a dozen exception types
         raise ValueError(
             f"{str(path)!r} cannot be read ({type(exc).__name__}: {_one_line(exc)}): must be "

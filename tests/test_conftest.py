@@ -72,7 +72,7 @@ def test_the_users_of_a_shared_session_fixture_run_in_one_worker_and_every_file_
     )
     run = _pytest(project, "-n", "2", "--dist", "loadgroup", "-v")
     assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
-    ran = dict((test, worker) for worker, test in re.findall(r"\[(gw\d+)\] .*PASSED (\S+)", run.stdout))
+    ran = {test: worker for worker, test in re.findall(r"\[(gw\d+)\] .*PASSED (\S+)", run.stdout)}
     groups: dict[str, set[str]] = {}
     for test, worker in ran.items():
         groups.setdefault(test.rpartition("@")[2], set()).add(worker)

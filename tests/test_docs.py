@@ -92,7 +92,7 @@ def test_every_python_block_of_the_page_runs(page: Path, tmp_path, monkeypatch, 
             if block in files.values():
                 (tmp_path / next(name for name, body in files.items() if body == block)).write_text(block)
                 continue
-            exec(compile(block, f"{page.relative_to(ROOT)} python block {k}", "exec"), namespace)  # noqa: S102
+            exec(compile(block, f"{page.relative_to(ROOT)} python block {k}", "exec"), namespace)
     finally:
         for name in set(sys.modules) - modules:
             if name.removesuffix(".py") in {f.removesuffix(".py") for f in files}:

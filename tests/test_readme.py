@@ -38,7 +38,7 @@ def test_every_python_block_of_the_readme_runs(tmp_path, monkeypatch, capsys) ->
     monkeypatch.chdir(tmp_path)
     namespace: dict[str, object] = {"__name__": "__readme__"}
     for k, block in enumerate(BLOCKS):
-        exec(compile(block, f"README.md python block {k}", "exec"), namespace)  # noqa: S102
+        exec(compile(block, f"README.md python block {k}", "exec"), namespace)
     assert "m/s, critical 0.578 m/s" in capsys.readouterr().out
 
 

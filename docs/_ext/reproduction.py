@@ -16,34 +16,34 @@ from typing import Any, Final
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402  (after the backend is chosen)
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from subenv.analysis import bifurcation as bif  # noqa: E402
-from subenv.analysis.continuation import continue_equilibria  # noqa: E402
-from subenv.analysis.critical import (  # noqa: E402
+from subenv.analysis import bifurcation as bif
+from subenv.analysis.continuation import continue_equilibria
+from subenv.analysis.critical import (
     critical_froude,
     critical_speed,
     critical_speed_for_planes,
     froude_number,
 )
-from subenv.analysis.design import (  # noqa: E402
+from subenv.analysis.design import (
     closed_loop_eigenvalues,
     controllability_determinant,
     scheduled_depth_gain,
     thesis_gain,
 )
-from subenv.analysis.equilibria import (  # noqa: E402
+from subenv.analysis.equilibria import (
     DragMoment,
     Equilibrium,
     HullIntegral,
     equilibria,
     symmetric_pitchfork,
 )
-from subenv.analysis.free_surface import surface_critical_speed  # noqa: E402
-from subenv.analysis.hopf import oscillatory_growth_rate  # noqa: E402
-from subenv.analysis.linear import BOW_PLANES_ONLY  # noqa: E402
-from subenv.analysis.report import (  # noqa: E402
+from subenv.analysis.free_surface import surface_critical_speed
+from subenv.analysis.hopf import oscillatory_growth_rate
+from subenv.analysis.linear import BOW_PLANES_ONLY
+from subenv.analysis.report import (
     FIG_4_X_GB_OVER_L,
     PATH_B_FROUDE,
     PATH_C_FROUDE,
@@ -57,14 +57,14 @@ from subenv.analysis.report import (  # noqa: E402
     saturation_pitch_and_froude,
     surface_depths,
 )
-from subenv.analysis.reversal import level_flight_trim  # noqa: E402
-from subenv.dynamics.free_surface import validity_depth_m  # noqa: E402
-from subenv.scenarios import get_scenario  # noqa: E402
-from subenv.thesis import reference_length_ratio  # noqa: E402
-from subenv.units import mps_to_fps  # noqa: E402
-from subenv.vehicles import load_vehicle  # noqa: E402
-from subenv.vehicles.scaling import froude_factor  # noqa: E402
-from subenv.vehicles.vehicle import Vehicle  # noqa: E402
+from subenv.analysis.reversal import level_flight_trim
+from subenv.dynamics.free_surface import validity_depth_m
+from subenv.scenarios import get_scenario
+from subenv.thesis import reference_length_ratio
+from subenv.units import mps_to_fps
+from subenv.vehicles import load_vehicle
+from subenv.vehicles.scaling import froude_factor
+from subenv.vehicles.vehicle import Vehicle
 
 VEHICLES: Final = ("suboff", "remus100")
 """The vehicles whose report the documentation shows, one page each."""

@@ -47,14 +47,14 @@ import numpy as np
 __all__ = [
     "KERNEL_OPTIONS",
     "KERNEL_SOURCES",
-    "KernelSources",
-    "declare_kernel_sources",
     "STATIC",
+    "KernelSources",
     "Static",
     "clip",
+    "declare_kernel_sources",
     "inline_kernel",
-    "kernel_sources",
     "kernel",
+    "kernel_sources",
     "maximum",
     "minimum",
     "parallel_kernel",
@@ -189,7 +189,7 @@ def threading_layer_available() -> bool:
     steps on one thread.
     """
     try:
-        import numba.np.ufunc.tbbpool  # noqa: F401
+        import numba.np.ufunc.tbbpool
     except ImportError:
         if not _load_pip_tbb():
             return False
@@ -197,9 +197,8 @@ def threading_layer_available() -> bool:
             import numba.np.ufunc.tbbpool  # noqa: F401
         except ImportError:
             return False
-    if os.environ.get("NUMBA_THREADING_LAYER", "default") not in ("default", "safe", "tbb"):
-        return False  # the user chose another layer for the process
-    return True
+    # (False if the user chose another layer for the process)
+    return os.environ.get("NUMBA_THREADING_LAYER", "default") in ("default", "safe", "tbb")
 
 
 def _load_pip_tbb() -> bool:

@@ -23,6 +23,7 @@ suction (:func:`source_rows`, :func:`slender_points`; :mod:`subenv.dynamics.free
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 from functools import cached_property
@@ -115,7 +116,7 @@ def slender_points(x_m: FloatArray, breadth_m: FloatArray) -> FloatArray:
     def area(at: FloatArray) -> FloatArray:
         return 0.25 * math.pi * np.interp(at, x, b) ** 2
 
-    for i, (lo, hi) in enumerate(zip(edges[:-1], edges[1:], strict=True)):
+    for i, (lo, hi) in enumerate(itertools.pairwise(edges)):
         mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
         cuts = np.concatenate([[lo], x[(x > lo) & (x < hi)], [hi]])
         a0, a1 = cuts[:-1, None], cuts[1:, None]

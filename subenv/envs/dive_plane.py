@@ -201,7 +201,10 @@ class DivePlaneEnv(gym.Env[np.ndarray, np.ndarray]):
       rollouts are unchanged, bit for bit.
     """
 
-    metadata: dict[str, Any] = {"render_modes": ["human", "rgb_array"], "render_fps": 30}
+    metadata: dict[str, Any] = {  # noqa: RUF012 - Gymnasium's convention
+        "render_modes": ["human", "rgb_array"],
+        "render_fps": 30,
+    }
 
     def __init__(
         self,

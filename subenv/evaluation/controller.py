@@ -48,9 +48,9 @@ from subenv.vehicles.vehicle import Vehicle
 
 __all__ = [
     "ENTRY_POINT_GROUP",
+    "UNINFORMED_SUFFIX",
     "BatchController",
     "Controller",
-    "UNINFORMED_SUFFIX",
     "ControllerFactory",
     "InformedController",
     "SingleRowMixin",

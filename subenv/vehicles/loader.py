@@ -42,10 +42,9 @@ _SCHEMA: dict[str, dict[str, str]] = {
         "x_B": "length",
         "z_B": "length",
     },
-    "hydrodynamics": {
-        name: "-"
-        for name in ("Z_wdot", "Z_qdot", "Z_w", "Z_q", "M_wdot", "M_qdot", "M_w", "M_q", "crossflow_drag")
-    },
+    "hydrodynamics": dict.fromkeys(
+        ("Z_wdot", "Z_qdot", "Z_w", "Z_q", "M_wdot", "M_qdot", "M_w", "M_q", "crossflow_drag"), "-"
+    ),
     "planes": {
         "Z_delta_s": "-",
         "M_delta_s": "-",

@@ -363,7 +363,7 @@ def test_the_card_states_the_seed_spread_of_its_settings_and_refuses_another_rep
     ):
         jax_ppo.seed_spread(PPOConfig(**{**TINY.__dict__, "lr": 1e-3}), report)
     (tmp_path / "damaged.json").write_text("{")
-    with pytest.raises(ValueError, match="damaged.json' is not a report of benchmarks/jax_ppo.py"):
+    with pytest.raises(ValueError, match=r"damaged\.json' is not a report of benchmarks/jax_ppo\.py"):
         jax_ppo.seed_spread(TINY, tmp_path / "damaged.json")
 
 
@@ -577,7 +577,7 @@ def test_a_model_with_memory_lacking_an_array_is_refused_naming_it(memory_folder
 
 
 def test_the_shipped_model_loads_as_it_was_saved():
-    config, network, stats = load(jax_ppo.shipped_folder())
+    _, network, stats = load(jax_ppo.shipped_folder())
     arrays = _arrays(jax_ppo.shipped_folder())
     np.testing.assert_array_equal(np.asarray(network["actor"][0]["w"]), arrays["actor/0/w"])
     np.testing.assert_array_equal(np.asarray(stats.var), arrays["obs_var"])

@@ -61,7 +61,7 @@ def test_band_bonus_is_added_exactly_where_the_true_depth_error_is_inside() -> N
     for _ in range(200):
         actions = rng.uniform(-1, 1, size=(4, 2)).astype(np.float32)
         obs, rewards, dones, infos = plain.step(actions)
-        obs_s, rewards_s, dones_s, infos_s = shaped.step(actions)
+        obs_s, rewards_s, dones_s, _ = shaped.step(actions)
         np.testing.assert_array_equal(obs, obs_s)
         np.testing.assert_array_equal(dones, dones_s)
         error = np.array([info[DEPTH_ERROR_KEY] for info in infos])

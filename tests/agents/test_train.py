@@ -432,7 +432,7 @@ def test_training_stack_adds_the_band_bonus_on_the_true_depth_error() -> None:
     rng = np.random.default_rng(0)
     errors = []
     for _ in range(60):
-        actions = rng.uniform(-1, 1, size=(2,) + plain.action_space.shape).astype(np.float32)
+        actions = rng.uniform(-1, 1, size=(2, *plain.action_space.shape)).astype(np.float32)
         _, rewards, _, _ = plain.step(actions)
         _, rewards_banded, _, infos = banded.step(actions)
         error = np.array([info["depth_error_m"] for info in infos])

@@ -141,7 +141,7 @@ def test_every_controller_on_every_scenario_class(name, scenario):
 
 def test_thesis_controller_below_critical_ends_on_the_wrong_branch():
     """The thesis's failure mode (Ch. III.A): planes pinned, steady pitch, depth drifting."""
-    success, info, errors, planes = _episode(ThesisPolePlacement(), "LowSpeed", 3)
+    success, info, _, planes = _episode(ThesisPolePlacement(), "LowSpeed", 3)
     assert not success
     last = planes[-120:]
     assert np.mean(np.abs(last) >= 0.399) > 0.9 or info["termination_reason"] == "broached"

@@ -78,7 +78,7 @@ def _jax_twins():
     jax = pytest.importorskip("jax")  # the jax extra
     import subenv.jax as sj
 
-    return jax, {name: jax.jit(jax.numpy.vectorize(sj.traced(f))) for name, f in _KERNELS.items()}
+    return {name: jax.jit(jax.numpy.vectorize(sj.traced(f))) for name, f in _KERNELS.items()}
 
 
 _KERNELS = {"maximum": maximum, "minimum": minimum, "clip": clip, "fabs": _fabs}
@@ -87,7 +87,7 @@ _KERNELS = {"maximum": maximum, "minimum": minimum, "clip": clip, "fabs": _fabs}
 def test_the_same_bits_traced_by_jax():
     """The JAX twins (the same code, traced) give numba's result for every pair of special values, in
     either position, and so do the JAX programs whose twins call them (jit and vectorized)."""
-    jax, twins = _jax_twins()
+    twins = _jax_twins()
     a = np.array([p[0] for p in PAIRS])
     b = np.array([p[1] for p in PAIRS])
     for name, builtin in (("maximum", max), ("minimum", min)):
@@ -108,7 +108,7 @@ def test_the_same_bits_traced_by_jax():
     st.floats(allow_subnormal=False),
 )
 def test_numba_and_jax_agree_on_any_floats(a, b, hi):
-    _, twins = _jax_twins()
+    twins = _jax_twins()
     for name, helper in (("maximum", maximum), ("minimum", minimum)):
         compiled = [_bits(helper(x, y)) for x, y in zip(a, b, strict=True)]
         assert [_bits(x) for x in np.asarray(twins[name](a, b))] == compiled, name

@@ -240,7 +240,7 @@ def test_a_rejected_reset_does_not_change_the_next_episode():
         {"depth_command": 10**400},
         {"initial_state": {"pitch": 10**400}},
     ):
-        with pytest.raises(ValueError, match="is invalid|unknown"):
+        with pytest.raises(ValueError, match=r"is invalid|unknown"):
             env.reset(options=options)
     np.testing.assert_array_equal(env.reset()[0], reference.reset()[0])
 

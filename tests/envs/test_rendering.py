@@ -245,8 +245,8 @@ def test_single_point_and_non_finite_history(frame: Frame) -> None:
     assert render_rgb(one).shape == (480, 720, 3)
     gappy = dataclasses.replace(
         frame,
-        depths_m=(math.nan,) + frame.depths_m[1:],
-        commands_m=frame.commands_m[:50] + (math.nan,) + frame.commands_m[51:],
+        depths_m=(math.nan, *frame.depths_m[1:]),
+        commands_m=(*frame.commands_m[:50], math.nan, *frame.commands_m[51:]),
         critical_speed_mps=math.nan,
         depth_command_m=math.nan,
     )

@@ -60,7 +60,7 @@ def test_adapter_reproduces_dummy_vec_env(env_id, kwargs):
 
 
 def test_adapter_needs_same_step_autoreset_and_reports_its_spaces():
-    with pytest.raises(ValueError, match="needs AutoresetMode.SAME_STEP"):
+    with pytest.raises(ValueError, match=r"needs AutoresetMode\.SAME_STEP"):
         SB3VecEnv(gym.make_vec("subenv/Nominal-v0", num_envs=2))
     venv = make_sb3_vec_env("subenv/Nominal-v0", n_envs=2, control="independent", info_keys=())
     assert venv.action_space.shape == (2,) and venv.observation_space.shape == (8,)

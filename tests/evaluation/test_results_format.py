@@ -64,7 +64,7 @@ def test_results_csv_has_the_documented_columns_and_cell_types(written: Path, tm
     assert text.splitlines()[0] == ",".join(RESULTS_COLUMNS)
     bad = tmp_path / "results.csv"
     bad.write_text(text.replace(",True,", ",yes,", 1))
-    with pytest.raises(ValueError, match="line 2: .* is not a bool"):
+    with pytest.raises(ValueError, match=r"line 2: .* is not a bool"):
         check_results_csv(bad)
 
 

@@ -130,10 +130,13 @@ class Kernel:
         while changed:
             changed = False
             for name, values in self.assignments.items():
-                if name not in static and name not in self.parameters:
-                    if all(v is not None and self.is_static(v, static) for v in values):
-                        static.add(name)
-                        changed = True
+                if (
+                    name not in static
+                    and name not in self.parameters
+                    and all(v is not None and self.is_static(v, static) for v in values)
+                ):
+                    static.add(name)
+                    changed = True
         return static
 
     def is_static(self, node: ast.AST, static: set[str] | None = None) -> bool:

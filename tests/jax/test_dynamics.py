@@ -1,6 +1,5 @@
 """The dynamics on JAX (subenv.jax) against the compiled ones: the same source, traced."""
 
-# ruff: noqa: E402  (the module skips before importing what needs jax: pytest.importorskip comes first)
 import numpy as np
 import pytest
 

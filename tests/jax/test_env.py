@@ -298,7 +298,7 @@ def test_another_environments_episodes_and_states_are_refused_with_jit_and_witho
 
 
 def test_the_same_configurations_episodes_are_accepted(nominal):
-    env, params, state = nominal
+    env, params, _ = nominal
     again, theirs = sj.make("subenv/Nominal-v0", episodes=3, seed=5)  # (another make of the same id)
     assert again.made_for == env.made_for and params.made_for == theirs.made_for
     obs, _ = jax.jit(env.reset)(jax.random.key(3), theirs)
@@ -371,7 +371,7 @@ def independent():
 def test_any_action_is_refused_by_name_while_traced_or_steps_to_finite_numbers(
     independent, shape, dtype, values, seed
 ):
-    env, params, step, state = independent
+    _, params, step, state = independent
     with np.errstate(all="ignore"):
         action = np.resize(np.asarray(values), shape).astype(dtype)
     real = np.dtype(dtype).kind in "iuf"
